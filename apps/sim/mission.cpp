@@ -1,0 +1,261 @@
+#include "mission.h"
+
+#include <auvnav/io/rawlog.h>
+#include <auvnav/obs/CObservationThrusters.h>
+
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "sensors.h"
+
+namespace fs = std::filesystem;
+
+namespace auvnav::sim
+{
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+
+config::Node loadRelative(const config::Node& mission, const std::string& key)
+{
+	const fs::path base = fs::path(mission.file()).parent_path();
+	const fs::path p = base / mission.string(key);
+	if (!fs::exists(p)) mission.fail(key, "file not found: " + p.string());
+	return config::Node::load(p.string());
+}
+
+/** Number of simulation steps in `period_s`; the period must be a whole
+ *  number of steps so that every sensor fires on the grid. */
+long stepsOf(double period_s, double dt_s, const config::Node& owner, const std::string& key)
+{
+	const double n = period_s / dt_s;
+	const long k = std::lround(n);
+	if (k < 1 || std::abs(n - k) > 1e-6)
+		owner.fail(key, "period " + std::to_string(period_s) +
+							" s is not a whole multiple of the simulation step " + std::to_string(dt_s) + " s");
+	return k;
+}
+
+struct Schedule
+{
+	long every = 1, offset = 0;
+	bool due(long k) const { return k >= offset && (k - offset) % every == 0; }
+};
+
+/** Text output written line by line and flushed, so a killed run keeps what it made. */
+class LineWriter
+{
+   public:
+	explicit LineWriter(const std::string& path) : f_(path)
+	{
+		if (!f_) throw std::runtime_error("cannot write " + path);
+	}
+	void line(const std::string& s)
+	{
+		f_ << s << '\n';
+		if (++n_ % 100 == 0) f_.flush();
+	}
+
+   private:
+	std::ofstream f_;
+	std::size_t n_ = 0;
+};
+
+std::string fmt(const char* f, ...) __attribute__((format(printf, 1, 2)));
+std::string fmt(const char* f, ...)
+{
+	char buf[2048];
+	va_list ap;
+	va_start(ap, f);
+	std::vsnprintf(buf, sizeof buf, f, ap);
+	va_end(ap);
+	return buf;
+}
+
+const char* kCsvHeader =
+	"time_s,unix_time_s,north_m,east_m,down_m,latitude_deg,longitude_deg,qw,qx,qy,qz,"
+	"roll_deg,pitch_deg,yaw_deg,vn_mps,ve_mps,vd_mps,u_mps,v_mps,w_mps,p_radps,q_radps,r_radps,"
+	"current_n_mps,current_e_mps,current_far_n_mps,current_far_e_mps,"
+	"gyro_bias_x_radps,gyro_bias_y_radps,gyro_bias_z_radps,"
+	"accel_bias_x_mps2,accel_bias_y_mps2,accel_bias_z_mps2,adcp_bias_x_mps,adcp_bias_y_mps,"
+	"seabed_depth_m,altitude_m,distance_m,submerged";
+}  // namespace
+
+MissionSpec MissionSpec::load(const std::string& mission_file)
+{
+	MissionSpec s;
+	s.mission = config::Node::load(mission_file);
+	const auto& m = s.mission;
+	s.file = mission_file;
+	s.name = m.string("name");
+	for (char c : s.name)
+		if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-'))
+			m.fail("name", "use letters, digits, '_' or '-' only (it names the rawlog file)");
+	s.vehicle = loadRelative(m, "vehicle");
+	s.sensors = loadRelative(m, "sensors");
+	s.environment = m.child("environment");
+	const auto o = s.environment.child("origin");
+	s.origin.lat_rad = o.inRange("latitude_deg", -85, 85) * kDeg;
+	s.origin.lon_rad = o.inRange("longitude_deg", -180, 180) * kDeg;
+	s.origin.h_m = 0;
+	const auto st = m.child("start");
+	s.start_unix_s = st.nonNegative("unix_time_s");
+	const auto ne = st.numbers("position_ne_m");
+	if (ne.size() != 2) st.fail("position_ne_m", "expected [north_m, east_m]");
+	s.start_ne = {ne[0], ne[1]};
+	s.start_heading_rad = st.inRange("heading_deg", -360, 360) * kDeg;
+	if (m.has("simulation"))
+	{
+		const auto sim = m.child("simulation");
+		s.dt_s = sim.inRange("step_s", 1e-4, 0.1, s.dt_s);
+		s.ground_truth_rate_hz = sim.positive("ground_truth_rate_hz", s.ground_truth_rate_hz);
+		s.max_duration_s = sim.positive("max_duration_s", s.max_duration_s);
+		s.rawlog_compression = static_cast<int>(sim.inRange("rawlog_compression", 0, 9, s.rawlog_compression));
+	}
+	return s;
+}
+
+MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::string& out_dir)
+{
+	fs::create_directories(out_dir);
+	const earth::TangentFrame frame(spec.origin);
+	Vehicle vehicle(VehicleParams::fromConfig(spec.vehicle));
+	Environment env = Environment::fromConfig(spec.environment, seed * 31u + 17u);
+	Controller controller(vehicle.params(),
+						  spec.vehicle.has("controller") ? ControllerGains::fromConfig(spec.vehicle.child("controller"))
+														 : ControllerGains{},
+						  planFromConfig(spec.mission));
+
+	const auto& sc = spec.sensors;
+	ImuSim imu(sc.child("imu"), seed);
+	DvlSim dvl(sc.child("dvl"), seed);
+	AdcpSim adcp(sc.child("adcp"), seed);
+	PressureSim pressure(sc.child("pressure"), seed);
+	GpsSim gps(sc.child("gps"), seed);
+	const auto thr_cfg = sc.child("thrusters");
+	const std::string thr_label = thr_cfg.string("label", "THRUSTERS");
+	const double dt = spec.dt_s;
+
+	const Schedule imu_s{stepsOf(imu.period_s(), dt, sc.child("imu"), "rate_hz"), 0};
+	const Schedule dvl_s{stepsOf(dvl.period_s(), dt, sc.child("dvl"), "rate_hz"),
+						 std::lround(dvl.offset_s() / dt)};
+	const Schedule adcp_s{stepsOf(adcp.period_s(), dt, sc.child("adcp"), "rate_hz"),
+						  std::lround(adcp.offset_s() / dt)};
+	const Schedule pres_s{stepsOf(pressure.period_s(), dt, sc.child("pressure"), "rate_hz"),
+						  std::lround(pressure.offset_s() / dt)};
+	const Schedule gps_s{stepsOf(gps.period_s(), dt, sc.child("gps"), "rate_hz"), 0};
+	const Schedule ctl_s{stepsOf(1.0 / thr_cfg.positive("rate_hz"), dt, thr_cfg, "rate_hz"), 0};
+	const Schedule truth_s{stepsOf(1.0 / spec.ground_truth_rate_hz, dt, spec.mission, "simulation.ground_truth_rate_hz"), 0};
+	const bool use_adcp = sc.child("adcp").boolean("enabled", true);
+
+	MissionSummary sum;
+	sum.rawlog_path = (fs::path(out_dir) / (spec.name + ".rawlog")).string();
+	io::RawlogWriter rawlog(sum.rawlog_path, spec.rawlog_compression);
+	LineWriter tum((fs::path(out_dir) / "ground_truth.tum").string());
+	LineWriter csv((fs::path(out_dir) / "ground_truth.csv").string());
+	tum.line("# timestamp north_m east_m down_m qx qy qz qw  (body FRD origin, NED tangent frame at the mission origin)");
+	csv.line(kCsvHeader);
+
+	VehicleState x;
+	x.p_n = {spec.start_ne.x(), spec.start_ne.y(), 0.25};
+	x.q_nb = Eigen::AngleAxisd(spec.start_heading_rad, Eigen::Vector3d::UnitZ());
+	x.thrust_n = Eigen::VectorXd::Zero(vehicle.params().thrusters.size());
+	Eigen::VectorXd cmd = x.thrust_n;
+	auto count = [&](const mrpt::obs::CObservation& o) {
+		rawlog.write(o);
+		++sum.observations[o.sensorLabel];
+	};
+
+	for (long k = 0;; ++k)
+	{
+		const double t = k * dt;
+		if (t > spec.max_duration_s) break;
+		env.advanceTo(t);
+		const Eigen::Vector3d current_n = env.current(x.p_n.z());
+		Truth truth;
+		truth.t_s = t;
+		truth.stamp = mrpt::Clock::fromDouble(spec.start_unix_s + t);
+		truth.x = &x;
+		truth.current_n = current_n;
+		truth.nu_dot_b = vehicle.rates(x, cmd, current_n).nu_dot_b;
+
+		if (ctl_s.due(k))
+		{
+			if (controller.finished())
+			{
+				sum.plan_completed = true;
+				break;
+			}
+			cmd = controller.command(x, t, ctl_s.every * dt);
+			auvnav::obs::CObservationThrusters thr;
+			thr.timestamp = truth.stamp;
+			thr.sensorLabel = thr_label;
+			thr.unit = auvnav::obs::EffortUnit::Force_N;
+			thr.effort.assign(cmd.data(), cmd.data() + cmd.size());
+			count(thr);
+			truth.nu_dot_b = vehicle.rates(x, cmd, current_n).nu_dot_b;
+		}
+		if (imu_s.due(k)) count(*imu.sample(truth, frame));
+		if (dvl_s.due(k))
+		{
+			const auto o = dvl.sample(truth, env);
+			sum.dvl_total++;
+			sum.dvl_locked += o->bottom_lock;
+			count(*o);
+		}
+		if (use_adcp && adcp_s.due(k))
+		{
+			const auto o = adcp.sample(truth, env);
+			sum.adcp_profiles++;
+			for (const auto& c : o->cells) sum.adcp_valid_cells += c.valid;
+			count(*o);
+		}
+		if (pres_s.due(k)) count(*pressure.sample(truth, env, frame));
+		if (gps_s.due(k))
+			if (const auto o = gps.sample(truth, frame)) count(*o);
+
+		if (truth_s.due(k))
+		{
+			const Eigen::Matrix3d R = x.R_nb();
+			const Eigen::Vector3d v_n = R * x.nu_b.head<3>();
+			const earth::Geodetic g = frame.toGeodetic(x.p_n);
+			const double roll = std::atan2(R(2, 1), R(2, 2));
+			const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0));
+			const double yaw = std::atan2(R(1, 0), R(0, 0));
+			const Eigen::Vector3d far = env.current(x.p_n.z() + adcp.farRange_m());
+			const double seabed = env.seabedDepth(x.p_n.x(), x.p_n.y());
+			const auto& q = x.q_nb;
+			const double unix_t = spec.start_unix_s + t;
+			tum.line(fmt("%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", unix_t, x.p_n.x(), x.p_n.y(),
+						 x.p_n.z(), q.x(), q.y(), q.z(), q.w()));
+			const Eigen::Vector3d bg = imu.gyroBias(), ba = imu.accelBias();
+			const Eigen::Vector2d bc = adcp.bias();
+			csv.line(fmt("%.3f,%.6f,%.6f,%.6f,%.6f,%.10f,%.10f,%.9f,%.9f,%.9f,%.9f,%.5f,%.5f,%.5f,"
+						 "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.6f,"
+						 "%.4e,%.4e,%.4e,%.4e,%.4e,%.4e,%.6f,%.6f,%.4f,%.4f,%.4f,%d",
+						 t, unix_t, x.p_n.x(), x.p_n.y(), x.p_n.z(), g.lat_rad / kDeg, g.lon_rad / kDeg, q.w(),
+						 q.x(), q.y(), q.z(), roll / kDeg, pitch / kDeg, yaw / kDeg, v_n.x(), v_n.y(), v_n.z(),
+						 x.nu_b[0], x.nu_b[1], x.nu_b[2], x.nu_b[3], x.nu_b[4], x.nu_b[5], current_n.x(),
+						 current_n.y(), far.x(), far.y(), bg.x(), bg.y(), bg.z(), ba.x(), ba.y(), ba.z(),
+						 bc.x(), bc.y(), seabed, seabed - x.p_n.z(), sum.distance_m, x.p_n.z() > 0.5 ? 1 : 0));
+		}
+
+		const Eigen::Vector3d p_before = x.p_n;
+		vehicle.step(x, cmd, current_n, dt);
+		const double moved = (x.p_n - p_before).head<2>().norm();
+		sum.distance_m += moved;
+		if (x.p_n.z() > 0.5) sum.submerged_distance_m += moved;
+		sum.max_depth_m = std::max(sum.max_depth_m, x.p_n.z());
+		sum.duration_s = t;
+		if (!x.p_n.allFinite() || !x.nu_b.allFinite())
+			throw std::runtime_error("vehicle state diverged at t = " + std::to_string(t) + " s");
+	}
+	sum.gps_outliers = gps.outliers();
+	return sum;
+}
+
+}  // namespace auvnav::sim

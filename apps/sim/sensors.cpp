@@ -1,0 +1,367 @@
+#include "sensors.h"
+
+#include <mrpt/obs/gnss_messages_ascii_nmea.h>
+#include <mrpt/system/datetime.h>
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+namespace auvnav::sim
+{
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+
+Eigen::Matrix3d rotationFromYprDeg(const Eigen::Vector3d& ypr_deg)
+{
+	// Euler angles only at the config boundary, converted at once.
+	const mrpt::poses::CPose3D p(0, 0, 0, ypr_deg[0] * kDeg, ypr_deg[1] * kDeg, ypr_deg[2] * kDeg);
+	return p.getRotationMatrix().asEigen();
+}
+
+/** Derives an independent stream from the mission seed and a sensor id. */
+uint32_t streamSeed(uint32_t seed, uint32_t sensor_id) { return seed * 7919u + sensor_id * 104729u + 1u; }
+
+/** Position and velocity of a point fixed on the vehicle at `r_b`. */
+struct PointKinematics
+{
+	Eigen::Vector3d p_n, v_n, v_b;
+};
+PointKinematics pointOnVehicle(const VehicleState& x, const Eigen::Vector3d& r_b)
+{
+	const Eigen::Matrix3d R_nb = x.R_nb();
+	PointKinematics k;
+	k.v_b = x.nu_b.head<3>() + x.nu_b.tail<3>().cross(r_b);
+	k.p_n = x.p_n + R_nb * r_b;
+	k.v_n = R_nb * k.v_b;
+	return k;
+}
+
+InertialAxisErrorParams axisParams(const config::Node& n, double unit)
+{
+	InertialAxisErrorParams p;
+	p.random_walk = n.nonNegative("random_walk") * unit;
+	p.bias_instability = n.nonNegative("bias_instability") * unit;
+	p.bias_tau_s = n.positive("bias_correlation_time_s");
+	p.turn_on_sigma = n.nonNegative("turn_on_bias_sigma") * unit;
+	return p;
+}
+}  // namespace
+
+mrpt::poses::CPose3D Mounting::nominalPose() const
+{
+	mrpt::math::CMatrixDouble33 R(R_bs_nominal);
+	return mrpt::poses::CPose3D(R, mrpt::math::CVectorFixedDouble<3>(position_b));
+}
+
+Mounting Mounting::fromConfig(const config::Node& n)
+{
+	Mounting m;
+	m.position_b = n.vector3("position_m");
+	m.R_bs_nominal = rotationFromYprDeg(n.vector3("orientation_ypr_deg", Eigen::Vector3d::Zero()));
+	m.R_bs_true = m.R_bs_nominal * rotationFromYprDeg(n.vector3("misalignment_ypr_deg", Eigen::Vector3d::Zero()));
+	return m;
+}
+
+// ---------------------------------------------------------------- IMU
+ImuSim::ImuSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")), mount_(Mounting::fromConfig(n)), label_(n.string("label", "IMU"))
+{
+	rng_.randomize(streamSeed(seed, 1));
+	// Datasheet units in the config: gyro °/√h and °/h; accelerometer mg/√Hz and mg.
+	const auto g = n.child("gyro");
+	const auto a = n.child("accelerometer");
+	InertialAxisErrorParams gp = axisParams(g, 1.0);
+	gp.random_walk *= kDeg / 60.0;	 // °/√h -> rad/√s
+	gp.bias_instability *= kDeg / 3600.0;
+	gp.turn_on_sigma *= kDeg / 3600.0;
+	InertialAxisErrorParams ap = axisParams(a, 1e-3 * 9.80665);	 // mg -> m/s²; mg/√Hz -> m/s²·√s
+	for (int i = 0; i < 3; ++i)
+	{
+		gyro_.emplace_back(gp, rng_);
+		accel_.emplace_back(ap, rng_);
+	}
+}
+
+mrpt::obs::CObservationIMU::Ptr ImuSim::sample(const Truth& t, const earth::TangentFrame& frame)
+{
+	const VehicleState& x = *t.x;
+	const Eigen::Matrix3d R_nb = x.R_nb();
+	const Eigen::Vector3d r_b = mount_.position_b;
+	const Eigen::Vector3d w_b = x.nu_b.tail<3>();
+	const Eigen::Vector3d wdot_b = t.nu_dot_b.tail<3>();
+	// Acceleration of the IMU point relative to the Earth-fixed frame, in body.
+	const Eigen::Vector3d a_cg_b = t.nu_dot_b.head<3>() + w_b.cross(x.nu_b.head<3>());
+	const Eigen::Vector3d a_imu_b = a_cg_b + wdot_b.cross(r_b) + w_b.cross(w_b.cross(r_b));
+	const PointKinematics imu = pointOnVehicle(x, r_b);
+	const Eigen::Vector3d& omega_ie_n = frame.earthRate();
+	// Specific force in a rotating Earth frame: a_rel + 2Ω×v − g (g includes centrifugal).
+	const Eigen::Vector3d f_b =
+		a_imu_b + R_nb.transpose() * (2 * omega_ie_n.cross(imu.v_n) - frame.gravityNed(imu.p_n));
+	const Eigen::Vector3d omega_ib_b = w_b + R_nb.transpose() * omega_ie_n;
+	const Eigen::Matrix3d R_sb = mount_.R_bs_true.transpose();
+	const Eigen::Vector3d f_s = R_sb * f_b;
+	const Eigen::Vector3d w_s = R_sb * omega_ib_b;
+
+	auto obs = mrpt::obs::CObservationIMU::Create();
+	obs->timestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	using namespace mrpt::obs;
+	const TIMUDataIndex gyro_idx[3] = {IMU_WX, IMU_WY, IMU_WZ};
+	const TIMUDataIndex acc_idx[3] = {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC};
+	for (int i = 0; i < 3; ++i)
+	{
+		obs->set(gyro_idx[i], w_s[i] + gyro_[i].sample(period_s_, rng_));
+		obs->set(acc_idx[i], f_s[i] + accel_[i].sample(period_s_, rng_));
+	}
+	return obs;
+}
+
+Eigen::Vector3d ImuSim::gyroBias() const { return {gyro_[0].bias(), gyro_[1].bias(), gyro_[2].bias()}; }
+Eigen::Vector3d ImuSim::accelBias() const { return {accel_[0].bias(), accel_[1].bias(), accel_[2].bias()}; }
+
+// ---------------------------------------------------------------- DVL
+DvlSim::DvlSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
+	  mount_(Mounting::fromConfig(n)),
+	  inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
+	  beam_sigma_mps_(n.nonNegative("beam_velocity_sigma_mps")),
+	  scale_factor_(n.inRange("scale_factor_error", -0.1, 0.1)),
+	  min_altitude_m_(n.nonNegative("min_altitude_m")),
+	  max_range_m_(n.positive("max_altitude_m")),
+	  beam_dropout_probability_(n.inRange("beam_dropout_probability", 0, 1)),
+	  label_(n.string("label", "DVL"))
+{
+	rng_.randomize(streamSeed(seed, 2));
+	const int beams = n.integer("beam_count", 4);
+	if (beams < 3 || beams > 8) n.fail("beam_count", "expected 3..8 beams");
+	for (int i = 0; i < beams; ++i)
+	{
+		const double az = (45.0 + 360.0 * i / beams) * kDeg;
+		beam_dirs_s_.emplace_back(std::sin(inclination_rad_) * std::cos(az),
+								  std::sin(inclination_rad_) * std::sin(az), std::cos(inclination_rad_));
+	}
+}
+
+auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environment& env)
+{
+	const VehicleState& x = *t.x;
+	const PointKinematics s = pointOnVehicle(x, mount_.position_b);
+	const Eigen::Matrix3d R_ns = x.R_nb() * mount_.R_bs_true;
+	const Eigen::Vector3d v_s = R_ns.transpose() * s.v_n;
+
+	auto obs = auvnav::obs::CObservationDVL::Create();
+	obs->timestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	obs->beam_inclination_rad = inclination_rad_;
+	Eigen::MatrixXd A(beam_dirs_s_.size(), 3);
+	Eigen::VectorXd u(beam_dirs_s_.size());
+	int valid = 0;
+	double altitude_sum = 0;
+	for (const auto& d_s : beam_dirs_s_)
+	{
+		auvnav::obs::DvlBeam beam;
+		const double slant_max = max_range_m_ / std::cos(inclination_rad_);
+		const double range = env.rayToSeabed(s.p_n, R_ns * d_s, slant_max);
+		const double vertical = range * std::cos(inclination_rad_);
+		const bool dropped = rng_.drawUniform(0.0, 1.0) < beam_dropout_probability_;
+		beam.range_m = range > 0 ? range : 0;
+		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped;
+		const double radial = (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
+		if (beam.valid)
+		{
+			A.row(valid) = d_s.transpose();
+			u[valid] = radial;
+			altitude_sum += vertical;
+			++valid;
+		}
+		obs->beams.push_back(beam);
+	}
+	obs->bottom_lock = valid >= 3;
+	obs->altitude_m = valid > 0 ? altitude_sum / valid : std::nan("");
+	if (obs->bottom_lock)
+	{
+		const auto Av = A.topRows(valid);
+		const Eigen::Matrix3d AtA = Av.transpose() * Av;
+		const Eigen::LDLT<Eigen::Matrix3d> ldlt(AtA);
+		const Eigen::Vector3d v = ldlt.solve(Av.transpose() * u.head(valid));
+		const Eigen::Matrix3d cov =
+			beam_sigma_mps_ * beam_sigma_mps_ * ldlt.solve(Eigen::Matrix3d::Identity());
+		for (int i = 0; i < 3; ++i) obs->velocity_s_mps[i] = v[i];
+		for (int r = 0; r < 3; ++r)
+			for (int c = 0; c < 3; ++c) obs->velocity_cov[3 * r + c] = cov(r, c);
+	}
+	return obs;
+}
+
+// ---------------------------------------------------------------- ADCP
+AdcpSim::AdcpSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
+	  mount_(Mounting::fromConfig(n)),
+	  blank_m_(n.nonNegative("blank_distance_m")),
+	  cell_m_(n.positive("cell_size_m")),
+	  sigma_mps_(n.nonNegative("velocity_sigma_mps")),
+	  inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
+	  min_correlation_(n.inRange("min_correlation", 0, 1)),
+	  bad_cell_sigma_mps_(n.nonNegative("low_correlation_sigma_mps")),
+	  cell_count_(n.integer("cell_count")),
+	  label_(n.string("label", "ADCP"))
+{
+	if (cell_count_ < 1 || cell_count_ > 256) n.fail("cell_count", "expected 1..256");
+	rng_.randomize(streamSeed(seed, 3));
+	const double sigma = n.nonNegative("bias_sigma_mps");
+	const double tau = n.positive("bias_correlation_time_s");
+	bias_ = {GaussMarkov(sigma, tau, rng_), GaussMarkov(sigma, tau, rng_)};
+}
+
+double AdcpSim::farRange_m() const { return blank_m_ + cell_count_ * cell_m_; }
+
+auvnav::obs::CObservationADCP::Ptr AdcpSim::sample(const Truth& t, const Environment& env)
+{
+	const double dt = t.t_s - last_t_s_;
+	last_t_s_ = t.t_s;
+	if (dt > 0)
+		for (auto& b : bias_) b.advance(dt, rng_);
+	const VehicleState& x = *t.x;
+	const PointKinematics s = pointOnVehicle(x, mount_.position_b);
+	const Eigen::Matrix3d R_ns = x.R_nb() * mount_.R_bs_true;
+	const Eigen::Vector3d axis_n = R_ns.col(2);
+	// Side lobes contaminate the last (1 − cos θ) of the range to the seabed.
+	const double bottom = env.rayToSeabed(s.p_n, axis_n, farRange_m() + 50);
+	const double clean_range = bottom > 0 ? bottom * std::cos(inclination_rad_) : INFINITY;
+
+	auto obs = auvnav::obs::CObservationADCP::Create();
+	obs->timestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	obs->blank_distance_m = blank_m_;
+	obs->cell_size_m = cell_m_;
+	obs->velocity_sigma_mps = sigma_mps_;
+	const Eigen::Vector3d bias_s(bias_[0].value(), bias_[1].value(), 0.0);
+	for (int i = 0; i < cell_count_; ++i)
+	{
+		auvnav::obs::AdcpCell cell;
+		const double d = obs->cellDistance(i);
+		const bool in_water = d + 0.5 * cell_m_ <= clean_range;
+		const Eigen::Vector3d p_cell = s.p_n + d * axis_n;
+		// In water: current relative to the sensor; in the seabed: bottom echo.
+		const Eigen::Vector3d rel_n = in_water ? Eigen::Vector3d(env.current(p_cell.z()) - s.v_n) : Eigen::Vector3d(-s.v_n);
+		cell.correlation = std::clamp(0.95 - 0.02 * i + 0.03 * rng_.drawGaussian1D_normalized(), 0.0, 1.0);
+		const bool good = cell.correlation >= min_correlation_;
+		const double sigma = good ? sigma_mps_ : bad_cell_sigma_mps_;
+		const Eigen::Vector3d v_s = R_ns.transpose() * rel_n + bias_s +
+									sigma * Eigen::Vector3d(rng_.drawGaussian1D_normalized(),
+															rng_.drawGaussian1D_normalized(),
+															rng_.drawGaussian1D_normalized());
+		for (int k = 0; k < 3; ++k) cell.velocity_s_mps[k] = v_s[k];
+		cell.valid = in_water && good;
+		obs->cells.push_back(cell);
+	}
+	return obs;
+}
+
+// ---------------------------------------------------------------- pressure
+PressureSim::PressureSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
+	  mount_(Mounting::fromConfig(n)),
+	  sigma_pa_(n.nonNegative("noise_sigma_pa")),
+	  label_(n.string("label", "PRESSURE"))
+{
+	rng_.randomize(streamSeed(seed, 4));
+	bias_pa_ = n.nonNegative("bias_sigma_pa") * rng_.drawGaussian1D_normalized();
+}
+
+auvnav::obs::CObservationPressure::Ptr PressureSim::sample(const Truth& t, const Environment& env,
+														   const earth::TangentFrame& frame)
+{
+	const PointKinematics s = pointOnVehicle(*t.x, mount_.position_b);
+	const double depth = std::max(0.0, s.p_n.z());
+	const double g = frame.gravityNed(s.p_n).z();
+	auto obs = auvnav::obs::CObservationPressure::Create();
+	obs->timestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	obs->pressure_pa = env.water().atmospheric_pressure_pa + env.water().density_kg_m3 * g * depth +
+					   bias_pa_ + sigma_pa_ * rng_.drawGaussian1D_normalized();
+	obs->temperature_c = env.temperature(depth);
+	return obs;
+}
+
+// ---------------------------------------------------------------- GPS
+GpsSim::GpsSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  mount_(Mounting::fromConfig(n)),
+	  sigma_white_m_(n.nonNegative("white_sigma_m")),
+	  sigma_corr_m_(n.nonNegative("correlated_sigma_m")),
+	  tau_corr_s_(n.positive("correlation_time_s")),
+	  sigma_vertical_m_(n.nonNegative("vertical_sigma_m")),
+	  outlier_probability_(n.inRange("outlier_probability", 0, 1)),
+	  outlier_min_m_(n.nonNegative("outlier_min_m")),
+	  outlier_max_m_(n.nonNegative("outlier_max_m")),
+	  reacquisition_s_(n.nonNegative("reacquisition_s")),
+	  min_antenna_height_m_(n.nonNegative("min_antenna_height_m")),
+	  label_(n.string("label", "GPS"))
+{
+	if (outlier_max_m_ < outlier_min_m_) n.fail("outlier_max_m", "must be >= outlier_min_m");
+	rng_.randomize(streamSeed(seed, 5));
+	corr_ = {GaussMarkov(sigma_corr_m_, tau_corr_s_, rng_), GaussMarkov(sigma_corr_m_, tau_corr_s_, rng_)};
+}
+
+mrpt::obs::CObservationGPS::Ptr GpsSim::sample(const Truth& t, const earth::TangentFrame& frame)
+{
+	const double dt = t.t_s - last_t_s_;
+	last_t_s_ = t.t_s;
+	if (dt > 0)
+		for (auto& c : corr_) c.advance(dt, rng_);
+	const PointKinematics a = pointOnVehicle(*t.x, mount_.position_b);
+	const bool above_water = a.p_n.z() < -min_antenna_height_m_;
+	if (!above_water)
+	{
+		surfaced_since_s_ = -1;
+		return nullptr;
+	}
+	if (surfaced_since_s_ < 0) surfaced_since_s_ = t.t_s;
+	if (t.t_s - surfaced_since_s_ < reacquisition_s_) return nullptr;
+
+	Eigen::Vector3d p_fix = a.p_n;
+	p_fix.x() += corr_[0].value() + sigma_white_m_ * rng_.drawGaussian1D_normalized();
+	p_fix.y() += corr_[1].value() + sigma_white_m_ * rng_.drawGaussian1D_normalized();
+	p_fix.z() += sigma_vertical_m_ * rng_.drawGaussian1D_normalized();
+	if (rng_.drawUniform(0.0, 1.0) < outlier_probability_)
+	{
+		// Gross multipath-like outlier, as seen in the paper's GPS traces.
+		const double mag = rng_.drawUniform(outlier_min_m_, outlier_max_m_);
+		const double dir = rng_.drawUniform(0.0, 2 * M_PI);
+		p_fix.x() += mag * std::cos(dir);
+		p_fix.y() += mag * std::sin(dir);
+		++outliers_;
+	}
+	const earth::Geodetic g = frame.toGeodetic(p_fix);
+
+	mrpt::obs::gnss::Message_NMEA_GGA gga;
+	const double unix_s = mrpt::Clock::toDouble(t.stamp);
+	const double day_s = std::fmod(unix_s, 86400.0);
+	gga.fields.UTCTime.hour = static_cast<uint8_t>(day_s / 3600);
+	gga.fields.UTCTime.minute = static_cast<uint8_t>(std::fmod(day_s, 3600.0) / 60);
+	gga.fields.UTCTime.sec = std::fmod(day_s, 60.0);
+	gga.fields.latitude_degrees = g.lat_rad / kDeg;
+	gga.fields.longitude_degrees = g.lon_rad / kDeg;
+	gga.fields.altitude_meters = g.h_m;
+	gga.fields.fix_quality = 1;
+	gga.fields.satellitesUsed = 8;
+	gga.fields.HDOP = 1.0f;
+	auto obs = mrpt::obs::CObservationGPS::Create();
+	obs->timestamp = t.stamp;
+	obs->originalReceivedTimestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	obs->setMsg(gga);
+	return obs;
+}
+
+}  // namespace auvnav::sim

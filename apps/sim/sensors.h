@@ -1,0 +1,145 @@
+#pragma once
+/** @file sensors.h
+ *  Simulated sensors. Each turns the true vehicle state into the observation
+ *  a real instrument would log, with the error sources named in its config
+ *  (values and their datasheet sources are in config/sensors/). Each sensor
+ *  owns its random stream, so enabling one sensor never changes another's
+ *  noise for the same seed.
+ */
+#include <auvnav/config.h>
+#include <auvnav/earth.h>
+#include <auvnav/obs/CObservationADCP.h>
+#include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/obs/CObservationPressure.h>
+#include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/random/RandomGenerators.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+
+#include "environment.h"
+#include "noise.h"
+#include "vehicle.h"
+
+namespace auvnav::sim
+{
+/** What the sensors may look at: the true state at one instant. */
+struct Truth
+{
+	double t_s = 0;					  //!< mission time [s]
+	mrpt::Clock::time_point stamp;	  //!< absolute time of this instant
+	const VehicleState* x = nullptr;  //!< true vehicle state
+	Vector6d nu_dot_b = Vector6d::Zero();
+	Eigen::Vector3d current_n{0, 0, 0};	 //!< water current at the vehicle
+};
+
+/** Mounting of a sensor on the vehicle: nominal (what the observation and the
+ *  navigator's config say) and true (nominal rotated by a small misalignment). */
+struct Mounting
+{
+	Eigen::Vector3d position_b{0, 0, 0};
+	Eigen::Matrix3d R_bs_nominal = Eigen::Matrix3d::Identity();
+	Eigen::Matrix3d R_bs_true = Eigen::Matrix3d::Identity();
+	mrpt::poses::CPose3D nominalPose() const;
+	static Mounting fromConfig(const config::Node& n);
+};
+
+class ImuSim
+{
+   public:
+	ImuSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	/** Specific force and inertial angular rate at the IMU, with errors. */
+	mrpt::obs::CObservationIMU::Ptr sample(const Truth& truth, const earth::TangentFrame& frame);
+	Eigen::Vector3d gyroBias() const;
+	Eigen::Vector3d accelBias() const;
+
+   private:
+	double period_s_;
+	Mounting mount_;
+	mrpt::random::CRandomGenerator rng_;
+	std::vector<InertialAxisError> gyro_, accel_;
+	std::string label_;
+};
+
+class DvlSim
+{
+   public:
+	DvlSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	double offset_s() const { return offset_s_; }
+	auvnav::obs::CObservationDVL::Ptr sample(const Truth& truth, const Environment& env);
+
+   private:
+	double period_s_, offset_s_;
+	Mounting mount_;
+	double inclination_rad_, beam_sigma_mps_, scale_factor_, min_altitude_m_, max_range_m_,
+		beam_dropout_probability_;
+	std::vector<Eigen::Vector3d> beam_dirs_s_;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+class AdcpSim
+{
+   public:
+	AdcpSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	double offset_s() const { return offset_s_; }
+	auvnav::obs::CObservationADCP::Ptr sample(const Truth& truth, const Environment& env);
+	Eigen::Vector2d bias() const { return {bias_[0].value(), bias_[1].value()}; }
+	double farRange_m() const;
+
+   private:
+	double period_s_, offset_s_;
+	Mounting mount_;
+	double blank_m_, cell_m_, sigma_mps_, inclination_rad_, min_correlation_, bad_cell_sigma_mps_;
+	int cell_count_;
+	std::array<GaussMarkov, 2> bias_;
+	double last_t_s_ = 0;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+class PressureSim
+{
+   public:
+	PressureSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	double offset_s() const { return offset_s_; }
+	auvnav::obs::CObservationPressure::Ptr sample(const Truth& truth, const Environment& env,
+												  const earth::TangentFrame& frame);
+
+   private:
+	double period_s_, offset_s_;
+	Mounting mount_;
+	double sigma_pa_, bias_pa_;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+class GpsSim
+{
+   public:
+	GpsSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	/** A fix, or nothing when the antenna is under water or reacquiring. */
+	mrpt::obs::CObservationGPS::Ptr sample(const Truth& truth, const earth::TangentFrame& frame);
+	std::size_t outliers() const { return outliers_; }
+
+   private:
+	double period_s_;
+	Mounting mount_;
+	double sigma_white_m_, sigma_corr_m_, tau_corr_s_, sigma_vertical_m_, outlier_probability_,
+		outlier_min_m_, outlier_max_m_, reacquisition_s_, min_antenna_height_m_;
+	std::array<GaussMarkov, 2> corr_;
+	double last_t_s_ = 0;
+	double surfaced_since_s_ = -1;	// −1: antenna under water
+	std::size_t outliers_ = 0;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+}  // namespace auvnav::sim

@@ -1,0 +1,76 @@
+#pragma once
+/** @file config.h
+ *  Typed, checked access to YAML configuration (MRPT's YAML parser).
+ *
+ *  Every accessor validates what it returns (present, right type, finite,
+ *  in range) and throws ConfigError whose message names the file and the full
+ *  key path, e.g. "config/missions/x.yaml: vehicle.mass_kg: expected a
+ *  positive number, got '-3'". Nodes are values: a child copies its subtree.
+ */
+#include <Eigen/Core>
+#include <mrpt/containers/yaml.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace auvnav::config
+{
+class ConfigError : public std::runtime_error
+{
+   public:
+	using std::runtime_error::runtime_error;
+};
+
+class Node
+{
+   public:
+	/** An empty map node (for default-constructed holders). */
+	Node() = default;
+	/** Parses a YAML file; throws ConfigError if missing or malformed. */
+	static Node load(const std::string& file);
+	/** Wraps an in-memory YAML text (for tests); `origin` names it in errors. */
+	static Node fromText(const std::string& text, const std::string& origin = "<text>");
+
+	bool has(const std::string& key) const;
+	bool isMap() const { return y_.isMap(); }
+	/** Required sub-map. */
+	Node child(const std::string& key) const;
+	/** Required sequence of maps/scalars, as nodes. */
+	std::vector<Node> sequence(const std::string& key) const;
+
+	/** Required finite number; optionally within [lo, hi]. */
+	double number(const std::string& key) const;
+	double number(const std::string& key, double default_value) const;
+	double positive(const std::string& key) const;
+	double positive(const std::string& key, double default_value) const;
+	double nonNegative(const std::string& key) const;
+	double nonNegative(const std::string& key, double default_value) const;
+	double inRange(const std::string& key, double lo, double hi) const;
+	double inRange(const std::string& key, double lo, double hi, double default_value) const;
+	int integer(const std::string& key) const;
+	int integer(const std::string& key, int default_value) const;
+	bool boolean(const std::string& key, bool default_value) const;
+	std::string string(const std::string& key) const;
+	std::string string(const std::string& key, const std::string& default_value) const;
+	/** Required sequence of exactly 3 finite numbers. */
+	Eigen::Vector3d vector3(const std::string& key) const;
+	Eigen::Vector3d vector3(const std::string& key, const Eigen::Vector3d& default_value) const;
+	/** Required sequence of finite numbers (any length >= 1). */
+	std::vector<double> numbers(const std::string& key) const;
+
+	const std::string& file() const { return file_; }
+	/** "file: path.to.key" for error messages. */
+	std::string where(const std::string& key) const;
+	[[noreturn]] void fail(const std::string& key, const std::string& what) const;
+
+   private:
+	Node(mrpt::containers::yaml y, std::string file, std::string path);
+	std::string scalarText(const std::string& key) const;
+
+	mrpt::containers::yaml y_;
+	std::string file_;
+	std::string path_;
+};
+
+}  // namespace auvnav::config

@@ -1,0 +1,75 @@
+#pragma once
+/** @file rawlog.h
+ *  Streaming MRPT rawlog reading and writing.
+ *
+ *  RawlogReader yields one observation at a time (memory does not grow with
+ *  the file length). It accepts both rawlog layouts MRPT knows: a plain
+ *  sequence of CObservation objects, and CSensoryFrame/CActionCollection pairs
+ *  (actions are skipped and counted). Any corrupt, truncated or foreign
+ *  content raises RawlogError naming the file, the object index and the
+ *  uncompressed byte offset; the reader never crashes on bad bytes.
+ *
+ *  RawlogWriter writes a gzip-compressed observation-only rawlog and refuses
+ *  observations that go back in time.
+ */
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CObservation.h>
+
+#include <cstdint>
+#include <deque>
+#include <stdexcept>
+#include <string>
+
+namespace auvnav::io
+{
+class RawlogError : public std::runtime_error
+{
+   public:
+	using std::runtime_error::runtime_error;
+};
+
+class RawlogReader
+{
+   public:
+	/** Opens `path`; throws RawlogError if it cannot be opened. */
+	explicit RawlogReader(const std::string& path);
+
+	/** Next observation in file order, or nullptr at a clean end of file.
+	 *  Throws RawlogError on corrupt or truncated content. */
+	mrpt::obs::CObservation::Ptr next();
+
+	const std::string& path() const { return path_; }
+	std::size_t objectsRead() const { return objects_read_; }
+	std::size_t actionsSkipped() const { return actions_skipped_; }
+
+   private:
+	[[noreturn]] void throwTruncated(uint64_t offset) const;
+
+	std::string path_;
+	mrpt::io::CFileGZInputStream file_;
+	std::deque<mrpt::obs::CObservation::Ptr> pending_;	// from a CSensoryFrame
+	std::size_t objects_read_ = 0;
+	std::size_t actions_skipped_ = 0;
+};
+
+class RawlogWriter
+{
+   public:
+	/** Creates (truncates) `path`. `compression_level` is zlib's 0..9. */
+	explicit RawlogWriter(const std::string& path, int compression_level = 6);
+
+	/** Appends one observation; throws std::invalid_argument if its timestamp
+	 *  is earlier than the previous one. */
+	void write(const mrpt::obs::CObservation& obs);
+
+	std::size_t count() const { return count_; }
+
+   private:
+	std::string path_;
+	mrpt::io::CFileGZOutputStream file_;
+	mrpt::Clock::time_point last_{};
+	std::size_t count_ = 0;
+};
+
+}  // namespace auvnav::io

@@ -1,0 +1,54 @@
+#pragma once
+/** @file CObservationADCP.h
+ *  Acoustic Doppler Current Profiler water-velocity profile.
+ *
+ *  Contract:
+ *  - `cells[i].velocity_s_mps` is the velocity of the water in cell i relative
+ *    to the sensor, expressed in the sensor frame (so a vehicle moving through
+ *    still water sees −v). Valid only when `cells[i].valid`.
+ *  - Cell i is centred at distance `blank_distance_m + (i + 0.5) * cell_size_m`
+ *    along the sensor's z axis (the profiling direction).
+ *  - `correlation` in [0, 1] is the beam correlation of the cell; consumers may
+ *    apply their own threshold on top of `valid`.
+ *  - Serialization is versioned; every version ever written stays readable.
+ */
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include <array>
+#include <vector>
+
+namespace auvnav::obs
+{
+struct AdcpCell
+{
+	std::array<double, 3> velocity_s_mps{0, 0, 0};	//!< water rel. to sensor, sensor frame [m/s]
+	double correlation = 0;	 //!< beam correlation, 0..1
+	bool valid = false;	 //!< inside the water column and above the correlation floor
+};
+
+class CObservationADCP : public mrpt::obs::CObservation
+{
+	DEFINE_SERIALIZABLE(CObservationADCP, auvnav::obs)
+
+   public:
+	double blank_distance_m = 0;  //!< distance from transducer to first cell start [m]
+	double cell_size_m = 0;	 //!< cell length along the profiling axis [m]
+	double velocity_sigma_mps = 0;	//!< per-axis 1σ velocity noise of one cell [m/s]
+	std::vector<AdcpCell> cells;
+	mrpt::poses::CPose3D sensorPose;  //!< sensor pose in the body frame (FRD)
+
+	/** Distance of the centre of cell `i` from the transducer [m]. */
+	double cellDistance(std::size_t i) const
+	{
+		return blank_distance_m + (static_cast<double>(i) + 0.5) * cell_size_m;
+	}
+
+	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }
+	void setSensorPose(const mrpt::poses::CPose3D& p) override { sensorPose = p; }
+	void getDescriptionAsText(std::ostream& o) const override;
+	bool exportTxtSupported() const override { return true; }
+	std::string exportTxtHeader() const override;
+	std::string exportTxtDataRow() const override;
+};
+}  // namespace auvnav::obs
