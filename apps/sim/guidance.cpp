@@ -90,7 +90,13 @@ ControllerGains ControllerGains::fromConfig(const config::Node& n)
 Controller::Controller(const VehicleParams& vehicle, const ControllerGains& gains, std::vector<PlanStep> plan)
 	: vehicle_(vehicle), k_(gains), plan_(std::move(plan))
 {
-	allocation_ = vehicle_.configurationMatrix().completeOrthogonalDecomposition().pseudoInverse();
+	// Allocate surge, sway, heave, pitch and yaw only: with two heave thrusters
+	// roll and pitch cannot be set independently (the configuration matrix has
+	// rank 5), so roll is left to the hydrostatic restoring moment.
+	const auto T = vehicle_.configurationMatrix();
+	Eigen::MatrixXd T_controlled(5, T.cols());
+	T_controlled << T.row(0), T.row(1), T.row(2), T.row(4), T.row(5);
+	allocation_ = T_controlled.completeOrthogonalDecomposition().pseudoInverse();
 }
 
 bool Controller::surfaceDemanded() const { return finished() || plan_[step_].surface; }
@@ -135,11 +141,9 @@ Vector6d Controller::wrench(const VehicleState& x, double dt_s)
 	tau[0] = ff + k_.speed_kp * u_err + k_.speed_ki * speed_integral_;
 	tau[1] = -k_.sway_kp * v_b.y();
 	tau[5] = k_.heading_kp * wrapPi(heading_demand - yaw) - k_.heading_kd * r;
-	// Level hold: the weak metacentric restoring alone lets the Munk moment
+	// Pitch hold: the weak metacentric restoring alone lets the Munk moment
 	// pitch the vehicle steeply while diving.
-	const double roll = std::atan2(R_nb(2, 1), R_nb(2, 2));
 	const double pitch = -std::asin(std::clamp(R_nb(2, 0), -1.0, 1.0));
-	tau[3] = -k_.attitude_kp * roll - k_.attitude_kd * x.nu_b[3];
 	tau[4] = -k_.attitude_kp * pitch - k_.attitude_kd * x.nu_b[4];
 	if (!s.surface)
 	{
@@ -178,7 +182,10 @@ Eigen::VectorXd Controller::command(const VehicleState& x, double t_s, double dt
 		if (finished()) return Eigen::VectorXd::Zero(vehicle_.thrusters.size());
 		beginStep(x, t_s);
 	}
-	Eigen::VectorXd u = allocation_ * wrench(x, dt_s);
+	const Vector6d tau = wrench(x, dt_s);
+	Eigen::Matrix<double, 5, 1> tau_controlled;
+	tau_controlled << tau[0], tau[1], tau[2], tau[4], tau[5];
+	Eigen::VectorXd u = allocation_ * tau_controlled;
 	for (Eigen::Index i = 0; i < u.size(); ++i)
 		u[i] = std::clamp(u[i], -vehicle_.thrusters[i].max_force_n, vehicle_.thrusters[i].max_force_n);
 	return u;

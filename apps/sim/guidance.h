@@ -1,9 +1,9 @@
 #pragma once
 /** @file guidance.h
  *  Mission plan and the vehicle's guidance & control: line-of-sight waypoint
- *  following, surge-speed, depth and heading loops producing a body wrench,
- *  and thrust allocation through the pseudo-inverse of the thruster
- *  configuration matrix with per-thruster saturation. The controller sees
+ *  following, surge-speed, depth, pitch and heading loops producing a body
+ *  wrench, and thrust allocation through the pseudo-inverse of the thruster
+ *  configuration matrix (roll row dropped) with per-thruster saturation. The controller sees
  *  the true state (the simulator's autopilot is not under test).
  */
 #include <auvnav/config.h>
@@ -42,7 +42,7 @@ struct ControllerGains
 	double speed_kp = 150, speed_ki = 10;		// N/(m/s), N/m
 	double sway_kp = 80;						// N/(m/s)
 	double depth_kp = 60, depth_kd = 250, depth_ki = 2;	 // N/m, N/(m/s), N/(m·s)
-	double attitude_kp = 200, attitude_kd = 60;	 // roll/pitch hold, N·m/rad, N·m/(rad/s)
+	double attitude_kp = 200, attitude_kd = 60;	 // pitch hold, N·m/rad, N·m/(rad/s)
 	double speed_ramp_mps2 = 0.02;
 	double depth_rate_mps = 0.15;  //!< slew limit of the depth demand
 	static ControllerGains fromConfig(const config::Node& n);

@@ -23,7 +23,7 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> out("o", "out", "Output directory (created)", true, "", "DIR", cmd);
 	try
 	{
-		cmd.parse(argc, argv);
+		if (!cmd.parse(argc, argv)) return 0;  // --help or --version was shown
 	}
 	catch (const TCLAP::ArgException& e)
 	{

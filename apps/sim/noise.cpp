@@ -19,10 +19,13 @@ double gaussMarkovAllanVariance(double sigma, double tau_c, double T)
 
 namespace
 {
+// The floor is the Allan-deviation minimum between the white-noise slope and
+// the rise of the bias wander, i.e. over cluster times up to τc (beyond, a GM
+// turns white again and the curve falls for ever).
 double allanFloor(double n, double sigma, double tau_c)
 {
 	double best = INFINITY;
-	for (double T = 0.01; T < 1e6; T *= 1.05)
+	for (double T = 0.01; T <= tau_c; T *= 1.02)
 		best = std::min(best, n * n / T + gaussMarkovAllanVariance(sigma, tau_c, T));
 	return std::sqrt(best);
 }

@@ -5,8 +5,10 @@
  *  InertialAxisError: one gyro or accelerometer axis = white noise with
  *  density `random_walk` (ARW or VRW, per √s; sampled as N/√dt) + a constant
  *  turn-on bias + a first-order Gauss–Markov bias whose stationary σ is chosen
- *  so that the Allan-deviation floor equals the datasheet "bias instability"
- *  (the quantity datasheets quote). The GM is discretised exactly for any dt.
+ *  so that the Allan-deviation floor (its minimum over cluster times up to the
+ *  correlation time) equals the datasheet "bias instability". Beyond the floor
+ *  the curve rises like rate random walk, as real gyros' do. The GM is
+ *  discretised exactly for any dt.
  */
 #include <mrpt/random/RandomGenerators.h>
 
@@ -18,8 +20,8 @@ double gaussMarkovAllanVariance(double sigma, double tau_c, double T);
 
 /** Stationary σ of a Gauss–Markov process with correlation time `tau_c` that,
  *  added to white noise of density `random_walk`, gives an Allan-deviation
- *  minimum of `bias_instability`. Returns 0 if the white noise alone already
- *  reaches that floor within the searched cluster times. */
+ *  minimum (over cluster times up to `tau_c`) of `bias_instability`. Returns 0
+ *  if the white noise alone already reaches that floor before `tau_c`. */
 double gaussMarkovSigmaForAllanFloor(double random_walk, double bias_instability, double tau_c);
 
 struct InertialAxisErrorParams

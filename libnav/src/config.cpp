@@ -1,4 +1,5 @@
 #include <auvnav/config.h>
+#include <yaml.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -23,8 +24,40 @@ Node Node::load(const std::string& file)
 	return fromText(ss.str(), file);
 }
 
+namespace
+{
+/** MRPT's YAML reader reports some syntax errors on stderr and returns a
+ *  partial document; run libyaml's parser first so a broken file is refused
+ *  with its line and column. */
+void checkSyntax(const std::string& text, const std::string& origin)
+{
+	yaml_parser_t parser;
+	if (!yaml_parser_initialize(&parser)) throw ConfigError(origin + ": cannot initialise the YAML parser");
+	yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(text.data()), text.size());
+	std::string error;
+	for (bool done = false; !done;)
+	{
+		yaml_event_t event;
+		if (!yaml_parser_parse(&parser, &event))
+		{
+			std::ostringstream m;
+			m << origin << ":" << parser.problem_mark.line + 1 << ":" << parser.problem_mark.column + 1
+			  << ": malformed YAML: " << (parser.problem ? parser.problem : "syntax error");
+			if (parser.context) m << " " << parser.context;
+			error = m.str();
+			break;
+		}
+		done = event.type == YAML_STREAM_END_EVENT;
+		yaml_event_delete(&event);
+	}
+	yaml_parser_delete(&parser);
+	if (!error.empty()) throw ConfigError(error);
+}
+}  // namespace
+
 Node Node::fromText(const std::string& text, const std::string& origin)
 {
+	checkSyntax(text, origin);
 	try
 	{
 		yaml y = yaml::FromText(text);

@@ -8,6 +8,17 @@
 
 namespace auvnav::io
 {
+namespace
+{
+[[noreturn]] void throwTruncated(const std::string& path, std::size_t index, uint64_t offset)
+{
+	std::ostringstream msg;
+	msg << path << ": truncated rawlog: object #" << index << " starting at byte " << offset
+		<< " (uncompressed) ends early";
+	throw RawlogError(msg.str());
+}
+}  // namespace
+
 RawlogReader::RawlogReader(const std::string& path) : path_(path)
 {
 	// CFileGZInputStream::open() throws, rather than returning false, when the
@@ -43,17 +54,17 @@ mrpt::obs::CObservation::Ptr RawlogReader::next()
 			if (file_.getPosition() == offset)
 			{
 				std::ostringstream msg;
-				msg << path_ << ": corrupt rawlog: cannot decompress object #" << objects_read_
-					<< " at byte " << offset << " (uncompressed)";
+				msg << path_ << ": corrupt rawlog: cannot read or decompress object #"
+					<< objects_read_ << " at byte " << offset << " (uncompressed)";
 				throw RawlogError(msg.str());
 			}
-			throwTruncated(offset);
+			throwTruncated(path_, objects_read_, offset);
 		}
 		catch (const std::exception& e)
 		{
 			// MRPT reports a short read inside an object as a plain exception,
 			// not CExceptionEOF: being at the end of the file means truncation.
-			if (file_.checkEOF()) throwTruncated(offset);
+			if (file_.checkEOF()) throwTruncated(path_, objects_read_, offset);
 			std::ostringstream msg;
 			msg << path_ << ": corrupt rawlog: cannot read object #" << objects_read_
 				<< " at byte " << offset << " (uncompressed): " << e.what();
@@ -88,14 +99,6 @@ mrpt::obs::CObservation::Ptr RawlogReader::next()
 	auto o = pending_.front();
 	pending_.pop_front();
 	return o;
-}
-
-void RawlogReader::throwTruncated(uint64_t offset) const
-{
-	std::ostringstream msg;
-	msg << path_ << ": truncated rawlog: object #" << objects_read_ << " starting at byte "
-		<< offset << " (uncompressed) ends early";
-	throw RawlogError(msg.str());
 }
 
 RawlogWriter::RawlogWriter(const std::string& path, int compression_level) : path_(path)

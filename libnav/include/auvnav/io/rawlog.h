@@ -44,8 +44,6 @@ class RawlogReader
 	std::size_t actionsSkipped() const { return actions_skipped_; }
 
    private:
-	[[noreturn]] void throwTruncated(uint64_t offset) const;
-
 	std::string path_;
 	mrpt::io::CFileGZInputStream file_;
 	std::deque<mrpt::obs::CObservation::Ptr> pending_;	// from a CSensoryFrame
