@@ -1,0 +1,127 @@
+#pragma once
+/** @file measurement_model.h
+ *  The stable measurement-model interface that sensor plugins implement.
+ *
+ *  A plugin DESCRIBES a measurement; the filter owns sigma points, covariance
+ *  and gating. Per observation the filter calls `prepare` once (turn the MRPT
+ *  observation into zero or more measurements: value z, noise R), then, per
+ *  measurement, `predict` once per sigma point (h(x), a pure function: no
+ *  shared mutable state, no allocation), and `residual` to compare.
+ *
+ *  Contract (checked by auvnav/testing/model_checks.h and by the host):
+ *  - `uses()` lists every state block h reads. The filter evaluates h only on
+ *    sigma points that move those blocks; reading an undeclared block gives
+ *    wrong results (the checks perturb undeclared blocks to catch it).
+ *  - z, R and h(x) are finite; R is symmetric positive definite; a NaN/Inf
+ *    anywhere is rejected by the host and counted as invalid.
+ *  - residual(z, z) = 0 and residual is the boxminus of the measurement space
+ *    (wrap angles there).
+ *  - No exception may leave a plugin: derive from SafeMeasurementModel, which
+ *    turns exceptions into `Invalid`.
+ */
+#include <auvnav/earth.h>
+#include <auvnav/state.h>
+#include <mrpt/obs/CObservation.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+namespace auvnav
+{
+/** What the filter knows besides the state when a measurement arrives. */
+struct FilterContext
+{
+	double t_s = 0;	 //!< filter time [s, Unix epoch]
+	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  //!< latest raw gyro sample [rad/s], IMU axes
+	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();  //!< Earth rate in the navigation frame
+	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< IMU lever arm in the body frame [m]
+	const earth::TangentFrame* frame = nullptr;  //!< navigation frame (origin), never null in updates
+};
+
+/** One measurement for the filter. Sized by the plugin in `prepare`. */
+struct Measurement
+{
+	Eigen::VectorXd z;	//!< measured value, dimension m
+	Eigen::MatrixXd R;	//!< noise covariance (m × m), SPD
+	int tag = 0;		//!< plugin-private (e.g. ADCP cell index)
+	std::array<double, 8> aux{};  //!< plugin-private numbers h needs (e.g. cell distance)
+	std::string label;	//!< optional sub-name for statistics (e.g. "cell")
+};
+
+enum class PrepareStatus
+{
+	Ok,		  //!< `out` holds the measurements to apply (possibly none)
+	Skip,	  //!< nothing to apply, not an error (e.g. DVL without bottom lock)
+	Invalid	  //!< bad observation (NaN, wrong class, …): rejected and counted
+};
+
+class MeasurementModel
+{
+   public:
+	virtual ~MeasurementModel() = default;
+	/** Bit mask of StateBlock values h reads. */
+	virtual uint32_t uses() const noexcept = 0;
+	/** Observation → measurements. `why` explains Invalid/Skip (short). */
+	virtual PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+								  std::vector<Measurement>& out, std::string& why) noexcept = 0;
+	/** h(x) into `z_pred` (pre-sized to m). Returns false if it cannot. */
+	virtual bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+						 Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept = 0;
+	/** r = z ⊟ z_pred; default plain difference. */
+	virtual void residual(const Eigen::Ref<const Eigen::VectorXd>& z,
+						  const Eigen::Ref<const Eigen::VectorXd>& z_pred,
+						  Eigen::Ref<Eigen::VectorXd> r) const noexcept
+	{
+		r = z - z_pred;
+	}
+	/** Gate probability; the filter gates at the χ² quantile of the
+	 *  measurement's own dimension. 1.0 disables the gate. */
+	virtual double gateProbability() const noexcept { return 0.999; }
+};
+
+/** Base class for plugin authors: implement the do* methods; exceptions they
+ *  throw become Invalid / false and never cross into the host. */
+class SafeMeasurementModel : public MeasurementModel
+{
+   public:
+	PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+						  std::vector<Measurement>& out, std::string& why) noexcept final
+	{
+		try
+		{
+			return doPrepare(obs, ctx, out, why);
+		}
+		catch (const std::exception& e)
+		{
+			why = std::string("exception in prepare: ") + e.what();
+		}
+		catch (...)
+		{
+			why = "unknown exception in prepare";
+		}
+		out.clear();
+		return PrepareStatus::Invalid;
+	}
+	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+				 Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept final
+	{
+		try
+		{
+			return doPredict(x, m, ctx, z_pred);
+		}
+		catch (...)
+		{
+			return false;
+		}
+	}
+
+   protected:
+	virtual PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+									std::vector<Measurement>& out, std::string& why) = 0;
+	virtual bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+						   Eigen::Ref<Eigen::VectorXd> z_pred) const = 0;
+};
+
+}  // namespace auvnav

@@ -1,0 +1,101 @@
+#pragma once
+/** @file plugin_api.h
+ *  The versioned C entry point of an auvnav sensor plugin.
+ *
+ *  A plugin is a shared library exporting one symbol,
+ *  `auvnav_plugin_entry_v1`, an `extern "C"` function returning a pointer to a
+ *  static AuvnavPluginEntry: a header the host checks before anything else
+ *  (ABI version, API version, name, version, build fingerprint) and a factory.
+ *  The factory gets the plugin's YAML configuration as text and returns a new
+ *  MeasurementModel, or nullptr with a message in `error`; it never throws
+ *  (use AUVNAV_PLUGIN, which wraps it). Objects are destroyed by the plugin's
+ *  own `destroy`, so allocation and release stay on one side.
+ *
+ *  ABI version: changes when this entry layout or the MeasurementModel vtable
+ *  changes (the host refuses other values). API version: grows when the
+ *  interface gains backward-compatible features. Build fingerprint: compiler,
+ *  Eigen version and alignment, MRPT version, state dimension; must match the
+ *  host's exactly (C++ objects cross the boundary).
+ */
+#include <auvnav/config.h>
+#include <auvnav/measurement_model.h>
+#include <mrpt/version.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+
+#define AUVNAV_PLUGIN_ABI_VERSION 1u
+#define AUVNAV_PLUGIN_API_VERSION 1u
+#define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
+
+#define AUVNAV_STR2(x) #x
+#define AUVNAV_STR(x) AUVNAV_STR2(x)
+/** Everything that must agree between host and plugin for C++ objects to cross. */
+#define AUVNAV_BUILD_FINGERPRINT                                                               \
+	"gcc-" AUVNAV_STR(__GNUC__) "." AUVNAV_STR(__GNUC_MINOR__) " eigen-" AUVNAV_STR(               \
+		EIGEN_WORLD_VERSION) "." AUVNAV_STR(EIGEN_MAJOR_VERSION) "." AUVNAV_STR(EIGEN_MINOR_VERSION) \
+		" align-" AUVNAV_STR(EIGEN_MAX_ALIGN_BYTES) " mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43"
+
+extern "C"
+{
+	struct AuvnavPluginHeader
+	{
+		uint32_t abi_version;
+		uint32_t api_version;
+		const char* name;		  //!< e.g. "dvl"
+		const char* version;	  //!< plugin's own version, e.g. "1.0.0"
+		const char* fingerprint;  //!< AUVNAV_BUILD_FINGERPRINT at plugin build time
+		const char* description;  //!< one line for users
+	};
+
+	typedef auvnav::MeasurementModel* (*AuvnavCreateFn)(const char* config_yaml, const char* sensor_label,
+														char* error, size_t error_size);
+	typedef void (*AuvnavDestroyFn)(auvnav::MeasurementModel* model);
+
+	struct AuvnavPluginEntry
+	{
+		AuvnavPluginHeader header;
+		AuvnavCreateFn create;
+		AuvnavDestroyFn destroy;
+	};
+
+	typedef const AuvnavPluginEntry* (*AuvnavEntryFn)();
+}
+
+/** Defines the entry point of a plugin whose model class `ModelClass` has a
+ *  constructor `ModelClass(const auvnav::config::Node& cfg, const std::string& label)`.
+ *  Exceptions from the constructor become an error message. */
+#define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                  \
+	namespace                                                                                        \
+	{                                                                                                \
+	auvnav::MeasurementModel* auvnavCreate_(const char* yaml, const char* label, char* error,        \
+											size_t error_size)                                       \
+	{                                                                                                \
+		try                                                                                          \
+		{                                                                                            \
+			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                       \
+															std::string(plugin_name) + " plugin config"); \
+			return new ModelClass(cfg, label ? label : "");                                          \
+		}                                                                                            \
+		catch (const std::exception& e)                                                              \
+		{                                                                                            \
+			std::snprintf(error, error_size, "%s", e.what());                                        \
+		}                                                                                            \
+		catch (...)                                                                                  \
+		{                                                                                            \
+			std::snprintf(error, error_size, "unknown exception");                                   \
+		}                                                                                            \
+		return nullptr;                                                                              \
+	}                                                                                                \
+	void auvnavDestroy_(auvnav::MeasurementModel* m) { delete m; }                                   \
+	const AuvnavPluginEntry kAuvnavEntry_ = {                                                        \
+		{AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, plugin_name, plugin_version,          \
+		 AUVNAV_BUILD_FINGERPRINT, plugin_description},                                              \
+		&auvnavCreate_, &auvnavDestroy_};                                                            \
+	}                                                                                                \
+	extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1() \
+	{                                                                                                \
+		return &kAuvnavEntry_;                                                                       \
+	}

@@ -1,0 +1,81 @@
+#pragma once
+/** @file process_model.h
+ *  The inertial process model (Arnold & Medagoda 2018, II-A, done right):
+ *  constant acceleration for translation (with the ½·a·dt² term), attitude
+ *  from the gyro minus its bias minus the Earth rate, exact first-order
+ *  Gauss–Markov discretisation for biases, currents and model parameters for
+ *  any dt, and process noise that scales with dt (not dt²).
+ */
+#include <auvnav/config.h>
+#include <auvnav/state.h>
+
+#include <Eigen/Core>
+
+namespace auvnav
+{
+/** A first-order Gauss–Markov process: x' = φ(x − μ) + μ, φ = e^{−dt/τ},
+ *  added variance σ²(1 − φ²) (exact for any dt). */
+struct GaussMarkov
+{
+	double sigma = 0;	   //!< stationary standard deviation
+	double tau_s = 3600;   //!< correlation time [s]
+	double phi(double dt_s) const;
+	double variance(double dt_s) const;
+};
+
+struct ProcessNoise
+{
+	double gyro_arw = 0;		  //!< gyro angle random walk [rad/√s]
+	GaussMarkov gyro_bias;		  //!< [rad/s]
+	GaussMarkov accel_bias;		  //!< [m/s²]
+	double jerk_psd = 0.01;		  //!< white jerk PSD of the constant-acceleration model [(m/s³)²·s]
+	double velocity_psd = 1e-6;	  //!< extra white velocity noise [(m/s)²/s]
+	double gravity_psd = 1e-12;	  //!< gravity random walk [(m/s²)²/s]
+	GaussMarkov current;		  //!< water currents [m/s]
+	double current_spatial_var_per_m = 0;  //!< extra current variance per metre moved through water [(m/s)²/m]
+	GaussMarkov adcp_bias;		  //!< [m/s]
+	double parameter_tau_s = 3600;	//!< model parameter correlation time [s]
+	Eigen::Matrix<double, 18, 1> parameter_sigma = Eigen::Matrix<double, 18, 1>::Zero();  //!< stationary σ, tangent order
+};
+
+struct ProcessModel
+{
+	ProcessNoise noise;
+	/** Means the Gauss–Markov states relax to (tangent order, Euclidean part):
+	 *  zero biases and currents, the system-identification parameter prior. */
+	TangentVector prior_mean = TangentVector::Zero();
+
+	/** Mean propagation of one state by `dt_s` with raw gyro `omega_ib_b` and
+	 *  Earth rate `omega_ie_n` (a pure function: used per sigma point). */
+	NavState propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
+					   double dt_s) const;
+
+	/** Process noise covariance over `dt_s` (tangent space). `speed_through_water_mps`
+	 *  scales the spatial part of the current noise. */
+	Covariance noiseCovariance(double dt_s, double speed_through_water_mps) const;
+
+	/** The linear part (everything but attitude and gyro bias) as the map
+	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
+	 *  (tangent rows 6..42; rows 0..5 untouched). */
+	template <typename Derived>
+	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const;
+
+	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
+};
+
+// ---------------------------------------------------------------- inline
+template <typename Derived>
+void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const
+{
+	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
+	M.template middleRows<3>(idx::pos) +=
+		dt_s * M.template middleRows<3>(idx::vel) + (0.5 * dt_s * dt_s) * M.template middleRows<3>(idx::acc);
+	M.template middleRows<3>(idx::vel) += dt_s * M.template middleRows<3>(idx::acc);
+	M.template middleRows<3>(idx::acc_bias) *= noise.accel_bias.phi(dt_s);
+	const double phi_c = noise.current.phi(dt_s);
+	M.template middleRows<4>(idx::current_vehicle) *= phi_c;  // both current states
+	M.template middleRows<2>(idx::adcp_bias) *= noise.adcp_bias.phi(dt_s);
+	M.template middleRows<18>(idx::inertia) *= std::exp(-dt_s / noise.parameter_tau_s);
+}
+
+}  // namespace auvnav

@@ -1,0 +1,63 @@
+#pragma once
+/** @file so3.h
+ *  SO(3) exponential and logarithm maps for the filter's attitude.
+ *
+ *  Convention (used everywhere in auvnav): the attitude R_nb is perturbed on
+ *  the LEFT, in the navigation frame:  R ⊞ δ = Exp(δ) · R,  R ⊟ R̂ = Log(R · R̂ᵀ).
+ *  So an attitude error vector is a small rotation about navigation-frame
+ *  (NED) axes: its third component is the heading error.
+ *
+ *  Log returns the rotation vector with angle in [0, π]; near π the axis is
+ *  recovered from the symmetric part so the map stays accurate there.
+ */
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace auvnav::so3
+{
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& v)
+{
+	Eigen::Matrix3d S;
+	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+	return S;
+}
+
+/** Rotation matrix of the rotation vector `phi` (Rodrigues). */
+inline Eigen::Matrix3d Exp(const Eigen::Vector3d& phi)
+{
+	const double theta2 = phi.squaredNorm();
+	const Eigen::Matrix3d K = skew(phi);
+	if (theta2 < 1e-16) return Eigen::Matrix3d::Identity() + K + 0.5 * K * K;
+	const double theta = std::sqrt(theta2);
+	return Eigen::Matrix3d::Identity() + (std::sin(theta) / theta) * K +
+		   ((1 - std::cos(theta)) / theta2) * K * K;
+}
+
+/** Rotation vector of `R` (angle in [0, π]). */
+inline Eigen::Vector3d Log(const Eigen::Matrix3d& R)
+{
+	const Eigen::Vector3d w(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));  // 2 sin θ · axis
+	const double c = std::clamp(0.5 * (R.trace() - 1.0), -1.0, 1.0);
+	const double s = 0.5 * w.norm();
+	const double theta = std::atan2(s, c);
+	if (theta < 1e-6) return 0.5 * (1 + theta * theta / 6) * w;  // θ/sinθ ≈ 1 + θ²/6
+	if (M_PI - theta > 1e-3) return (theta / (2 * std::sin(theta))) * w;
+	// Near π: axis from the largest diagonal of (R + I)/2 = a aᵀ (for θ = π);
+	// sign from the antisymmetric part.
+	const Eigen::Matrix3d B = 0.5 * (R + Eigen::Matrix3d::Identity());
+	int k = 0;
+	B.diagonal().maxCoeff(&k);
+	Eigen::Vector3d axis = B.col(k) / std::sqrt(std::max(B(k, k), 1e-300));
+	axis.normalize();
+	if (axis.dot(w) < 0) axis = -axis;
+	return theta * axis;
+}
+
+/** Nearest rotation to a nearly orthonormal matrix (after many products). */
+inline Eigen::Matrix3d normalized(const Eigen::Matrix3d& R)
+{
+	return Eigen::Quaterniond(R).normalized().toRotationMatrix();
+}
+
+}  // namespace auvnav::so3

@@ -1,0 +1,98 @@
+#pragma once
+/** @file state.h
+ *  The navigation filter's state: the 43-dimensional state of Arnold &
+ *  Medagoda (2018, Table I), as named members with frame suffixes, and its
+ *  manifold operations.
+ *
+ *  Tangent-space layout (fixed; `idx::`): the blocks are ordered so that the
+ *  states the nonlinear attitude prediction reads come first, then those of the
+ *  high-rate accelerometer update. The filter exploits this order (see ukf.h),
+ *  so it is part of the plugin ABI.
+ *
+ *    0  attitude error δθ_n (3)        left perturbation, see so3.h
+ *    3  gyro bias b_w (3)              [rad/s], IMU axes
+ *    6  acceleration a_n (3)           [m/s²] of the IMU point, NED
+ *    9  gravity g (1)                  [m/s²], magnitude, down
+ *   10  accelerometer bias b_a (3)     [m/s²], IMU axes
+ *   13  velocity v_n (3)               [m/s] of the IMU point, NED
+ *   16  position p_n (3)               [m] of the IMU point, NED tangent frame
+ *   19  water current at the vehicle (2)     [m/s] N, E
+ *   21  water current at the ADCP far range (2) [m/s] N, E
+ *   23  ADCP bias (2)                  [m/s], ADCP x, y axes
+ *   25  inertia sub-matrix M_sub (2x3)        rows x,y; columns x,y,ψ; row-major
+ *   31  linear damping sub-matrix D_l,sub (2x3)
+ *   37  quadratic damping sub-matrix D_q,sub (2x3)
+ */
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace auvnav
+{
+namespace idx
+{
+constexpr int att = 0, gyro_bias = 3, acc = 6, gravity = 9, acc_bias = 10, vel = 13, pos = 16,
+			  current_vehicle = 19, current_far = 21, adcp_bias = 23, inertia = 25, damping_lin = 31,
+			  damping_quad = 37;
+constexpr int dim = 43;
+}  // namespace idx
+
+/** One bit per state block, for a measurement model to declare what h reads. */
+enum StateBlock : uint32_t
+{
+	kAttitude = 1u << 0,
+	kGyroBias = 1u << 1,
+	kAcceleration = 1u << 2,
+	kGravity = 1u << 3,
+	kAccelBias = 1u << 4,
+	kVelocity = 1u << 5,
+	kPosition = 1u << 6,
+	kCurrentVehicle = 1u << 7,
+	kCurrentFar = 1u << 8,
+	kAdcpBias = 1u << 9,
+	kInertia = 1u << 10,
+	kDampingLinear = 1u << 11,
+	kDampingQuadratic = 1u << 12,
+	kAllBlocks = (1u << 13) - 1
+};
+
+/** Number of leading tangent coordinates that cover every block in `mask`. */
+int tangentPrefix(uint32_t mask);
+
+using TangentVector = Eigen::Matrix<double, idx::dim, 1>;
+using Covariance = Eigen::Matrix<double, idx::dim, idx::dim>;
+
+struct NavState
+{
+	Eigen::Matrix3d R_nb = Eigen::Matrix3d::Identity();	 //!< IMU (= body axes) to NED
+	Eigen::Vector3d b_w = Eigen::Vector3d::Zero();		 //!< gyro bias [rad/s]
+	Eigen::Vector3d a_n = Eigen::Vector3d::Zero();		 //!< IMU acceleration [m/s²]
+	double g = 9.78;									 //!< gravity magnitude [m/s²]
+	Eigen::Vector3d b_a = Eigen::Vector3d::Zero();		 //!< accelerometer bias [m/s²]
+	Eigen::Vector3d v_n = Eigen::Vector3d::Zero();		 //!< IMU velocity [m/s]
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();		 //!< IMU position [m]
+	Eigen::Vector2d current_vehicle_ne = Eigen::Vector2d::Zero();  //!< water current around the vehicle
+	Eigen::Vector2d current_far_ne = Eigen::Vector2d::Zero();	   //!< water current at ADCP far range
+	Eigen::Vector2d b_adcp = Eigen::Vector2d::Zero();			   //!< ADCP bias, sensor x/y
+	Eigen::Matrix<double, 2, 3> M_sub = Eigen::Matrix<double, 2, 3>::Zero();
+	Eigen::Matrix<double, 2, 3> Dl_sub = Eigen::Matrix<double, 2, 3>::Zero();
+	Eigen::Matrix<double, 2, 3> Dq_sub = Eigen::Matrix<double, 2, 3>::Zero();
+
+	/** x ⊞ δ: attitude Exp(δ_att)·R, everything else additive. */
+	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
+	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. */
+	TangentVector boxminus(const NavState& y) const;
+
+	/** Flat copy of the Euclidean part (everything but the attitude), in
+	 *  tangent order (entries 0..2 are zero). */
+	TangentVector euclidean() const;
+	void setEuclidean(const Eigen::Ref<const TangentVector>& e);
+
+	bool allFinite() const;
+};
+
+/** Names of the 43 tangent coordinates, for CSV headers ("att_n", "vel_e", …). */
+const std::vector<std::string>& tangentNames();
+
+}  // namespace auvnav

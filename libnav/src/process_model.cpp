@@ -1,0 +1,102 @@
+#include <auvnav/process_model.h>
+#include <auvnav/so3.h>
+
+#include <cmath>
+
+namespace auvnav
+{
+double GaussMarkov::phi(double dt_s) const { return std::exp(-dt_s / tau_s); }
+double GaussMarkov::variance(double dt_s) const
+{
+	const double p = phi(dt_s);
+	return sigma * sigma * (1 - p * p);
+}
+
+NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
+								 const Eigen::Vector3d& omega_ie_n, double dt) const
+{
+	NavState y = x;
+	// Body rotation relative to inertial space, then undo the turn of the
+	// Earth-fixed navigation frame.
+	y.R_nb = so3::Exp(-omega_ie_n * dt) * x.R_nb * so3::Exp((omega_ib_b - x.b_w) * dt);
+	TangentVector e = x.euclidean();
+	const TangentVector e0 = e;
+	Eigen::Map<TangentVector> em(e.data());
+	applyLinearRows(em, dt);
+	// Gauss–Markov states relax to their prior mean: x' = φ(x − μ) + μ; the
+	// rows above applied φx, add (1 − φ)μ.
+	TangentVector mu_term = TangentVector::Zero();
+	const double phi_ba = noise.accel_bias.phi(dt), phi_c = noise.current.phi(dt),
+				 phi_b = noise.adcp_bias.phi(dt), phi_p = std::exp(-dt / noise.parameter_tau_s);
+	mu_term.segment<3>(idx::acc_bias) = (1 - phi_ba) * prior_mean.segment<3>(idx::acc_bias);
+	mu_term.segment<4>(idx::current_vehicle) = (1 - phi_c) * prior_mean.segment<4>(idx::current_vehicle);
+	mu_term.segment<2>(idx::adcp_bias) = (1 - phi_b) * prior_mean.segment<2>(idx::adcp_bias);
+	mu_term.segment<18>(idx::inertia) = (1 - phi_p) * prior_mean.segment<18>(idx::inertia);
+	e += mu_term;
+	const double phi_g = noise.gyro_bias.phi(dt);
+	e.segment<3>(idx::gyro_bias) =
+		phi_g * e0.segment<3>(idx::gyro_bias) + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
+	y.setEuclidean(e);
+	return y;
+}
+
+Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps) const
+{
+	Covariance Q = Covariance::Zero();
+	Q.block<3, 3>(idx::att, idx::att).diagonal().setConstant(noise.gyro_arw * noise.gyro_arw * dt);
+	Q.block<3, 3>(idx::gyro_bias, idx::gyro_bias).diagonal().setConstant(noise.gyro_bias.variance(dt));
+	// White jerk integrated exactly into (p, v, a), per axis.
+	const double q = noise.jerk_psd;
+	const double dt2 = dt * dt, dt3 = dt2 * dt, dt4 = dt3 * dt, dt5 = dt4 * dt;
+	for (int k = 0; k < 3; ++k)
+	{
+		const int p = idx::pos + k, v = idx::vel + k, a = idx::acc + k;
+		Q(p, p) = q * dt5 / 20 + noise.velocity_psd * dt3 / 3;
+		Q(p, v) = Q(v, p) = q * dt4 / 8 + noise.velocity_psd * dt2 / 2;
+		Q(p, a) = Q(a, p) = q * dt3 / 6;
+		Q(v, v) = q * dt3 / 3 + noise.velocity_psd * dt;
+		Q(v, a) = Q(a, v) = q * dt2 / 2;
+		Q(a, a) = q * dt;
+	}
+	Q(idx::gravity, idx::gravity) = noise.gravity_psd * dt;
+	Q.block<3, 3>(idx::acc_bias, idx::acc_bias).diagonal().setConstant(noise.accel_bias.variance(dt));
+	const double current_var =
+		noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
+	Q.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().setConstant(current_var);
+	Q.block<2, 2>(idx::adcp_bias, idx::adcp_bias).diagonal().setConstant(noise.adcp_bias.variance(dt));
+	const double phi_p = std::exp(-dt / noise.parameter_tau_s);
+	for (int i = 0; i < 18; ++i)
+		Q(idx::inertia + i, idx::inertia + i) =
+			noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p);
+	return Q;
+}
+
+ProcessModel ProcessModel::fromConfig(const config::Node& n, const TangentVector& prior_mean)
+{
+	ProcessModel m;
+	m.prior_mean = prior_mean;
+	auto gm = [&](const std::string& key, double unit) {
+		const auto c = n.child(key);
+		GaussMarkov g;
+		g.sigma = c.nonNegative("sigma") * unit;
+		g.tau_s = c.positive("tau_s");
+		return g;
+	};
+	constexpr double kDeg = M_PI / 180;
+	m.noise.gyro_arw = n.nonNegative("gyro_arw_deg_per_sqrt_h") * kDeg / 60;
+	m.noise.gyro_bias = gm("gyro_bias_deg_per_h", kDeg / 3600);
+	m.noise.accel_bias = gm("accel_bias_mg", 1e-3 * 9.80665);
+	m.noise.jerk_psd = n.positive("jerk_psd");
+	m.noise.velocity_psd = n.nonNegative("velocity_psd", m.noise.velocity_psd);
+	m.noise.gravity_psd = n.nonNegative("gravity_psd", m.noise.gravity_psd);
+	m.noise.current = gm("current_mps", 1.0);
+	m.noise.current_spatial_var_per_m = n.nonNegative("current_spatial_var_per_m", 0.0);
+	m.noise.adcp_bias = gm("adcp_bias_mps", 1.0);
+	m.noise.parameter_tau_s = n.positive("parameter_tau_s");
+	const double rel = n.nonNegative("parameter_relative_sigma");
+	for (int i = 0; i < 18; ++i)
+		m.noise.parameter_sigma[i] = rel * std::max(std::abs(prior_mean[idx::inertia + i]), 1e-3);
+	return m;
+}
+
+}  // namespace auvnav

@@ -1,0 +1,123 @@
+#include <auvnav/so3.h>
+#include <auvnav/state.h>
+
+namespace auvnav
+{
+namespace
+{
+struct BlockSpan
+{
+	uint32_t bit;
+	int begin, size;
+};
+constexpr BlockSpan kBlocks[] = {
+	{kAttitude, idx::att, 3},		   {kGyroBias, idx::gyro_bias, 3},
+	{kAcceleration, idx::acc, 3},	   {kGravity, idx::gravity, 1},
+	{kAccelBias, idx::acc_bias, 3},	   {kVelocity, idx::vel, 3},
+	{kPosition, idx::pos, 3},		   {kCurrentVehicle, idx::current_vehicle, 2},
+	{kCurrentFar, idx::current_far, 2}, {kAdcpBias, idx::adcp_bias, 2},
+	{kInertia, idx::inertia, 6},	   {kDampingLinear, idx::damping_lin, 6},
+	{kDampingQuadratic, idx::damping_quad, 6}};
+
+// Row-major copies of the 2x3 parameter blocks.
+void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
+{
+	for (int r = 0; r < 2; ++r)
+		for (int c = 0; c < 3; ++c) t[at + 3 * r + c] = m(r, c);
+}
+void get23(const Eigen::Ref<const TangentVector>& t, int at, Eigen::Matrix<double, 2, 3>& m)
+{
+	for (int r = 0; r < 2; ++r)
+		for (int c = 0; c < 3; ++c) m(r, c) = t[at + 3 * r + c];
+}
+}  // namespace
+
+int tangentPrefix(uint32_t mask)
+{
+	int end = 0;
+	for (const auto& b : kBlocks)
+		if (mask & b.bit) end = std::max(end, b.begin + b.size);
+	return end;
+}
+
+TangentVector NavState::euclidean() const
+{
+	TangentVector t = TangentVector::Zero();
+	t.segment<3>(idx::gyro_bias) = b_w;
+	t.segment<3>(idx::acc) = a_n;
+	t[idx::gravity] = g;
+	t.segment<3>(idx::acc_bias) = b_a;
+	t.segment<3>(idx::vel) = v_n;
+	t.segment<3>(idx::pos) = p_n;
+	t.segment<2>(idx::current_vehicle) = current_vehicle_ne;
+	t.segment<2>(idx::current_far) = current_far_ne;
+	t.segment<2>(idx::adcp_bias) = b_adcp;
+	put23(t, idx::inertia, M_sub);
+	put23(t, idx::damping_lin, Dl_sub);
+	put23(t, idx::damping_quad, Dq_sub);
+	return t;
+}
+
+void NavState::setEuclidean(const Eigen::Ref<const TangentVector>& t)
+{
+	b_w = t.segment<3>(idx::gyro_bias);
+	a_n = t.segment<3>(idx::acc);
+	g = t[idx::gravity];
+	b_a = t.segment<3>(idx::acc_bias);
+	v_n = t.segment<3>(idx::vel);
+	p_n = t.segment<3>(idx::pos);
+	current_vehicle_ne = t.segment<2>(idx::current_vehicle);
+	current_far_ne = t.segment<2>(idx::current_far);
+	b_adcp = t.segment<2>(idx::adcp_bias);
+	get23(t, idx::inertia, M_sub);
+	get23(t, idx::damping_lin, Dl_sub);
+	get23(t, idx::damping_quad, Dq_sub);
+}
+
+NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
+{
+	NavState y;
+	y.setEuclidean(euclidean() + delta);
+	y.R_nb = so3::Exp(delta.segment<3>(idx::att)) * R_nb;
+	return y;
+}
+
+TangentVector NavState::boxminus(const NavState& y) const
+{
+	TangentVector d = euclidean() - y.euclidean();
+	d.segment<3>(idx::att) = so3::Log(R_nb * y.R_nb.transpose());
+	return d;
+}
+
+bool NavState::allFinite() const { return R_nb.allFinite() && euclidean().allFinite(); }
+
+const std::vector<std::string>& tangentNames()
+{
+	static const std::vector<std::string> names = [] {
+		std::vector<std::string> n;
+		auto add3 = [&](const std::string& b, const char* a, const char* c, const char* d) {
+			n.push_back(b + a);
+			n.push_back(b + c);
+			n.push_back(b + d);
+		};
+		add3("att_", "n", "e", "d");
+		add3("gyro_bias_", "x", "y", "z");
+		add3("acc_", "n", "e", "d");
+		n.push_back("gravity");
+		add3("acc_bias_", "x", "y", "z");
+		add3("vel_", "n", "e", "d");
+		add3("pos_", "n", "e", "d");
+		n.push_back("current_n");
+		n.push_back("current_e");
+		n.push_back("current_far_n");
+		n.push_back("current_far_e");
+		n.push_back("adcp_bias_x");
+		n.push_back("adcp_bias_y");
+		for (const char* m : {"M", "Dl", "Dq"})
+			for (const char* rc : {"xx", "xy", "xpsi", "yx", "yy", "ypsi"}) n.push_back(std::string(m) + "_" + rc);
+		return n;
+	}();
+	return names;
+}
+
+}  // namespace auvnav

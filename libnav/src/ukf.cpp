@@ -1,0 +1,275 @@
+#include <auvnav/so3.h>
+#include <auvnav/ukf.h>
+#include <boost/math/distributions/chi_squared.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+namespace auvnav
+{
+namespace
+{
+constexpr int n = idx::dim;
+constexpr int kNonlinear = 6;  // attitude + gyro bias: the only non-affine part of the prediction
+
+void symmetrize(Covariance& P) { P = 0.5 * (P + P.transpose()).eval(); }
+}  // namespace
+
+UtWeights UtWeights::make(int dim, const UtParams& p)
+{
+	UtWeights w;
+	const double lambda = p.alpha * p.alpha * (dim + p.kappa) - dim;
+	w.gamma = std::sqrt(dim + lambda);
+	w.wm0 = lambda / (dim + lambda);
+	w.wc0 = w.wm0 + 1 - p.alpha * p.alpha + p.beta;
+	w.wi = 1.0 / (2 * (dim + lambda));
+	return w;
+}
+
+Eigen::Matrix3d weightedRotationMean(const Eigen::Matrix3d* R, const double* w, int count,
+									 const Eigen::Matrix3d& start)
+{
+	Eigen::Matrix3d mean = start;
+	for (int iter = 0; iter < 10; ++iter)
+	{
+		Eigen::Vector3d d = Eigen::Vector3d::Zero();
+		for (int i = 0; i < count; ++i) d += w[i] * so3::Log(R[i] * mean.transpose());
+		mean = so3::Exp(d) * mean;
+		if (d.squaredNorm() < 1e-24) break;
+	}
+	return mean;
+}
+
+double ManifoldUkf::chiSquareQuantile(int dof, double p)
+{
+	static std::mutex mutex;
+	static std::map<std::pair<int, double>, double> cache;
+	std::lock_guard<std::mutex> lock(mutex);
+	const auto key = std::make_pair(dof, p);
+	auto it = cache.find(key);
+	if (it != cache.end()) return it->second;
+	const double q = p >= 1.0 ? INFINITY : boost::math::quantile(boost::math::chi_squared(dof), p);
+	cache.emplace(key, q);
+	return q;
+}
+
+ManifoldUkf::ManifoldUkf(const ProcessModel& model, const UtParams& ut)
+	: model_(model), ut_(ut), w_(UtWeights::make(n, ut))
+{
+}
+
+void ManifoldUkf::initialize(const NavState& x0, const Covariance& P0)
+{
+	x_ = x0;
+	P_ = P0;
+	symmetrize(P_);
+}
+
+void ManifoldUkf::repairCovariance()
+{
+	// Nearest symmetric positive-definite matrix by eigenvalue clipping.
+	symmetrize(P_);
+	Eigen::SelfAdjointEigenSolver<Covariance> es(P_);
+	Eigen::Matrix<double, n, 1> ev = es.eigenvalues();
+	const double floor = std::max(1e-15, 1e-12 * ev.cwiseAbs().maxCoeff());
+	ev = ev.cwiseMax(floor);
+	P_ = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
+	symmetrize(P_);
+	++repairs_;
+}
+
+void ManifoldUkf::leadingCholeskyColumns(int k)
+{
+	for (int attempt = 0; attempt < 2; ++attempt)
+	{
+		Eigen::LLT<Eigen::MatrixXd> llt(P_.topLeftCorner(k, k));
+		if (llt.info() == Eigen::Success)
+		{
+			const Eigen::MatrixXd L11 = llt.matrixL();
+			L_.topLeftCorner(k, k) = L11;
+			if (k < n)
+				// L21 = P21 L11⁻ᵀ
+				L_.bottomLeftCorner(n - k, k) =
+					L11.triangularView<Eigen::Lower>().solve(P_.bottomLeftCorner(n - k, k).transpose()).transpose();
+			return;
+		}
+		repairCovariance();
+	}
+	// Still not PD after repair (pathological): fall back to the diagonal.
+	L_.leftCols(k).setZero();
+	for (int j = 0; j < k; ++j) L_(j, j) = std::sqrt(std::max(P_(j, j), 1e-15));
+}
+
+void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
+{
+	constexpr int k = kNonlinear;
+	leadingCholeskyColumns(k);
+	const double g = w_.gamma;
+	// Sigma points that move attitude / gyro bias: 2k of them; all others
+	// leave that part at the mean, so they share the centre's propagation.
+	std::array<Eigen::Matrix3d, 2 * k + 1> R_out;
+	std::array<Eigen::Vector3d, 2 * k + 1> bw_out;
+	auto propagateN = [&](const Eigen::Matrix3d& R, const Eigen::Vector3d& bw, int slot) {
+		R_out[slot] = so3::Exp(-omega_ie_n * dt) * R * so3::Exp((omega_ib_b - bw) * dt);
+		const double phi = model_.noise.gyro_bias.phi(dt);
+		bw_out[slot] = phi * bw + (1 - phi) * model_.prior_mean.segment<3>(idx::gyro_bias);
+	};
+	propagateN(x_.R_nb, x_.b_w, 0);
+	for (int j = 0; j < k; ++j)
+		for (int s = 0; s < 2; ++s)
+		{
+			const double sign = s == 0 ? 1.0 : -1.0;
+			const Eigen::Matrix<double, n, 1> c = sign * g * L_.col(j);
+			propagateN(so3::Exp(c.segment<3>(idx::att)) * x_.R_nb, x_.b_w + c.segment<3>(idx::gyro_bias),
+					   1 + 2 * j + s);
+		}
+	// Weighted mean: the centre carries W_m0 plus the 2(n−k) points that do not move it.
+	std::array<double, 2 * k + 1> wm;
+	wm.fill(w_.wi);
+	wm[0] = w_.wm0 + 2 * (n - k) * w_.wi;
+	const Eigen::Matrix3d R_mean = weightedRotationMean(R_out.data(), wm.data(), 2 * k + 1, R_out[0]);
+	Eigen::Vector3d bw_mean = Eigen::Vector3d::Zero();
+	for (int i = 0; i < 2 * k + 1; ++i) bw_mean += wm[i] * bw_out[i];
+	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> d;
+	for (int i = 0; i < 2 * k + 1; ++i)
+	{
+		d[i].head<3>() = so3::Log(R_out[i] * R_mean.transpose());
+		d[i].tail<3>() = bw_out[i] - bw_mean;
+	}
+	Eigen::Matrix<double, k, k> P_NN = (w_.wc0 + 2 * (n - k) * w_.wi) * d[0] * d[0].transpose();
+	for (int i = 1; i < 2 * k + 1; ++i) P_NN += w_.wi * d[i] * d[i].transpose();
+	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
+	Eigen::Matrix<double, n, k> Ac = L_.leftCols(k);
+	model_.applyLinearRows(Ac, dt);
+	Eigen::Matrix<double, k, n - k> P_NL = Eigen::Matrix<double, k, n - k>::Zero();
+	for (int j = 0; j < k; ++j)
+		P_NL += (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]) * Ac.col(j).tail(n - k).transpose();
+	// Affine part: A P Aᵀ exactly (rows, then columns).
+	const double speed_through_water =
+		(x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
+	model_.applyLinearRows(P_, dt);
+	Covariance Pt = P_.transpose();
+	model_.applyLinearRows(Pt, dt);
+	P_ = Pt;
+	P_.topLeftCorner<k, k>() = P_NN;
+	P_.topRightCorner<k, n - k>() = P_NL;
+	P_.bottomLeftCorner<n - k, k>() = P_NL.transpose();
+	P_ += model_.noiseCovariance(dt, speed_through_water);
+	symmetrize(P_);
+
+	NavState next = model_.propagate(x_, omega_ib_b, omega_ie_n, dt);  // affine part of the mean
+	next.R_nb = so3::normalized(R_mean);
+	next.b_w = bw_mean;
+	x_ = next;
+}
+
+UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
+								 bool recovery)
+{
+	UpdateResult res;
+	const int m = static_cast<int>(meas.z.size());
+	res.dim = m;
+	if (m == 0 || meas.R.rows() != m || meas.R.cols() != m)
+	{
+		res.why = "measurement and noise sizes disagree";
+		return res;
+	}
+	if (!meas.z.allFinite() || !meas.R.allFinite())
+	{
+		res.why = "non-finite measurement or noise";
+		return res;
+	}
+	const int k = tangentPrefix(model.uses());
+	if (k == 0)
+	{
+		res.why = "model declares no state dependence";
+		return res;
+	}
+	leadingCholeskyColumns(k);
+	const double g = w_.gamma;
+	const int count = 2 * k + 1;
+	if (z_sigma_.rows() != m || z_sigma_.cols() < count) z_sigma_.resize(m, 2 * n + 1);
+	// Sigma points that move the first k coordinates; the rest evaluate like the centre.
+	if (!model.predict(x_, meas, ctx, z_sigma_.col(0)))
+	{
+		res.why = "model could not evaluate h";
+		return res;
+	}
+	for (int j = 0; j < k; ++j)
+		for (int s = 0; s < 2; ++s)
+		{
+			const TangentVector c = (s == 0 ? g : -g) * L_.col(j);
+			if (!model.predict(x_.boxplus(c), meas, ctx, z_sigma_.col(1 + 2 * j + s)))
+			{
+				res.why = "model could not evaluate h";
+				return res;
+			}
+		}
+	if (!z_sigma_.leftCols(count).allFinite())
+	{
+		res.why = "model returned a non-finite h";
+		return res;
+	}
+	// Mean in the measurement space, via residuals about the centre (wraps
+	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one.
+	const double w_center_c = w_.wc0 + 2 * (n - k) * w_.wi;
+	Eigen::VectorXd r(m), z_mean = z_sigma_.col(0);
+	Eigen::VectorXd acc = Eigen::VectorXd::Zero(m);
+	for (int i = 1; i < count; ++i)
+	{
+		model.residual(z_sigma_.col(i), z_sigma_.col(0), r);
+		acc += w_.wi * r;
+	}
+	z_mean += acc;	// centre residual is zero; its weight does not matter
+	Eigen::MatrixXd E(m, count);
+	for (int i = 0; i < count; ++i)
+	{
+		model.residual(z_sigma_.col(i), z_mean, r);
+		E.col(i) = r;
+	}
+	Eigen::MatrixXd S = w_center_c * E.col(0) * E.col(0).transpose() + meas.R;
+	for (int i = 1; i < count; ++i) S.noalias() += w_.wi * E.col(i) * E.col(i).transpose();
+	Eigen::Matrix<double, n, Eigen::Dynamic> Pxz = Eigen::Matrix<double, n, Eigen::Dynamic>::Zero(n, m);
+	for (int j = 0; j < k; ++j)
+		Pxz.noalias() += (w_.wi * g) * L_.col(j) * (E.col(1 + 2 * j) - E.col(2 + 2 * j)).transpose();
+
+	Eigen::VectorXd nu(m);
+	model.residual(meas.z, z_mean, nu);
+	Eigen::LLT<Eigen::MatrixXd> llt(S);
+	if (llt.info() != Eigen::Success || !nu.allFinite())
+	{
+		res.why = "innovation covariance not positive definite";
+		return res;
+	}
+	res.nis = nu.dot(llt.solve(nu));
+	const double gate = chiSquareQuantile(m, model.gateProbability());
+	if (res.nis > gate)
+	{
+		if (!recovery)
+		{
+			res.status = UpdateStatus::Rejected;
+			res.why = "chi-square gate";
+			return res;
+		}
+		// Re-acquire: treat the innovation as if it were on the gate boundary.
+		S *= res.nis / gate;
+		llt.compute(S);
+		res.status = UpdateStatus::Recovered;
+	}
+	else
+		res.status = UpdateStatus::Accepted;
+	// K = Pxz S⁻¹ via the factorisation; P −= K S Kᵀ = Pxz S⁻¹ Pxzᵀ.
+	const Eigen::Matrix<double, Eigen::Dynamic, n> KT = llt.solve(Pxz.transpose());	 // S⁻¹ Pxzᵀ
+	const TangentVector dx = KT.transpose() * nu;
+	x_ = x_.boxplus(dx);
+	x_.R_nb = so3::normalized(x_.R_nb);
+	P_.noalias() -= Pxz * KT;
+	symmetrize(P_);
+	return res;
+}
+
+}  // namespace auvnav
