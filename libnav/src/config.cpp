@@ -74,6 +74,38 @@ Node Node::fromText(const std::string& text, const std::string& origin)
 	}
 }
 
+std::string Node::toYaml() const
+{
+	if (y_.isNullNode() || (y_.isMap() && y_.empty())) return "{}\n";
+	std::ostringstream o;
+	y_.printAsYAML(o);
+	return o.str();
+}
+
+void Node::set(const std::string& dotted_path, const std::string& value)
+{
+	std::vector<std::string> keys;
+	std::stringstream ss(dotted_path);
+	for (std::string k; std::getline(ss, k, '.');)
+	{
+		if (k.empty()) throw ConfigError("override '" + dotted_path + "': empty key");
+		keys.push_back(k);
+	}
+	if (keys.empty()) throw ConfigError("override: empty key path");
+	yaml::node_t* n = &y_.node();
+	std::string walked;
+	for (std::size_t i = 0; i < keys.size(); ++i)
+	{
+		if (n->isNullNode()) n->d.emplace<yaml::map_t>();
+		if (!n->isMap())
+			throw ConfigError(file_ + ": override '" + dotted_path + "': '" + walked + "' is not a map");
+		auto& m = n->asMap();
+		n = &m[yaml::node_t(keys[i])];
+		walked += (walked.empty() ? "" : ".") + keys[i];
+	}
+	n->d.emplace<yaml::scalar_t>().emplace<std::string>(value);
+}
+
 std::string Node::where(const std::string& key) const
 {
 	return file_ + ": " + (path_.empty() ? key : path_ + "." + key);
@@ -222,6 +254,20 @@ std::vector<double> Node::numbers(const std::string& key) const
 		}
 		if (!parseFinite(s, v)) fail(key, "expected finite numbers, got '" + s + "'");
 		out.push_back(v);
+	}
+	return out;
+}
+
+std::vector<std::string> Node::strings(const std::string& key) const
+{
+	if (!has(key)) fail(key, "missing required list");
+	yaml sub(y_[key].node());
+	if (!sub.isSequence() || sub.asSequence().empty()) fail(key, "expected a non-empty list");
+	std::vector<std::string> out;
+	for (const auto& n : sub.asSequence())
+	{
+		if (!yaml(n).isScalar()) fail(key, "expected a list of names");
+		out.push_back(yaml(n).as<std::string>());
 	}
 	return out;
 }

@@ -56,8 +56,16 @@ class Node
 	/** Required sequence of exactly 3 finite numbers. */
 	Eigen::Vector3d vector3(const std::string& key) const;
 	Eigen::Vector3d vector3(const std::string& key, const Eigen::Vector3d& default_value) const;
+	/** Required sequence of strings (any length >= 1). */
+	std::vector<std::string> strings(const std::string& key) const;
 	/** Required sequence of finite numbers (any length >= 1). */
 	std::vector<double> numbers(const std::string& key) const;
+
+	/** This subtree as YAML text (to hand a plugin its configuration). */
+	std::string toYaml() const;
+	/** Sets `dotted.key.path` to the scalar `value` (creating maps on the way),
+	 *  for command-line overrides such as `--set filter.initial.heading_deg=25`. */
+	void set(const std::string& dotted_path, const std::string& value);
 
 	const std::string& file() const { return file_; }
 	/** "file: path.to.key" for error messages. */

@@ -43,9 +43,10 @@ inline Eigen::Vector3d Log(const Eigen::Matrix3d& R)
 	const double theta = std::atan2(s, c);
 	if (theta < 1e-6) return 0.5 * (1 + theta * theta / 6) * w;  // θ/sinθ ≈ 1 + θ²/6
 	if (M_PI - theta > 1e-3) return (theta / (2 * std::sin(theta))) * w;
-	// Near π: axis from the largest diagonal of (R + I)/2 = a aᵀ (for θ = π);
-	// sign from the antisymmetric part.
-	const Eigen::Matrix3d B = 0.5 * (R + Eigen::Matrix3d::Identity());
+	// Near π: the symmetric part (R + Rᵀ)/2 = cos θ·I + (1 − cos θ)·a aᵀ gives
+	// a aᵀ exactly (not (R + I)/2, which keeps the O(π − θ) antisymmetric part);
+	// axis from its largest diagonal, sign from the antisymmetric part.
+	const Eigen::Matrix3d B = (0.5 * (R + R.transpose()) - c * Eigen::Matrix3d::Identity()) / (1 - c);
 	int k = 0;
 	B.diagonal().maxCoeff(&k);
 	Eigen::Vector3d axis = B.col(k) / std::sqrt(std::max(B(k, k), 1e-300));

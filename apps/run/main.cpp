@@ -1,0 +1,150 @@
+// auvnav-run: the navigator on an MRPT rawlog. See README.md.
+#include <auvnav/io/rawlog.h>
+#include <auvnav/navigator.h>
+#include <auvnav/obs/register.h>
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "run_outputs.h"
+
+namespace
+{
+volatile std::sig_atomic_t g_stop = 0;
+void onSignal(int) { g_stop = 1; }
+}  // namespace
+
+int main(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Runs the auvnav navigator (manifold UKF with sensor plugins) on an MRPT rawlog and writes "
+		"DIR/trajectory.tum, DIR/states.csv and DIR/summary.json, incrementally.",
+		' ', "0.1.0");
+	TCLAP::UnlabeledValueArg<std::string> rawlog("rawlog", "Input rawlog", true, "", "RAWLOG", cmd);
+	TCLAP::ValueArg<std::string> config("c", "config", "Navigator YAML (e.g. config/flatfish.yaml)", true, "",
+										"FILE", cmd);
+	TCLAP::ValueArg<std::string> out("o", "out", "Output directory (created)", true, "", "DIR", cmd);
+	TCLAP::MultiArg<std::string> set("s", "set", "Override a config value, e.g. filter.initial.heading_deg=25",
+									 false, "KEY=VALUE", cmd);
+	TCLAP::MultiArg<std::string> deny("d", "deny",
+									  "Data denial: ignore sensor LABEL from FROM to TO seconds after the first "
+									  "observation, e.g. GPS:1200:1e9 (repeatable)",
+									  false, "LABEL:FROM:TO", cmd);
+	TCLAP::SwitchArg quiet("q", "quiet", "No progress display", cmd);
+	try
+	{
+		if (!cmd.parse(argc, argv)) return 0;
+	}
+	catch (const TCLAP::ArgException& e)
+	{
+		std::cerr << "auvnav-run: " << e.error() << " (" << e.argId() << ")\n";
+		return 1;
+	}
+	auvnav::obs::registerAllClasses();
+	std::signal(SIGINT, onSignal);
+	std::signal(SIGTERM, onSignal);
+	const auto t0 = std::chrono::steady_clock::now();
+	auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+
+	std::unique_ptr<auvnav::Navigator> nav;
+	std::unique_ptr<auvnav::run::RunOutputs> outputs;
+	auvnav::PluginHost* host_ptr = nullptr;
+	try
+	{
+		auto cfg = auvnav::config::Node::load(config.getValue());
+		for (const auto& kv : set.getValue())
+		{
+			const auto eq = kv.find('=');
+			if (eq == std::string::npos || eq == 0)
+				throw auvnav::config::ConfigError("--set '" + kv + "': expected KEY=VALUE");
+			cfg.set(kv.substr(0, eq), kv.substr(eq + 1));
+		}
+		std::vector<std::string> paths;
+		if (cfg.has("plugin_paths"))
+			for (const auto& p : cfg.strings("plugin_paths"))
+				paths.push_back((std::filesystem::path(config.getValue()).parent_path() / p).string());
+		static auvnav::PluginHost host(paths);	// outlives the models
+		host_ptr = &host;
+		nav = std::make_unique<auvnav::Navigator>(cfg, host);
+		for (const auto& d : deny.getValue())
+		{
+			auvnav::DenialWindow w;
+			const auto a = d.find(':'), b = d.rfind(':');
+			char* end = nullptr;
+			if (a == std::string::npos || a == b || a == 0)
+				throw auvnav::config::ConfigError("--deny '" + d + "': expected LABEL:FROM:TO");
+			w.labels = {d.substr(0, a)};
+			w.from_s = std::strtod(d.c_str() + a + 1, &end);
+			w.to_s = std::strtod(d.c_str() + b + 1, nullptr);
+			if (!(w.to_s > w.from_s) || w.from_s < 0)
+				throw auvnav::config::ConfigError("--deny '" + d + "': need 0 <= FROM < TO");
+			nav->addDenial(w);
+		}
+		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
+		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate);
+	}
+	catch (const std::exception& e)
+	{
+		std::cerr << "auvnav-run: error: " << e.what() << "\n";
+		return 2;
+	}
+	(void)host_ptr;
+
+	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
+	nav->on_predict = [&](const auvnav::Navigator& n) { outputs->onState(n); };
+	std::string error;
+	double next_progress = 0.5;
+	try
+	{
+		auvnav::io::RawlogReader reader(rawlog.getValue());
+		while (!g_stop)
+		{
+			const auto obs = reader.next();
+			if (!obs) break;
+			nav->process(*obs);
+			if (progress && wall() > next_progress)
+			{
+				next_progress = wall() + 0.5;
+				const double data_s = nav->time() - nav->startTime();
+				std::fprintf(stderr, "\r  %8.1f s of data processed, %6.0fx real time   ", data_s, data_s / wall());
+			}
+		}
+	}
+	catch (const std::exception& e)
+	{
+		error = e.what();
+	}
+	if (progress) std::fprintf(stderr, "\r%60s\r", "");
+	outputs->flush();
+	outputs->writeSummary(*nav, wall(), g_stop != 0, rawlog.getValue(), error);
+
+	const double data_s = nav->time() - nav->startTime();
+	std::printf("auvnav-run: %.1f s of data in %.2f s (%.0fx real time)%s\n", data_s, wall(), data_s / wall(),
+				g_stop ? " [interrupted]" : "");
+	std::printf("  %-10s %-14s %9s %9s %8s %8s %8s %8s  %s\n", "sensor", "plugin", "accepted", "rejected", "invalid",
+				"skipped", "denied", "recov.", "NIS/dim");
+	for (const auto& s : nav->stats())
+		std::printf("  %-10s %-14s %9zu %9zu %8zu %8zu %8zu %8zu  %.2f\n", s.label.c_str(), s.plugin.c_str(), s.accepted,
+					s.rejected, s.invalid, s.skipped, s.denied, s.recovered,
+					s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN);
+	if (nav->initialized())
+	{
+		const auto& P = nav->filter().covariance();
+		const auto p = nav->bodyPosition_n();
+		std::printf("  final position N %.2f E %.2f D %.2f m (1 sigma %.2f / %.2f / %.2f m), heading sigma %.3f deg\n",
+					p.x(), p.y(), p.z(), std::sqrt(P(16, 16)), std::sqrt(P(17, 17)), std::sqrt(P(18, 18)),
+					std::sqrt(P(2, 2)) * 180 / M_PI);
+	}
+	std::printf("  outputs in %s: trajectory.tum, states.csv, summary.json\n", out.getValue().c_str());
+	if (!error.empty())
+	{
+		std::fprintf(stderr, "auvnav-run: error: %s\n", error.c_str());
+		return 2;
+	}
+	return 0;
+}

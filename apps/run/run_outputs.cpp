@@ -1,0 +1,137 @@
+#include "run_outputs.h"
+
+#include <auvnav/state.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace auvnav::run
+{
+namespace
+{
+constexpr double kRad2Deg = 180.0 / M_PI;
+
+std::string jsonEscape(const std::string& s)
+{
+	std::string o;
+	for (char c : s)
+	{
+		if (c == '"' || c == '\\') o += '\\';
+		if (static_cast<unsigned char>(c) < 0x20)
+		{
+			o += ' ';
+			continue;
+		}
+		o += c;
+	}
+	return o;
+}
+
+std::string num(double v)
+{
+	if (!std::isfinite(v)) return "null";
+	char b[64];
+	std::snprintf(b, sizeof b, "%.10g", v);
+	return b;
+}
+}  // namespace
+
+RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), period_s_(1.0 / rate_hz)
+{
+	fs::create_directories(dir);
+	tum_.open(fs::path(dir) / "trajectory.tum");
+	csv_.open(fs::path(dir) / "states.csv");
+	if (!tum_ || !csv_) throw std::runtime_error("cannot write outputs in " + dir);
+	tum_ << "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)\n";
+	const auto& names = tangentNames();
+	csv_ << "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
+	for (std::size_t i = 3; i < names.size(); ++i) csv_ << ',' << names[i];
+	csv_ << ",body_n_m,body_e_m,body_d_m";
+	for (const auto& n : names) csv_ << ",sigma_" << n;
+	csv_ << '\n';
+}
+
+void RunOutputs::onState(const Navigator& nav)
+{
+	const double t = nav.time();
+	if (t - last_t_ < period_s_ - 1e-9) return;
+	last_t_ = t;
+	const NavState& x = nav.filter().state();
+	const Eigen::Quaterniond q(x.R_nb);
+	const Eigen::Vector3d p = nav.bodyPosition_n();
+	char line[256];
+	std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", t, p.x(), p.y(), p.z(), q.x(), q.y(),
+				  q.z(), q.w());
+	tum_ << line;
+	const Eigen::Matrix3d& R = x.R_nb;
+	const double roll = std::atan2(R(2, 1), R(2, 2)) * kRad2Deg;
+	const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0)) * kRad2Deg;
+	const double yaw = std::atan2(R(1, 0), R(0, 0)) * kRad2Deg;
+	std::ostringstream s;
+	s.precision(10);
+	s << std::fixed << t;
+	s.unsetf(std::ios::fixed);
+	s << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << roll << ',' << pitch << ',' << yaw;
+	const TangentVector e = x.euclidean();
+	for (int i = 3; i < idx::dim; ++i) s << ',' << e[i];
+	s << ',' << p.x() << ',' << p.y() << ',' << p.z();
+	const auto& P = nav.filter().covariance();
+	for (int i = 0; i < idx::dim; ++i) s << ',' << std::sqrt(std::max(P(i, i), 0.0));
+	csv_ << s.str() << '\n';
+	if (++rows_ % 50 == 0) flush();
+}
+
+void RunOutputs::flush()
+{
+	tum_.flush();
+	csv_.flush();
+}
+
+void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
+							  const std::string& error) const
+{
+	const double data_s = nav.startTime() > 0 ? nav.time() - nav.startTime() : 0.0;
+	std::ostringstream j;
+	j << "{\n  \"rawlog\": \"" << jsonEscape(rawlog) << "\",\n";
+	j << "  \"completed\": " << (interrupted || !error.empty() ? "false" : "true") << ",\n";
+	if (!error.empty()) j << "  \"error\": \"" << jsonEscape(error) << "\",\n";
+	j << "  \"initialized\": " << (nav.initialized() ? "true" : "false") << ",\n";
+	j << "  \"data_duration_s\": " << num(data_s) << ",\n";
+	j << "  \"wall_time_s\": " << num(wall_s) << ",\n";
+	j << "  \"real_time_factor\": " << num(wall_s > 0 ? data_s / wall_s : 0) << ",\n";
+	j << "  \"predictions\": " << nav.predictions() << ",\n";
+	j << "  \"imu_gaps\": " << nav.imuGaps() << ",\n";
+	j << "  \"cholesky_repairs\": " << nav.filter().choleskyRepairs() << ",\n";
+	j << "  \"sensors\": [\n";
+	const auto stats = nav.stats();
+	for (std::size_t i = 0; i < stats.size(); ++i)
+	{
+		const auto& s = stats[i];
+		j << "    {\"label\": \"" << jsonEscape(s.label) << "\", \"plugin\": \"" << jsonEscape(s.plugin)
+		  << "\", \"accepted\": " << s.accepted << ", \"recovered\": " << s.recovered
+		  << ", \"rejected\": " << s.rejected << ", \"invalid\": " << s.invalid << ", \"skipped\": " << s.skipped
+		  << ", \"denied\": " << s.denied << ", \"late\": " << s.late << ", \"before_init\": " << s.before_init
+		  << ", \"mean_nis_per_dim\": " << num(s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN)
+		  << ", \"last_problem\": \"" << jsonEscape(s.last_problem) << "\"}" << (i + 1 < stats.size() ? "," : "")
+		  << "\n";
+	}
+	j << "  ],\n  \"final_sigma\": {";
+	const auto& names = tangentNames();
+	const auto& P = nav.filter().covariance();
+	for (int i = 0; i < idx::dim; ++i)
+		j << (i ? ", " : "") << "\"" << names[i] << "\": " << num(nav.initialized() ? std::sqrt(std::max(P(i, i), 0.0)) : NAN);
+	j << "}\n}\n";
+	const fs::path tmp = fs::path(dir_) / "summary.json.tmp";
+	{
+		std::ofstream f(tmp);
+		f << j.str();
+	}
+	fs::rename(tmp, fs::path(dir_) / "summary.json");
+}
+
+}  // namespace auvnav::run

@@ -1,0 +1,40 @@
+#pragma once
+/** @file run_outputs.h
+ *  auvnav-run's output files, written incrementally and flushed so that a run
+ *  killed half way leaves valid files up to that point:
+ *   - trajectory.tum: `t x y z qx qy qz qw`, body-origin position (NED tangent
+ *     frame, metres) and body-to-NED attitude: the simulator's ground-truth
+ *     convention;
+ *   - states.csv: header row; time, the full state mean (attitude as
+ *     quaternion and roll/pitch/yaw in degrees for reading), the body-origin
+ *     position, and the standard deviation of every tangent coordinate;
+ *   - summary.json: per-sensor counts, consistency (mean NIS per dimension),
+ *     final standard deviations, run time and real-time factor.
+ */
+#include <auvnav/navigator.h>
+
+#include <fstream>
+#include <string>
+
+namespace auvnav::run
+{
+class RunOutputs
+{
+   public:
+	RunOutputs(const std::string& dir, double rate_hz);
+	/** Appends a row if at least 1/rate since the last one. */
+	void onState(const Navigator& nav);
+	void flush();
+	/** Writes summary.json (complete rewrite, atomically via rename). */
+	void writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
+					  const std::string& error) const;
+	std::size_t rows() const { return rows_; }
+
+   private:
+	std::string dir_;
+	double period_s_;
+	double last_t_ = -1e300;
+	std::ofstream tum_, csv_;
+	std::size_t rows_ = 0;
+};
+}  // namespace auvnav::run

@@ -1,0 +1,31 @@
+# GoogleTest helpers shared by every directory that registers tests (tests/,
+# plugins/<name>/). Included from the top-level CMakeLists.txt before any
+# add_subdirectory, and only when AUVNAV_BUILD_TESTS is ON, so that plugins can
+# register their own tests next to their sources.
+include_guard(GLOBAL)
+
+find_package(GTest REQUIRED)
+include(GoogleTest)
+
+# Read-only reference data (committed rawlogs). Tests write their scratch files
+# elsewhere (see the temporary-directory helpers in each test).
+set(AUVNAV_TEST_DATA_DIR "${PROJECT_SOURCE_DIR}/tests/data")
+
+# auvnav_add_gtest(<target> PREFIX <ctest name prefix> SOURCES <src...> LIBS <lib...>)
+# One GoogleTest executable; its tests are discovered when CTest runs
+# (PRE_TEST), not at build time, so a broken test binary cannot break the build
+# and cross-building stays possible.
+function(auvnav_add_gtest target)
+  cmake_parse_arguments(ARG "" "PREFIX" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "auvnav_add_gtest(${target}): no SOURCES")
+  endif()
+  add_executable(${target} ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE GTest::gtest_main auvnav_warnings ${ARG_LIBS})
+  target_compile_definitions(${target} PRIVATE
+    AUVNAV_TEST_DATA_DIR="${AUVNAV_TEST_DATA_DIR}")
+  gtest_discover_tests(${target}
+    TEST_PREFIX "${ARG_PREFIX}"
+    DISCOVERY_MODE PRE_TEST
+    WORKING_DIRECTORY "${CMAKE_CURRENT_BINARY_DIR}")
+endfunction()

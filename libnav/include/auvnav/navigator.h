@@ -1,0 +1,115 @@
+#pragma once
+/** @file navigator.h
+ *  The navigator: a ManifoldUkf fed with observations in time order.
+ *
+ *  - The IMU (label from `imu.label`) drives prediction: each sample
+ *    predicts from the previous sample's time with its gyro reading; the same
+ *    observation then goes to the plugins configured for that label (the
+ *    accelerometer update). Other observations are applied at the filter's
+ *    current time (the latest IMU sample, ≤ one IMU period earlier).
+ *  - Start-up: the first `imu.leveling_s` of accelerometer data give roll and
+ *    pitch; heading comes from `filter.initial.heading_deg`; position from the
+ *    first GPS fix (`filter.initial.position: gps`) or from `north_m`,
+ *    `east_m` (`position: config`); depth from `depth_m`.
+ *  - Every update is counted per sensor: accepted, recovered, rejected by the
+ *    gate, invalid, skipped, denied (data denial windows), late. A sensor
+ *    rejected continuously for `gates.recovery_after_s` gets its next update
+ *    with the innovation covariance inflated onto the gate (it cannot lock
+ *    itself out, e.g. the DVL after a long dropout).
+ *  - Bad input never reaches the state: non-finite or absent IMU data,
+ *    duplicate or backward timestamps, NaN measurements are counted and dropped.
+ */
+#include <auvnav/config.h>
+#include <auvnav/earth.h>
+#include <auvnav/plugin_host.h>
+#include <auvnav/ukf.h>
+#include <mrpt/obs/CObservation.h>
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace auvnav
+{
+struct SensorStats
+{
+	std::string label, plugin;
+	std::size_t accepted = 0, recovered = 0, rejected = 0, invalid = 0, skipped = 0, denied = 0, late = 0,
+				before_init = 0;
+	double nis_sum = 0;		 //!< over accepted updates
+	double nis_dim_sum = 0;	 //!< Σ dimensions of those updates (E[NIS] = dim)
+	std::string last_problem;
+};
+
+struct DenialWindow
+{
+	std::vector<std::string> labels;
+	double from_s = 0, to_s = 0;  //!< seconds from the first observation
+};
+
+class Navigator
+{
+   public:
+	/** Builds the filter and loads the plugins named in `cfg`. Throws
+	 *  ConfigError / PluginError with a clear message. */
+	Navigator(const config::Node& cfg, PluginHost& host);
+	~Navigator();
+
+	/** Feeds one observation (must come in file order). */
+	void process(const mrpt::obs::CObservation& obs);
+
+	bool initialized() const { return initialized_; }
+	const ManifoldUkf& filter() const { return *ukf_; }
+	double time() const { return t_s_; }					//!< filter time [s, Unix]
+	double startTime() const { return t0_s_; }				//!< first observation [s, Unix]
+	const earth::TangentFrame& frame() const { return *frame_; }
+	const Eigen::Vector3d& imuPosition_b() const { return imu_position_b_; }
+	std::vector<SensorStats> stats() const;
+	const SensorStats& imuStats() const { return imu_stats_; }
+	std::size_t predictions() const { return predictions_; }
+	std::size_t imuGaps() const { return imu_gaps_; }
+
+	/** Position of the body origin (CG) and attitude, from the IMU state. */
+	Eigen::Vector3d bodyPosition_n() const;
+
+	/** Adds a data-denial window (as the config's `denial` list does). */
+	void addDenial(const DenialWindow& w) { denial_.push_back(w); }
+
+	/** Called after every prediction (i.e. at IMU rate) once initialised. */
+	std::function<void(const Navigator&)> on_predict;
+
+   private:
+	struct Slot;
+	void handleImu(const mrpt::obs::CObservation& obs);
+	void initialize();
+	void dispatch(const mrpt::obs::CObservation& obs, double t_obs);
+	bool denied(const std::string& label, double t_obs) const;
+
+	std::unique_ptr<earth::TangentFrame> frame_;
+	std::unique_ptr<ManifoldUkf> ukf_;
+	std::vector<std::unique_ptr<Slot>> slots_;
+	std::vector<DenialWindow> denial_;
+	config::Node initial_;
+	std::string imu_label_;
+	Eigen::Vector3d imu_position_b_ = Eigen::Vector3d::Zero();
+	double leveling_s_ = 1.0, max_gap_s_ = 0.5, recovery_after_s_ = 30, late_tolerance_s_ = 0.05;
+	bool position_from_gps_ = false;
+	bool earth_rate_ = true;  // filter.earth_rate: false only for studies (no gyrocompassing)
+	std::string gps_label_;
+	TangentVector prior_mean_ = TangentVector::Zero();
+	Covariance P0_ = Covariance::Zero();
+
+	bool initialized_ = false;
+	double t_s_ = 0, t0_s_ = -1;
+	Eigen::Vector3d omega_ib_b_ = Eigen::Vector3d::Zero();
+	Eigen::Vector3d f_sum_ = Eigen::Vector3d::Zero(), w_sum_ = Eigen::Vector3d::Zero();
+	std::size_t leveling_samples_ = 0;
+	double leveling_start_s_ = -1;
+	std::optional<Eigen::Vector3d> gps_fix_n_;
+	SensorStats imu_stats_;
+	std::size_t predictions_ = 0, imu_gaps_ = 0;
+};
+
+}  // namespace auvnav

@@ -1,0 +1,318 @@
+#include <auvnav/navigator.h>
+#include <auvnav/so3.h>
+#include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/gnss_messages_ascii_nmea.h>
+
+#include <cmath>
+
+namespace auvnav
+{
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+
+Eigen::Matrix<double, 2, 3> subMatrix(const config::Node& n, const std::string& key)
+{
+	// Rows x, y; columns x, y, ψ of the 6x6 diagonal matrix given by its diagonal.
+	const auto d = n.numbers(key);
+	if (d.size() != 6) n.fail(key, "expected 6 diagonal values");
+	Eigen::Matrix<double, 2, 3> m = Eigen::Matrix<double, 2, 3>::Zero();
+	m(0, 0) = d[0];
+	m(1, 1) = d[1];
+	return m;
+}
+
+void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
+{
+	for (int r = 0; r < 2; ++r)
+		for (int c = 0; c < 3; ++c) t[at + 3 * r + c] = m(r, c);
+}
+}  // namespace
+
+struct Navigator::Slot
+{
+	SensorStats stats;
+	ModelPtr model;
+	double rejecting_since_s = -1;	// start of the current run of rejections
+	std::vector<Measurement> buffer;
+};
+
+Navigator::~Navigator() = default;
+
+Navigator::Navigator(const config::Node& cfg, PluginHost& host)
+{
+	const auto nf = cfg.child("navigation_frame").child("origin");
+	frame_ = std::make_unique<earth::TangentFrame>(earth::Geodetic{nf.inRange("latitude_deg", -85, 85) * kDeg,
+																	 nf.inRange("longitude_deg", -180, 180) * kDeg,
+																	 nf.number("height_m", 0.0)});
+	const auto imu = cfg.child("imu");
+	imu_label_ = imu.string("label");
+	imu_position_b_ = imu.vector3("position_m");
+	leveling_s_ = imu.inRange("leveling_s", 0.01, 600, 1.0);
+	max_gap_s_ = imu.inRange("max_gap_s", 0.01, 10, 0.5);
+	imu_stats_.label = imu_label_;
+	imu_stats_.plugin = "(prediction)";
+
+	const auto f = cfg.child("filter");
+	initial_ = f.child("initial");
+	// Prior means of the Gauss–Markov states: zero biases and currents,
+	// model parameters from the system identification.
+	const auto vm = f.child("vehicle_model");
+	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
+	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
+	put23(prior_mean_, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));
+	const ProcessModel pm = ProcessModel::fromConfig(f.child("process_noise"), prior_mean_);
+	UtParams ut;
+	if (f.has("unscented"))
+	{
+		const auto u = f.child("unscented");
+		ut.alpha = u.inRange("alpha", 1e-4, 1.0, ut.alpha);
+		ut.beta = u.nonNegative("beta", ut.beta);
+		ut.kappa = u.number("kappa", ut.kappa);
+	}
+	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
+	earth_rate_ = f.boolean("earth_rate", true);
+
+	// Initial covariance (diagonal, tangent order).
+	const auto& in = initial_;
+	auto set3 = [&](int at, double sigma) { P0_.block<3, 3>(at, at).diagonal().setConstant(sigma * sigma); };
+	const double rp = in.positive("roll_pitch_sigma_deg") * kDeg;
+	P0_(0, 0) = P0_(1, 1) = rp * rp;
+	P0_(2, 2) = std::pow(in.positive("heading_sigma_deg") * kDeg, 2);
+	set3(idx::gyro_bias, in.positive("gyro_bias_sigma_deg_per_h") * kDeg / 3600);
+	set3(idx::acc, in.positive("acceleration_sigma_mps2"));
+	P0_(idx::gravity, idx::gravity) = std::pow(in.positive("gravity_sigma_mps2"), 2);
+	set3(idx::acc_bias, in.positive("accel_bias_sigma_mg") * 1e-3 * 9.80665);
+	set3(idx::vel, in.positive("velocity_sigma_mps"));
+	set3(idx::pos, in.positive("position_sigma_m"));
+	const double sc = in.positive("current_sigma_mps");
+	P0_.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().setConstant(sc * sc);
+	const double sb = in.positive("adcp_bias_sigma_mps");
+	P0_.block<2, 2>(idx::adcp_bias, idx::adcp_bias).diagonal().setConstant(sb * sb);
+	for (int i = 0; i < 18; ++i)
+		P0_(idx::inertia + i, idx::inertia + i) = std::pow(std::max(pm.noise.parameter_sigma[i], 1e-6), 2);
+	const std::string position_source = in.string("position", "config");
+	if (position_source == "gps")
+	{
+		position_from_gps_ = true;
+		gps_label_ = in.string("gps_label", "GPS");
+	}
+	else if (position_source != "config")
+		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
+
+	if (cfg.has("gates")) recovery_after_s_ = cfg.child("gates").positive("recovery_after_s", recovery_after_s_);
+	if (cfg.has("denial"))
+		for (const auto& d : cfg.sequence("denial"))
+		{
+			DenialWindow w;
+			w.from_s = d.nonNegative("from_s");
+			w.to_s = d.positive("to_s");
+			if (w.to_s <= w.from_s) d.fail("to_s", "must be after from_s");
+			for (const auto& l : d.strings("labels")) w.labels.push_back(l);
+			denial_.push_back(w);
+		}
+
+	for (const auto& s : cfg.sequence("sensors"))
+	{
+		auto slot = std::make_unique<Slot>();
+		slot->stats.label = s.string("label");
+		slot->stats.plugin = s.string("plugin");
+		const std::string yaml = s.has("config") ? s.child("config").toYaml() : "{}\n";
+		slot->model = host.create(slot->stats.plugin, yaml, slot->stats.label);
+		slots_.push_back(std::move(slot));
+	}
+}
+
+bool Navigator::denied(const std::string& label, double t_obs) const
+{
+	const double rel = t_obs - t0_s_;
+	for (const auto& w : denial_)
+		if (rel >= w.from_s && rel < w.to_s)
+			for (const auto& l : w.labels)
+				if (l == label) return true;
+	return false;
+}
+
+std::vector<SensorStats> Navigator::stats() const
+{
+	std::vector<SensorStats> out{imu_stats_};
+	for (const auto& s : slots_) out.push_back(s->stats);
+	return out;
+}
+
+Eigen::Vector3d Navigator::bodyPosition_n() const
+{
+	const NavState& x = ukf_->state();
+	return x.p_n - x.R_nb * imu_position_b_;
+}
+
+void Navigator::process(const mrpt::obs::CObservation& obs)
+{
+	const double t = mrpt::Clock::toDouble(obs.timestamp);
+	if (!std::isfinite(t) || t <= 0)
+	{
+		++imu_stats_.invalid;  // counted with the IMU: there is no valid time to place it
+		imu_stats_.last_problem = "observation '" + obs.sensorLabel + "' with an invalid timestamp";
+		return;
+	}
+	if (t0_s_ < 0) t0_s_ = t;
+	if (obs.sensorLabel == imu_label_)
+	{
+		if (!denied(obs.sensorLabel, t)) handleImu(obs);
+		else ++imu_stats_.denied;
+	}
+	// Record the first GPS fix for initialisation.
+	if (!initialized_ && position_from_gps_ && obs.sensorLabel == gps_label_ && !denied(obs.sensorLabel, t))
+		if (const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs))
+			if (gps->has_GGA_datum())
+			{
+				const auto& gga = gps->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>();
+				const double lat = gga.fields.latitude_degrees, lon = gga.fields.longitude_degrees;
+				if (gga.fields.fix_quality > 0 && std::isfinite(lat) && std::isfinite(lon))
+					gps_fix_n_ = frame_->toNed({lat * kDeg, lon * kDeg, 0.0});
+			}
+	dispatch(obs, t);
+}
+
+void Navigator::handleImu(const mrpt::obs::CObservation& obs)
+{
+	const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(&obs);
+	const double t = mrpt::Clock::toDouble(obs.timestamp);
+	using namespace mrpt::obs;
+	if (!imu || !imu->has(IMU_WX) || !imu->has(IMU_WY) || !imu->has(IMU_WZ) || !imu->has(IMU_X_ACC))
+	{
+		++imu_stats_.invalid;
+		imu_stats_.last_problem = "IMU observation without gyro/accelerometer data";
+		return;
+	}
+	const Eigen::Vector3d w(imu->get(IMU_WX), imu->get(IMU_WY), imu->get(IMU_WZ));
+	const Eigen::Vector3d f(imu->get(IMU_X_ACC), imu->get(IMU_Y_ACC), imu->get(IMU_Z_ACC));
+	if (!w.allFinite() || !f.allFinite())
+	{
+		++imu_stats_.invalid;
+		imu_stats_.last_problem = "non-finite IMU sample";
+		return;
+	}
+	if (!initialized_)
+	{
+		if (leveling_start_s_ < 0) leveling_start_s_ = t;
+		f_sum_ += f;
+		w_sum_ += w;
+		++leveling_samples_;
+		t_s_ = t;
+		omega_ib_b_ = w;
+		++imu_stats_.before_init;
+		if (t - leveling_start_s_ >= leveling_s_ && (!position_from_gps_ || gps_fix_n_)) initialize();
+		return;
+	}
+	const double dt = t - t_s_;
+	if (dt <= 0)
+	{
+		++imu_stats_.invalid;
+		imu_stats_.last_problem = dt == 0 ? "duplicate IMU timestamp" : "IMU timestamp going backwards";
+		return;
+	}
+	// A gap: predict in steps no longer than the nominal limit with the new rate.
+	const int steps = dt > max_gap_s_ ? static_cast<int>(std::ceil(dt / 0.01)) : 1;
+	if (steps > 1) ++imu_gaps_;
+	for (int i = 0; i < steps; ++i) ukf_->predict(w, earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero(), dt / steps);
+	++predictions_;
+	t_s_ = t;
+	omega_ib_b_ = w;
+	++imu_stats_.accepted;
+	if (on_predict) on_predict(*this);
+}
+
+void Navigator::initialize()
+{
+	// Level from the mean specific force: f_b = R_nbᵀ (0, 0, −g).
+	const Eigen::Vector3d fm = f_sum_ / static_cast<double>(leveling_samples_);
+	const double roll = std::atan2(-fm.y(), -fm.z());
+	const double pitch = std::atan2(fm.x(), std::hypot(fm.y(), fm.z()));
+	const double heading = initial_.inRange("heading_deg", -360, 360) * kDeg;
+	NavState x0;
+	x0.R_nb = (Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+			   Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+				  .toRotationMatrix();
+	x0.g = earth::normalGravity(frame_->origin().lat_rad, frame_->origin().h_m);
+	Eigen::Vector3d p_body(initial_.number("north_m", 0.0), initial_.number("east_m", 0.0), 0.0);
+	if (position_from_gps_ && gps_fix_n_) p_body = *gps_fix_n_;
+	p_body.z() = initial_.number("depth_m", 0.0);
+	x0.p_n = p_body + x0.R_nb * imu_position_b_;
+	TangentVector e = x0.euclidean();
+	e.segment<18>(idx::inertia) = prior_mean_.segment<18>(idx::inertia);
+	x0.setEuclidean(e);
+	ukf_->initialize(x0, P0_);
+	initialized_ = true;
+}
+
+void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
+{
+	FilterContext ctx;
+	ctx.t_s = t_s_;
+	ctx.omega_ib_b = omega_ib_b_;
+	ctx.omega_ie_n = frame_->earthRate();
+	ctx.imu_position_b = imu_position_b_;
+	ctx.frame = frame_.get();
+	for (auto& slot : slots_)
+	{
+		SensorStats& st = slot->stats;
+		if (st.label != obs.sensorLabel) continue;
+		if (denied(st.label, t_obs))
+		{
+			++st.denied;
+			continue;
+		}
+		if (!initialized_)
+		{
+			++st.before_init;
+			continue;
+		}
+		if (t_obs < t_s_ - late_tolerance_s_)
+		{
+			++st.late;
+			st.last_problem = "observation older than the filter time";
+			continue;
+		}
+		std::string why;
+		slot->buffer.clear();
+		const PrepareStatus ps = slot->model->prepare(obs, ctx, slot->buffer, why);
+		if (ps == PrepareStatus::Skip)
+		{
+			++st.skipped;
+			continue;
+		}
+		if (ps == PrepareStatus::Invalid)
+		{
+			++st.invalid;
+			st.last_problem = why;
+			continue;
+		}
+		for (const Measurement& m : slot->buffer)
+		{
+			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
+			const UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
+			switch (r.status)
+			{
+				case UpdateStatus::Accepted:
+				case UpdateStatus::Recovered:
+					(r.status == UpdateStatus::Accepted ? st.accepted : st.recovered)++;
+					st.nis_sum += r.nis;
+					st.nis_dim_sum += r.dim;
+					slot->rejecting_since_s = -1;
+					break;
+				case UpdateStatus::Rejected:
+					++st.rejected;
+					if (slot->rejecting_since_s < 0) slot->rejecting_since_s = t_obs;
+					break;
+				case UpdateStatus::Invalid:
+					++st.invalid;
+					st.last_problem = r.why;
+					break;
+			}
+		}
+	}
+}
+
+}  // namespace auvnav

@@ -1,0 +1,88 @@
+#include "gps.h"
+
+#include <auvnav/earth.h>
+#include <mrpt/obs/CObservationGPS.h>
+
+#include <cmath>
+
+#include "plugin_common.h"
+
+namespace auvnav::plugins
+{
+GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
+	: label_(label),
+	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(-0.3, 0, -0.6))),
+	  sigma_m_(cfg.positive("sigma_m", 3.0)),
+	  scale_by_hdop_(cfg.boolean("scale_by_hdop", false)),
+	  gate_probability_(gateProbabilityFrom(cfg))
+{
+	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
+}
+
+PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+								  std::vector<Measurement>& out, std::string& why)
+{
+	using mrpt::obs::gnss::Message_NMEA_GGA;
+	out.clear();
+	const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs);
+	if (!gps)
+	{
+		why = std::string("expected mrpt::obs::CObservationGPS, got ") + obs.GetRuntimeClass()->className;
+		return PrepareStatus::Invalid;
+	}
+	if (!gps->has_GGA_datum())
+	{
+		why = "no GGA message";
+		return PrepareStatus::Skip;
+	}
+	const auto& f = gps->getMsgByClass<Message_NMEA_GGA>().fields;
+	if (f.fix_quality == 0)
+	{
+		why = "no fix (GGA fix quality 0)";
+		return PrepareStatus::Skip;
+	}
+	if (!std::isfinite(f.latitude_degrees) || !std::isfinite(f.longitude_degrees) ||
+		std::abs(f.latitude_degrees) > 90 || std::abs(f.longitude_degrees) > 180)
+	{
+		why = "invalid latitude/longitude";
+		return PrepareStatus::Invalid;
+	}
+	if (!ctx.frame)
+	{
+		why = "no navigation frame in the filter context";
+		return PrepareStatus::Invalid;
+	}
+	earth::Geodetic geo;
+	geo.lat_rad = f.latitude_degrees * kDeg;
+	geo.lon_rad = f.longitude_degrees * kDeg;
+	// GGA altitude is above mean sea level; + geoid separation = ellipsoidal
+	// height. It only shifts north/east by ~1e-7 per metre: if it is missing,
+	// the origin's height will do.
+	const double h = f.altitude_meters + f.geoidal_distance;
+	geo.h_m = std::isfinite(h) ? h : ctx.frame->origin().h_m;
+	const Eigen::Vector3d p_n = ctx.frame->toNed(geo);
+	if (!p_n.allFinite())
+	{
+		why = "position conversion failed";
+		return PrepareStatus::Invalid;
+	}
+	double sigma = sigma_m_;
+	if (scale_by_hdop_ && std::isfinite(f.HDOP) && f.HDOP > 0) sigma *= static_cast<double>(f.HDOP);
+
+	Measurement m;
+	m.z = p_n.head<2>();
+	m.R = Eigen::Matrix2d::Identity() * (sigma * sigma);
+	m.label = "position";
+	out.push_back(std::move(m));
+	return PrepareStatus::Ok;
+}
+
+bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
+						 Eigen::Ref<Eigen::VectorXd> z_pred) const
+{
+	if (z_pred.size() != 2) return false;
+	z_pred = (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
+	return true;
+}
+
+}  // namespace auvnav::plugins

@@ -1,0 +1,49 @@
+#pragma once
+/** @file gps.h
+ *  GNSS horizontal position update (plugin "gps").
+ *
+ *  Observation: mrpt::obs::CObservationGPS carrying an NMEA GGA message.
+ *  Latitude/longitude (and height above the ellipsoid, altitude_meters +
+ *  geoidal_distance) are converted to the navigation frame with
+ *  FilterContext::frame->toNed(). With r_a the antenna position and r_imu the
+ *  IMU lever arm (body FRD):
+ *
+ *      z = antenna north, east in the navigation frame (2) [m]
+ *      h = (p_n + R_nb (r_a − r_imu)).head<2>()
+ *
+ *  Noise (sigma_m)² I₂, optionally scaled by the fix's HDOP. Observations
+ *  without a GGA message or without a fix (fix_quality 0) are skipped; gross
+ *  outliers fail the χ² gate (gate_probability).
+ */
+#include <auvnav/config.h>
+#include <auvnav/measurement_model.h>
+
+#include <Eigen/Core>
+#include <string>
+
+namespace auvnav::plugins
+{
+class GpsModel final : public SafeMeasurementModel
+{
+   public:
+	GpsModel(const config::Node& cfg, const std::string& label);
+
+	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
+	double gateProbability() const noexcept override { return gate_probability_; }
+
+	const Eigen::Vector3d& position_b() const { return position_b_; }
+
+   protected:
+	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+							std::vector<Measurement>& out, std::string& why) override;
+	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+
+   private:
+	std::string label_;
+	Eigen::Vector3d position_b_;
+	double sigma_m_ = 3.0;
+	bool scale_by_hdop_ = false;
+	double gate_probability_ = 0.999;
+};
+}  // namespace auvnav::plugins

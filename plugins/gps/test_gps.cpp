@@ -1,0 +1,266 @@
+// The "gps" plugin: NMEA GGA horizontal position with lever arm and outlier gate.
+#include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/testing/model_checks.h>
+#include <auvnav/ukf.h>
+#include <gtest/gtest.h>
+#include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/obs/gnss_messages_ascii_nmea.h>
+
+#include <cmath>
+
+#include "gps.h"
+#include "plugin_test_support.h"
+
+using namespace auvnav;
+using auvnav::plugins::GpsModel;
+using mrpt::obs::CObservationGPS;
+namespace at = auvnav::testing;
+namespace pt = auvnav::plugins::test;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
+const Eigen::Vector3d kAntennaPos(-0.3, 0, -0.6);	  // gps.position_m
+
+/** A GGA fix at navigation-frame position `p_n`, as the simulator writes it. */
+CObservationGPS::Ptr ggaObs(const earth::TangentFrame& frame, const Eigen::Vector3d& p_n, int fix_quality = 1,
+							float hdop = 1.0f)
+{
+	const earth::Geodetic g = frame.toGeodetic(p_n);
+	mrpt::obs::gnss::Message_NMEA_GGA gga;
+	gga.fields.latitude_degrees = g.lat_rad / kDeg;
+	gga.fields.longitude_degrees = g.lon_rad / kDeg;
+	gga.fields.altitude_meters = g.h_m;
+	gga.fields.fix_quality = static_cast<uint8_t>(fix_quality);
+	gga.fields.satellitesUsed = 8;
+	gga.fields.HDOP = hdop;
+	auto o = CObservationGPS::Create();
+	o->sensorLabel = "GPS";
+	o->sensorPose = mrpt::poses::CPose3D(kAntennaPos.x(), kAntennaPos.y(), kAntennaPos.z(), 0, 0, 0);
+	o->setMsg(gga);
+	return o;
+}
+
+Eigen::Vector3d antennaPosition(const NavState& x, const Eigen::Vector3d& imu_pos)
+{
+	return x.p_n + x.R_nb * (kAntennaPos - imu_pos);
+}
+
+Measurement prepareOne(GpsModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
+{
+	std::vector<Measurement> out;
+	std::string why;
+	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
+	return out.empty() ? Measurement{} : out[0];
+}
+}  // namespace
+
+TEST(Gps, DefaultConfig)
+{
+	const GpsModel m(pt::defaultConfig(), "GPS");
+	EXPECT_TRUE(m.position_b() == kAntennaPos);
+	EXPECT_EQ(m.uses(), uint32_t(kAttitude | kPosition));
+	EXPECT_DOUBLE_EQ(m.gateProbability(), 0.999);
+	EXPECT_TRUE(GpsModel(pt::configText("{}"), "GPS").position_b() == kAntennaPos);
+}
+
+TEST(Gps, RejectsBadConfigNamingTheKey)
+{
+	EXPECT_THROW(GpsModel(pt::configText("sigma_m: 0"), "GPS"), config::ConfigError);
+	EXPECT_THROW(GpsModel(pt::configText("scale_by_hdop: 2"), "GPS"), config::ConfigError);
+	EXPECT_THROW(GpsModel(pt::configText("position_m: [0, 0, 1e6]"), "GPS"), config::ConfigError);
+	EXPECT_THROW(GpsModel(pt::configText("gate_probability: 0"), "GPS"), config::ConfigError);
+	EXPECT_TRUE(pt::ModuleRefuses("sigma_m: -3", "sigma_m"));
+	EXPECT_TRUE(pt::ModuleRefuses("sigma_m: [1", "malformed"));
+}
+
+TEST(Gps, ModuleExportsEntryAndCreatesFromDefaultConfig)
+{
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+}
+
+TEST(Gps, WellFormedOnRandomStates)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	for (const char* cfg : {"{}", "scale_by_hdop: true"})
+	{
+		GpsModel model(pt::configText(cfg), "GPS");
+		for (uint32_t seed = 1; seed <= 20; ++seed)
+		{
+			const NavState x = at::RandomNavState(seed);
+			const Eigen::Vector3d p = antennaPosition(at::RandomNavState(seed + 3), kImuPos);
+			at::WellFormedOptions opt;
+			opt.seed = seed;
+			opt.accept_skip = false;
+			EXPECT_TRUE(at::IsWellFormed(model, *ggaObs(tc.frame(), p, 1, 1.4f), tc.ctx(), x, opt))
+				<< cfg << ", seed " << seed;
+		}
+	}
+}
+
+TEST(Gps, FixConvertsBackToTheNavigationFrame)
+{
+	at::TestContext tc;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1234.5, -987.6, -1.0),
+									 Eigen::Vector3d(-20000, 15000, -0.5)})
+	{
+		const Measurement m = prepareOne(model, *ggaObs(tc.frame(), p), tc.ctx());
+		ASSERT_EQ(m.z.size(), 2);
+		EXPECT_NEAR(m.z[0], p.x(), 1e-6);
+		EXPECT_NEAR(m.z[1], p.y(), 1e-6);
+		EXPECT_TRUE(m.R.isApprox(9.0 * Eigen::Matrix2d::Identity(), 1e-15));
+	}
+}
+
+TEST(Gps, LeverArmAtHeading180)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	NavState x;
+	x.R_nb = at::rotationYpr(180 * kDeg, 0, 0);	// facing south
+	x.p_n = Eigen::Vector3d(10, 20, 0);
+	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), Eigen::Vector3d(10, 20, -0.6)), tc.ctx());
+	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
+	// Antenna 0.59424 m behind the IMU; facing south, behind is north.
+	EXPECT_NEAR(h[0], 10.59424, 1e-12);
+	EXPECT_NEAR(h[1], 20.0, 1e-12);
+	// Heading 90 (east): behind is west.
+	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);
+	const Eigen::VectorXd h90 = at::Predict(model, m, tc.ctx(), x);
+	EXPECT_NEAR(h90[0], 10.0, 1e-12);
+	EXPECT_NEAR(h90[1], 20 - 0.59424, 1e-12);
+	// 10° roll to starboard: the mast (0.57 m above the IMU) leans to starboard = west when facing south.
+	x.R_nb = at::rotationYpr(180 * kDeg, 0, 10 * kDeg);
+	const Eigen::VectorXd hr = at::Predict(model, m, tc.ctx(), x);
+	EXPECT_NEAR(hr[0], 10.59424, 1e-12);
+	EXPECT_NEAR(hr[1], 20 - 0.57137 * std::sin(10 * kDeg), 1e-12);
+}
+
+TEST(Gps, HdopScalingOnlyWhenConfiguredAndReported)
+{
+	at::TestContext tc;
+	GpsModel plain(pt::defaultConfig(), "GPS");
+	GpsModel scaled(pt::configText("scale_by_hdop: true\nsigma_m: 2.0"), "GPS");
+	const Eigen::Vector3d p(5, 5, -1);
+	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 0), 9.0, 1e-12);
+	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(1, 1), 25.0, 1e-12);
+	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 0.0f), tc.ctx()).R(0, 0), 4.0, 1e-12);	// not reported
+	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, NAN), tc.ctx()).R(0, 0), 4.0, 1e-12);
+	EXPECT_EQ(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 1), 0.0);
+}
+
+TEST(Gps, UpdateReducesPositionError)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	NavState truth;
+	truth.R_nb = at::rotationYpr(180 * kDeg, 0, 0);
+	truth.p_n = Eigen::Vector3d(10, 20, 0);
+	NavState x0 = truth;
+	x0.p_n = Eigen::Vector3d(15, 16, 0);
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(x0, at::TypicalCovariance());  // 5 m per axis
+	const double err_before = (x0.p_n - truth.p_n).head<2>().norm();
+	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos)), tc.ctx());
+	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
+	ASSERT_EQ(res.updates.size(), 1u);
+	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
+	const double err_after = (ukf.state().p_n - truth.p_n).head<2>().norm();
+	// Prior 5 m, fix 3 m: the error keeps 9/34 of itself (Kalman gain 25/34).
+	EXPECT_NEAR(err_after, err_before * 9.0 / 34.0, 0.05 * err_before) << "before " << err_before;
+	EXPECT_NEAR(ukf.state().p_n.z(), 0.0, 1e-9);  // depth is not observed
+}
+
+TEST(Gps, GrossOutlierIsRejectedAndLeavesTheStateUnchanged)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	NavState truth;
+	truth.R_nb = at::rotationYpr(45 * kDeg, 0, 0);
+	truth.p_n = Eigen::Vector3d(-40, 70, 0);
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(truth, at::TypicalCovariance());
+	const NavState before = ukf.state();
+	const Covariance P_before = ukf.covariance();
+	const Eigen::Vector3d outlier = antennaPosition(truth, kImuPos) + Eigen::Vector3d(60, -80, 0);	// 100 m off
+	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), outlier), tc.ctx());
+	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
+	ASSERT_EQ(res.updates.size(), 1u);
+	EXPECT_EQ(res.updates[0].status, UpdateStatus::Rejected);
+	EXPECT_GT(res.updates[0].nis, ManifoldUkf::chiSquareQuantile(2, 0.999));
+	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
+	EXPECT_TRUE(ukf.covariance() == P_before);
+	// A 3 m error is accepted.
+	const auto ok = at::ApplyObservation(
+		ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos) + Eigen::Vector3d(3, 0, 0)), tc.ctx());
+	ASSERT_EQ(ok.updates.size(), 1u);
+	EXPECT_EQ(ok.updates[0].status, UpdateStatus::Accepted);
+}
+
+TEST(Gps, NoFixOrNoGgaIsSkipped)
+{
+	at::TestContext tc;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	std::vector<Measurement> out;
+	std::string why;
+	EXPECT_EQ(model.prepare(*ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0), 0), tc.ctx(), out, why),
+			  PrepareStatus::Skip);
+	EXPECT_TRUE(out.empty());
+	EXPECT_NE(why.find("fix"), std::string::npos) << why;
+	auto rmc_only = CObservationGPS::Create();
+	rmc_only->setMsg(mrpt::obs::gnss::Message_NMEA_RMC());
+	EXPECT_EQ(model.prepare(*rmc_only, tc.ctx(), out, why), PrepareStatus::Skip);
+	EXPECT_EQ(model.prepare(*CObservationGPS::Create(), tc.ctx(), out, why), PrepareStatus::Skip);
+}
+
+TEST(Gps, InvalidInputs)
+{
+	at::TestContext tc;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	std::vector<Measurement> out;
+	std::string why;
+	auto withLatLon = [&](double lat, double lon) {
+		auto o = ggaObs(tc.frame(), Eigen::Vector3d::Zero());
+		auto& f = o->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields;
+		f.latitude_degrees = lat;
+		f.longitude_degrees = lon;
+		return o;
+	};
+	for (const auto& [lat, lon] : std::vector<std::pair<double, double>>{
+			 {NAN, 8.8}, {53.1, NAN}, {HUGE_VAL, 8.8}, {95.0, 8.8}, {53.1, -190.0}})
+	{
+		EXPECT_EQ(model.prepare(*withLatLon(lat, lon), tc.ctx(), out, why), PrepareStatus::Invalid) << lat << " " << lon;
+		EXPECT_TRUE(out.empty());
+	}
+	// No navigation frame in the context.
+	FilterContext no_frame;
+	EXPECT_EQ(model.prepare(*ggaObs(tc.frame(), Eigen::Vector3d::Zero()), no_frame, out, why), PrepareStatus::Invalid);
+	// A missing altitude still gives the horizontal position.
+	auto no_alt = ggaObs(tc.frame(), Eigen::Vector3d(100, 50, 0));
+	no_alt->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.altitude_meters = NAN;
+	const Measurement m = prepareOne(model, *no_alt, tc.ctx());
+	EXPECT_NEAR(m.z[0], 100, 1e-3);
+	EXPECT_NEAR(m.z[1], 50, 1e-3);
+	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), out, why),
+			  PrepareStatus::Invalid);
+	EXPECT_NE(why.find("CObservationGPS"), std::string::npos) << why;
+}
+
+TEST(Gps, NanMeasurementNeverChangesTheState)
+{
+	at::TestContext tc;
+	GpsModel model(pt::defaultConfig(), "GPS");
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(at::RandomNavState(5), at::TypicalCovariance());
+	const NavState before = ukf.state();
+	Measurement m = prepareOne(model, *ggaObs(tc.frame(), before.p_n), tc.ctx());
+	m.z[0] = std::nan("");
+	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
+	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
+}

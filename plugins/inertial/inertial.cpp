@@ -1,0 +1,82 @@
+#include "inertial.h"
+
+#include <mrpt/obs/CObservationIMU.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "plugin_common.h"
+
+namespace auvnav::plugins
+{
+namespace
+{
+constexpr double kMg = 1e-3 * 9.80665;	// 1 mg in m/s² (standard gravity, as datasheets)
+}
+
+InertialModel::InertialModel(const config::Node& cfg, const std::string& label) : label_(label)
+{
+	const double rate_hz = cfg.inRange("rate_hz", 1.0, 10000.0, 100.0);
+	const double vrw = cfg.nonNegative("vrw_mg_per_sqrt_hz", 0.12) * kMg;	// m/s²/√Hz
+	const double extra = cfg.nonNegative("extra_sigma_mps2", 0.02);
+	const double white = vrw * std::sqrt(rate_hz);	// per-sample σ of white noise
+	sigma_mps2_ = std::sqrt(white * white + extra * extra);
+	if (!(sigma_mps2_ > 0))
+		cfg.fail("extra_sigma_mps2", "vrw_mg_per_sqrt_hz and extra_sigma_mps2 are both 0: noise must be positive");
+	gate_probability_ = gateProbabilityFrom(cfg);
+	coriolis_ = cfg.boolean("coriolis", false);
+}
+
+uint32_t InertialModel::uses() const noexcept
+{
+	return kAttitude | kAcceleration | kGravity | kAccelBias | (coriolis_ ? kVelocity : 0u);
+}
+
+PrepareStatus InertialModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& /*ctx*/,
+									   std::vector<Measurement>& out, std::string& why)
+{
+	using namespace mrpt::obs;
+	out.clear();
+	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
+	if (!imu)
+	{
+		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
+		return PrepareStatus::Invalid;
+	}
+	constexpr TIMUDataIndex kAcc[3] = {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC};
+	Eigen::Vector3d f;
+	for (int i = 0; i < 3; ++i)
+	{
+		if (!imu->has(kAcc[i]))
+		{
+			why = "accelerometer data missing";
+			return PrepareStatus::Invalid;
+		}
+		f[i] = imu->get(kAcc[i]);
+	}
+	if (!f.allFinite())
+	{
+		why = "non-finite specific force";
+		return PrepareStatus::Invalid;
+	}
+	Measurement m;
+	m.z = f;
+	m.R = Eigen::Matrix3d::Identity() * (sigma_mps2_ * sigma_mps2_);
+	m.label = "specific_force";
+	out.push_back(std::move(m));
+	return PrepareStatus::Ok;
+}
+
+bool InertialModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
+							  Eigen::Ref<Eigen::VectorXd> z_pred) const
+{
+	if (z_pred.size() != 3) return false;
+	// Specific force = acceleration relative to the Earth-fixed frame minus
+	// gravity (down-positive, so −g along z), plus Coriolis if enabled.
+	Eigen::Vector3d f_n = x.a_n - Eigen::Vector3d(0, 0, x.g);
+	if (coriolis_) f_n += 2 * ctx.omega_ie_n.cross(x.v_n);
+	z_pred = x.R_nb.transpose() * f_n + x.b_a;
+	return true;
+}
+
+}  // namespace auvnav::plugins

@@ -1,0 +1,59 @@
+#include "pressure.h"
+
+#include <auvnav/obs/CObservationPressure.h>
+
+#include <cmath>
+
+#include "plugin_common.h"
+
+namespace auvnav::plugins
+{
+PressureModel::PressureModel(const config::Node& cfg, const std::string& label)
+	: label_(label),
+	  density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
+	  atmospheric_pa_(cfg.inRange("atmospheric_pressure_pa", 50e3, 120e3, 101325.0)),
+	  sigma_pa_(cfg.positive("sigma_pa", 100.0)),
+	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(0, 0, 0.3))),
+	  gate_probability_(gateProbabilityFrom(cfg))
+{
+	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
+}
+
+PrepareStatus PressureModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& /*ctx*/,
+									   std::vector<Measurement>& out, std::string& why)
+{
+	out.clear();
+	const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(&obs);
+	if (!p)
+	{
+		why = std::string("expected auvnav::obs::CObservationPressure, got ") + obs.GetRuntimeClass()->className;
+		return PrepareStatus::Invalid;
+	}
+	if (!std::isfinite(p->pressure_pa))
+	{
+		why = "non-finite pressure";
+		return PrepareStatus::Invalid;
+	}
+	if (p->pressure_pa < kMinPressurePa || p->pressure_pa > kMaxPressurePa)
+	{
+		why = "absurd pressure (outside 50 kPa .. 100 MPa)";
+		return PrepareStatus::Invalid;
+	}
+	Measurement m;
+	m.z = Eigen::VectorXd::Constant(1, p->pressure_pa);
+	m.R = Eigen::MatrixXd::Constant(1, 1, sigma_pa_ * sigma_pa_);
+	m.label = "pressure";
+	out.push_back(std::move(m));
+	return PrepareStatus::Ok;
+}
+
+bool PressureModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
+							  Eigen::Ref<Eigen::VectorXd> z_pred) const
+{
+	if (z_pred.size() != 1) return false;
+	const double depth_s = x.p_n.z() + x.R_nb.row(2).dot(position_b_ - ctx.imu_position_b);
+	z_pred[0] = atmospheric_pa_ + density_kg_m3_ * x.g * depth_s;
+	return true;
+}
+
+}  // namespace auvnav::plugins

@@ -1,0 +1,184 @@
+// The "pressure" plugin: absolute pressure to depth.
+#include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/testing/model_checks.h>
+#include <auvnav/ukf.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "plugin_test_support.h"
+#include "pressure.h"
+
+using namespace auvnav;
+using auvnav::obs::CObservationPressure;
+using auvnav::plugins::PressureModel;
+namespace at = auvnav::testing;
+namespace pt = auvnav::plugins::test;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
+const Eigen::Vector3d kSensorPos(0, 0, 0.3);		  // pressure.position_m
+
+CObservationPressure::Ptr pressureObs(double pa)
+{
+	auto o = CObservationPressure::Create();
+	o->sensorLabel = "PRESSURE";
+	o->pressure_pa = pa;
+	o->temperature_c = 12;
+	o->sensorPose = mrpt::poses::CPose3D(kSensorPos.x(), kSensorPos.y(), kSensorPos.z(), 0, 0, 0);
+	return o;
+}
+
+/** The simulator's pressure (no noise, no bias) for state x. */
+double truePressure(const NavState& x, const Eigen::Vector3d& imu_pos)
+{
+	const double depth = x.p_n.z() + (x.R_nb * (kSensorPos - imu_pos)).z();
+	return 101325 + 1025 * x.g * depth;
+}
+
+double predictOne(PressureModel& model, const NavState& x, const FilterContext& ctx)
+{
+	std::vector<Measurement> out;
+	std::string why;
+	EXPECT_EQ(model.prepare(*pressureObs(2e5), ctx, out, why), PrepareStatus::Ok) << why;
+	return out.empty() ? NAN : at::Predict(model, out[0], ctx, x)[0];
+}
+}  // namespace
+
+TEST(Pressure, DefaultConfig)
+{
+	const PressureModel m(pt::defaultConfig(), "PRESSURE");
+	EXPECT_DOUBLE_EQ(m.density_kg_m3(), 1025);
+	EXPECT_DOUBLE_EQ(m.atmospheric_pressure_pa(), 101325);
+	EXPECT_TRUE(m.position_b() == kSensorPos);
+	EXPECT_EQ(m.uses(), uint32_t(kAttitude | kGravity | kPosition));
+	EXPECT_DOUBLE_EQ(m.gateProbability(), 0.999);
+	const PressureModel e(pt::configText("{}"), "PRESSURE");
+	EXPECT_DOUBLE_EQ(e.density_kg_m3(), 1025);
+	EXPECT_TRUE(e.position_b() == kSensorPos);
+}
+
+TEST(Pressure, RejectsBadConfigNamingTheKey)
+{
+	EXPECT_THROW(PressureModel(pt::configText("density_kg_m3: 10"), "P"), config::ConfigError);
+	EXPECT_THROW(PressureModel(pt::configText("atmospheric_pressure_pa: 0"), "P"), config::ConfigError);
+	EXPECT_THROW(PressureModel(pt::configText("sigma_pa: 0"), "P"), config::ConfigError);
+	EXPECT_THROW(PressureModel(pt::configText("position_m: 3"), "P"), config::ConfigError);
+	EXPECT_THROW(PressureModel(pt::configText("gate_probability: 2"), "P"), config::ConfigError);
+	EXPECT_TRUE(pt::ModuleRefuses("density_kg_m3: 5000", "density_kg_m3"));
+}
+
+TEST(Pressure, ModuleExportsEntryAndCreatesFromDefaultConfig)
+{
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("pressure", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
+										  kAttitude | kGravity | kPosition));
+}
+
+TEST(Pressure, WellFormedOnRandomStates)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	PressureModel model(pt::defaultConfig(), "PRESSURE");
+	for (uint32_t seed = 1; seed <= 20; ++seed)
+	{
+		const NavState x = at::RandomNavState(seed);
+		at::WellFormedOptions opt;
+		opt.seed = seed;
+		opt.accept_skip = false;
+		EXPECT_TRUE(at::IsWellFormed(model, *pressureObs(truePressure(at::RandomNavState(seed + 9), kImuPos) + 30),
+									 tc.ctx(), x, opt))
+			<< "seed " << seed;
+	}
+}
+
+TEST(Pressure, TenMetresLevelAndPitched)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	PressureModel model(pt::defaultConfig(), "PRESSURE");
+	NavState x;
+	x.g = 9.81;
+	x.p_n = Eigen::Vector3d(5, -3, 10);	 // IMU at 10 m
+	// Level: the sensor is 0.3 + 0.02863 m below the IMU.
+	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 101325 + 1025 * 9.81 * 10.32863, 1e-8);
+	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 205181.9568075, 1e-6);
+	// Heading does not matter.
+	x.R_nb = at::rotationYpr(123 * kDeg, 0, 0);
+	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 205181.9568075, 1e-6);
+	// 10° nose up: the sensor, 0.294 m behind the IMU, goes 0.294·sin 10° deeper.
+	x.R_nb = at::rotationYpr(0, 10 * kDeg, 0);
+	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 101325 + 1025 * 9.81 * (10 + 0.37473161166912), 1e-6);
+	// The gravity state scales the hydrostatic part.
+	x.R_nb.setIdentity();
+	x.g = 9.78;
+	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 101325 + 1025 * 9.78 * 10.32863, 1e-8);
+}
+
+TEST(Pressure, UpdateReducesDepthError)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	PressureModel model(pt::defaultConfig(), "PRESSURE");
+	NavState truth;
+	truth.g = 9.81;
+	truth.R_nb = at::rotationYpr(10 * kDeg, 3 * kDeg, -2 * kDeg);
+	truth.p_n = Eigen::Vector3d(20, 30, 10);
+	NavState x0 = truth;
+	x0.p_n.z() = 12;
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(x0, at::TypicalCovariance());
+	const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
+	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
+	ASSERT_EQ(res.updates.size(), 1u);
+	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
+	const double err_after = std::abs(ukf.state().p_n.z() - truth.p_n.z());
+	EXPECT_LT(err_after, 0.05) << "depth error 2 m -> " << err_after << " m";
+	// Horizontal position untouched (uncorrelated in P0).
+	EXPECT_NEAR(ukf.state().p_n.x(), 20, 1e-9);
+	EXPECT_NEAR(ukf.state().p_n.y(), 30, 1e-9);
+	EXPECT_LT(ukf.covariance()(idx::pos + 2, idx::pos + 2), 0.01);
+}
+
+TEST(Pressure, InvalidInputs)
+{
+	at::TestContext tc;
+	PressureModel model(pt::defaultConfig(), "PRESSURE");
+	std::vector<Measurement> out;
+	std::string why;
+	for (double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL, 0.0, 4.9e4, -101325.0, 1.01e8, 1e12})
+	{
+		why.clear();
+		EXPECT_EQ(model.prepare(*pressureObs(bad), tc.ctx(), out, why), PrepareStatus::Invalid) << bad;
+		EXPECT_TRUE(out.empty());
+		EXPECT_FALSE(why.empty());
+	}
+	// The plausible extremes pass: a reading above water, and 9000 m deep.
+	EXPECT_EQ(model.prepare(*pressureObs(5.0e4), tc.ctx(), out, why), PrepareStatus::Ok);
+	EXPECT_EQ(model.prepare(*pressureObs(9.3e7), tc.ctx(), out, why), PrepareStatus::Ok);
+	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_NE(why.find("CObservationPressure"), std::string::npos) << why;
+}
+
+TEST(Pressure, NanMeasurementNeverChangesTheState)
+{
+	at::TestContext tc;
+	PressureModel model(pt::defaultConfig(), "PRESSURE");
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(at::RandomNavState(11), at::TypicalCovariance());
+	const NavState before = ukf.state();
+	const Covariance P_before = ukf.covariance();
+	EXPECT_EQ(at::ApplyObservation(ukf, model, *pressureObs(NAN), tc.ctx()).status, PrepareStatus::Invalid);
+	std::vector<Measurement> out;
+	std::string why;
+	ASSERT_EQ(model.prepare(*pressureObs(2e5), tc.ctx(), out, why), PrepareStatus::Ok);
+	out[0].z[0] = std::nan("");
+	EXPECT_EQ(ukf.update(model, out[0], tc.ctx()).status, UpdateStatus::Invalid);
+	out[0].z[0] = 2e5;
+	out[0].R(0, 0) = std::nan("");
+	EXPECT_EQ(ukf.update(model, out[0], tc.ctx()).status, UpdateStatus::Invalid);
+	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
+	EXPECT_TRUE(ukf.covariance() == P_before);
+}

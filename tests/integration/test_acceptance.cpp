@@ -1,0 +1,155 @@
+// Acceptance of the navigator on simulated missions (issue: navigator):
+//  - square_5x50m: GPS before diving only, initial heading 10° off (σ 30°):
+//    horizontal error at resurfacing < 0.5 % of the distance travelled
+//    submerged and inside the filter's 2σ, for ≥ 4 of 5 seeds;
+//  - heading: GPS withheld all along, initial heading offsets +15°, 0°, −15°
+//    (σ 30°): heading error < 1° after 15 min and inside 3σ after the first
+//    minute, for every offset and 3 seeds.
+// The full sets are labelled `slow`; one seed of each runs by default.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "harness.h"
+
+namespace fs = std::filesystem;
+using namespace auvnav;
+using namespace auvnav::test;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/flatfish.yaml";
+
+std::string fmt(double v) { return std::to_string(v); }
+
+struct SquareOutcome
+{
+	double error_m = 0, distance_m = 0, two_sigma_m = 0, heading_err_deg = 0;
+	bool pass() const { return error_m < 0.005 * distance_m && error_m <= two_sigma_m; }
+};
+
+SquareOutcome runSquare(unsigned seed)
+{
+	const fs::path dir = simulate("config/missions/square_5x50m.yaml", seed);
+	const auto truth = readTruth(dir / "ground_truth.csv");
+	// Dive: first submerged row; resurfacing: first surfaced row after that.
+	std::size_t dive = 0;
+	while (dive < truth.size() && !truth[dive].submerged) ++dive;
+	std::size_t surf = dive;
+	while (surf < truth.size() && truth[surf].submerged) ++surf;
+	EXPECT_LT(surf, truth.size());
+	const double t0 = truth.front().t_unix;
+	const double true_heading0 = yawOf(truth.front().q_nb.toRotationMatrix());
+
+	auto cfg = config::Node::load(kConfig);
+	cfg.set("filter.initial.heading_deg", fmt(true_heading0 / kDeg + 10.0));
+	cfg.set("filter.initial.heading_sigma_deg", "30");
+	static PluginHost host;
+	Navigator nav(cfg, host);
+	DenialWindow gps_off;  // GPS before diving only
+	gps_off.labels = {"GPS"};
+	gps_off.from_s = truth[dive].t_unix - t0;
+	gps_off.to_s = 1e9;
+	nav.addDenial(gps_off);
+	SquareOutcome out;
+	bool recorded = false;
+	nav.on_predict = [&](const Navigator& n) {
+		if (recorded || n.time() < truth[surf].t_unix) return;
+		recorded = true;
+		const auto& tr = truthAt(truth, n.time());
+		out.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
+		const Eigen::Matrix2d P = n.filter().covariance().block<2, 2>(idx::pos, idx::pos);
+		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
+		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
+	};
+	io::RawlogReader reader((dir / "square_5x50m.rawlog").string());
+	while (auto o = reader.next()) nav.process(*o);
+	EXPECT_TRUE(recorded);
+	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;
+	fs::remove_all(dir);
+	return out;
+}
+
+void squareSeeds(const std::vector<unsigned>& seeds, int min_pass)
+{
+	int passed = 0;
+	std::printf("square_5x50m: seed | error at resurfacing [m] | distance submerged [m] | error %% | 2 sigma [m] | heading err [deg]\n");
+	for (unsigned s : seeds)
+	{
+		const auto o = runSquare(s);
+		std::printf("  %u | %.2f | %.0f | %.3f %% | %.2f | %.3f | %s\n", s, o.error_m, o.distance_m,
+					100 * o.error_m / o.distance_m, o.two_sigma_m, o.heading_err_deg, o.pass() ? "pass" : "FAIL");
+		passed += o.pass();
+	}
+	EXPECT_GE(passed, min_pass);
+}
+
+struct HeadingOutcome
+{
+	double error_15min_deg = 0, sigma_15min_deg = 0, worst_ratio_after_1min = 0;
+	bool pass() const { return std::abs(error_15min_deg) < 1.0 && worst_ratio_after_1min <= 3.0; }
+};
+
+HeadingOutcome runHeading(const fs::path& dir, double offset_deg)
+{
+	const auto truth = readTruth(dir / "ground_truth.csv");
+	const double t0 = truth.front().t_unix;
+	const double true_heading0 = yawOf(truth.front().q_nb.toRotationMatrix());
+	const auto run = runNavigator(kConfig, (dir / "heading.rawlog").string(),
+								  {{"filter.initial.heading_deg", fmt(true_heading0 / kDeg + offset_deg)},
+								   {"filter.initial.heading_sigma_deg", "30"},
+								   {"filter.initial.position", "config"},
+								   {"filter.initial.north_m", "0"},
+								   {"filter.initial.east_m", "0"}},
+								  {DenialWindow{{"GPS"}, 0.0, 1e9}});  // GPS withheld for the whole run
+	HeadingOutcome o;
+	bool at15 = false;
+	for (const auto& r : run.rows)
+	{
+		const double err =
+			wrapPi(yawOf(r.R_nb) - yawOf(truthAt(truth, r.t_unix).q_nb.toRotationMatrix()));
+		if (r.t_unix - t0 > 60) o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.heading_sigma);
+		if (!at15 && r.t_unix - t0 >= 900)
+		{
+			at15 = true;
+			o.error_15min_deg = err / kDeg;
+			o.sigma_15min_deg = r.heading_sigma / kDeg;
+		}
+	}
+	EXPECT_TRUE(at15);
+	for (const auto& s : run.stats)
+	{
+		if (s.label == "GPS")
+		{
+			EXPECT_EQ(s.accepted, 0u) << "GPS must be withheld";
+		}
+	}
+	return o;
+}
+
+void headingSeeds(const std::vector<unsigned>& seeds, const std::vector<double>& offsets)
+{
+	std::printf("heading (no GPS): seed | offset [deg] | error at 15 min [deg] | sigma at 15 min [deg] | worst |err|/sigma after 1 min\n");
+	for (unsigned s : seeds)
+	{
+		const fs::path dir = simulate("config/missions/heading.yaml", s);
+		for (double off : offsets)
+		{
+			const auto o = runHeading(dir, off);
+			std::printf("  %u | %+.0f | %+.3f | %.3f | %.2f | %s\n", s, off, o.error_15min_deg, o.sigma_15min_deg,
+						o.worst_ratio_after_1min, o.pass() ? "pass" : "FAIL");
+			EXPECT_TRUE(o.pass()) << "seed " << s << " offset " << off;
+		}
+		fs::remove_all(dir);
+	}
+}
+}  // namespace
+
+TEST(SquareMission, OneSeedResurfacesWithinHalfPercent) { squareSeeds({1}, 1); }
+TEST(SquareMissionSlow, FiveSeedsResurfaceWithinHalfPercent) { squareSeeds({1, 2, 3, 4, 5}, 4); }
+TEST(HeadingMission, OneSeedGyrocompassesWithoutGps) { headingSeeds({1}, {15.0}); }
+TEST(HeadingMissionSlow, ThreeSeedsThreeOffsetsGyrocompassWithoutGps) { headingSeeds({1, 2, 3}, {15.0, 0.0, -15.0}); }

@@ -1,0 +1,144 @@
+// The plain dense reference UKF (see reference_ukf.h). Deliberately simple.
+#include "reference_ukf.h"
+
+#include <Eigen/Cholesky>
+#include <stdexcept>
+
+namespace auvnav::reference
+{
+SigmaWeights SigmaWeights::fromUt(const UtWeights& u, int n)
+{
+	SigmaWeights w;
+	w.gamma = u.gamma;
+	w.wm.assign(2 * n + 1, u.wi);
+	w.wc.assign(2 * n + 1, u.wi);
+	w.wm[0] = u.wm0;
+	w.wc[0] = u.wc0;
+	return w;
+}
+
+SigmaWeights SigmaWeights::uniform(double gamma, int n)
+{
+	SigmaWeights w;
+	w.gamma = gamma;
+	w.wm.assign(2 * n + 1, 1.0 / (2 * n + 1));
+	w.wc = w.wm;
+	return w;
+}
+
+std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma)
+{
+	const Eigen::LLT<Covariance> llt(P);
+	if (llt.info() != Eigen::Success) throw std::runtime_error("reference UKF: P is not positive definite");
+	const Covariance L = llt.matrixL();
+	std::vector<NavState> X;
+	X.reserve(2 * idx::dim + 1);
+	X.push_back(x);
+	for (int j = 0; j < idx::dim; ++j)
+	{
+		const TangentVector c = gamma * L.col(j);
+		X.push_back(x.boxplus(c));
+		X.push_back(x.boxplus(-c));
+	}
+	return X;
+}
+
+NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>& w, const NavState& start)
+{
+	NavState mean = start;
+	for (int iter = 0; iter < 50; ++iter)
+	{
+		TangentVector d = TangentVector::Zero();
+		for (std::size_t i = 0; i < X.size(); ++i) d += w[i] * X[i].boxminus(mean);
+		mean = mean.boxplus(d);
+		if (iter > 0 && d.head<3>().norm() < 1e-15) break;
+	}
+	return mean;
+}
+
+void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
+					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
+					  const SigmaWeights& w, NavState& x_out, Covariance& P_out)
+{
+	std::vector<NavState> Y = sigmaPoints(x, P, w.gamma);
+	for (auto& y : Y) y = model.propagate(y, omega_ib_b, omega_ie_n, dt);
+	const NavState mean = manifoldMean(Y, w.wm, Y[0]);
+	Covariance Pn = Covariance::Zero();
+	for (std::size_t i = 0; i < Y.size(); ++i)
+	{
+		const TangentVector d = Y[i].boxminus(mean);
+		Pn += w.wc[i] * d * d.transpose();
+	}
+	const double speed_through_water = (x.v_n.head<2>() - x.current_vehicle_ne).norm();
+	Pn += model.noiseCovariance(dt, speed_through_water);
+	x_out = mean;
+	P_out = 0.5 * (Pn + Pn.transpose());
+}
+
+bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h, const Measurement& m,
+						const FilterContext& ctx, const SigmaWeights& w, UtResult& out)
+{
+	const int dim_z = static_cast<int>(m.z.size());
+	const std::vector<NavState> X = sigmaPoints(x, P, w.gamma);
+	const int count = static_cast<int>(X.size());
+	Eigen::MatrixXd Z(dim_z, count);
+	for (int i = 0; i < count; ++i)
+		if (!h.predict(X[i], m, ctx, Z.col(i))) return false;
+	// Mean in the measurement space (the residual is its ⊟): iterate.
+	Eigen::VectorXd z_mean = Z.col(0), r(dim_z);
+	for (int iter = 0; iter < 50; ++iter)
+	{
+		Eigen::VectorXd d = Eigen::VectorXd::Zero(dim_z);
+		for (int i = 0; i < count; ++i)
+		{
+			h.residual(Z.col(i), z_mean, r);
+			d += w.wm[i] * r;
+		}
+		z_mean += d;
+		if (iter > 0 && d.norm() <= 1e-14 * (1 + z_mean.norm())) break;
+	}
+	out.z_mean = z_mean;
+	out.Pzz = Eigen::MatrixXd::Zero(dim_z, dim_z);
+	out.Pxz = Eigen::MatrixXd::Zero(idx::dim, dim_z);
+	for (int i = 0; i < count; ++i)
+	{
+		h.residual(Z.col(i), z_mean, r);
+		out.Pzz += w.wc[i] * r * r.transpose();
+		out.Pxz += w.wc[i] * X[i].boxminus(x) * r.transpose();
+	}
+	return true;
+}
+
+ReferenceUkf::ReferenceUkf(const ProcessModel& model, const UtParams& ut)
+	: model_(model), w_(SigmaWeights::fromUt(UtWeights::make(idx::dim, ut)))
+{
+}
+
+void ReferenceUkf::initialize(const NavState& x0, const Covariance& P0)
+{
+	x_ = x0;
+	P_ = 0.5 * (P0 + P0.transpose());
+}
+
+void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
+{
+	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_);
+}
+
+bool ReferenceUkf::update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx)
+{
+	UtResult ut;
+	if (!unscentedTransform(x_, P_, model, m, ctx, w_, ut)) return false;
+	const Eigen::MatrixXd S = ut.Pzz + m.R;
+	const Eigen::LLT<Eigen::MatrixXd> llt(S);
+	if (llt.info() != Eigen::Success) return false;
+	Eigen::VectorXd nu(m.z.size());
+	model.residual(m.z, ut.z_mean, nu);
+	const Eigen::MatrixXd K = llt.solve(ut.Pxz.transpose()).transpose();	// K = Pxz S⁻¹
+	x_ = x_.boxplus(K * nu);
+	const Covariance Pn = P_ - K * S * K.transpose();
+	P_ = 0.5 * (Pn + Pn.transpose());
+	return true;
+}
+
+}  // namespace auvnav::reference

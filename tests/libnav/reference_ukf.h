@@ -1,0 +1,72 @@
+#pragma once
+/** @file reference_ukf.h
+ *  The test oracle: a PLAIN dense scaled UKF on the 43-dim manifold state.
+ *
+ *  Written independently of ukf.cpp and on purpose without any of its
+ *  shortcuts: full Cholesky factor of P, all 2n+1 = 87 sigma points, the full
+ *  nonlinear ProcessModel::propagate on every sigma point, h on every sigma
+ *  point, iterated manifold means. Only UtWeights::make, the process model and
+ *  the state's ⊞/⊟ are shared with the code under test.
+ */
+#include <auvnav/measurement_model.h>
+#include <auvnav/process_model.h>
+#include <auvnav/state.h>
+#include <auvnav/ukf.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace auvnav::reference
+{
+/** Sigma-point spread and one mean and one covariance weight per point. */
+struct SigmaWeights
+{
+	double gamma = 0;
+	std::vector<double> wm, wc;	 // 2n+1 each; point 0 is the centre
+	static SigmaWeights fromUt(const UtWeights& w, int n = idx::dim);
+	/** A deliberately WRONG weighting for the "the test can fail" checks:
+	 *  the same sigma points, all weights 1/(2n+1). */
+	static SigmaWeights uniform(double gamma, int n = idx::dim);
+};
+
+/** X_0 = x, X_{2j+1} = x ⊞ γ L_j, X_{2j+2} = x ⊞ −γ L_j, L = chol(P) (lower). */
+std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma);
+
+/** Weighted mean on the manifold: iterate x̄ ← x̄ ⊞ Σ w_i (X_i ⊟ x̄). */
+NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>& w, const NavState& start);
+
+/** Unscented transform of a measurement function (no noise added). */
+struct UtResult
+{
+	Eigen::VectorXd z_mean;
+	Eigen::MatrixXd Pzz;  // Σ Wc r rᵀ, r = z_i ⊟ z̄
+	Eigen::MatrixXd Pxz;  // Σ Wc (X_i ⊟ x)(z_i ⊟ z̄)ᵀ
+};
+bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
+						const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out);
+
+/** Unscented prediction: mean and covariance of propagate(X_i) plus Q. */
+void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
+					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
+					  const SigmaWeights& w, NavState& x_out, Covariance& P_out);
+
+class ReferenceUkf
+{
+   public:
+	ReferenceUkf(const ProcessModel& model, const UtParams& ut);
+	void initialize(const NavState& x0, const Covariance& P0);
+	const NavState& state() const { return x_; }
+	const Covariance& covariance() const { return P_; }
+
+	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
+	/** Ungated update; false if h could not be evaluated or S is not PD. */
+	bool update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx);
+
+   private:
+	ProcessModel model_;
+	SigmaWeights w_;
+	NavState x_;
+	Covariance P_ = Covariance::Identity();
+};
+
+}  // namespace auvnav::reference

@@ -1,0 +1,334 @@
+// The fast ManifoldUkf (structure-exploiting, ukf.cpp) against the plain dense
+// 87-point reference UKF (reference_ukf.cpp): same numbers to ~1e-9.
+//
+// Differences are scale-free: means in standard deviations, max_i |(a ⊟ b)_i|/√P_ii,
+// covariances in correlation units, max_ij |ΔP_ij|/√(P_ii P_jj).
+#include <auvnav/measurement_model.h>
+#include <auvnav/so3.h>
+#include <auvnav/ukf.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "filter_test_util.h"
+#include "reference_ukf.h"
+
+using namespace auvnav;
+using auvnav::test::kDeg;
+
+namespace
+{
+constexpr double kTol = 1e-9;
+
+// ------------------------------------------------------------ test models
+class TestModel : public MeasurementModel
+{
+   public:
+	explicit TestModel(uint32_t mask) : mask_(mask) {}
+	uint32_t uses() const noexcept override { return mask_; }
+	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
+						  std::string& why) noexcept override
+	{
+		out.clear();
+		why = "test model";
+		return PrepareStatus::Skip;
+	}
+	double gateProbability() const noexcept override { return 1.0; }  // never gate: the reference does not
+	virtual std::string name() const = 0;
+	virtual Eigen::MatrixXd noise() const = 0;
+
+   private:
+	uint32_t mask_;
+};
+
+/** DVL-like: body-frame velocity of a point at lever arm aux[0..2]:
+ *  R_nbᵀ v_n + (ω_ib_b − b_w) × r. */
+class DvlModel : public TestModel
+{
+   public:
+	explicit DvlModel(uint32_t mask = kAttitude | kGyroBias | kVelocity) : TestModel(mask) {}
+	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
+		z = x.R_nb.transpose() * x.v_n + (ctx.omega_ib_b - x.b_w).cross(r);
+		return true;
+	}
+	std::string name() const override { return "dvl"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Matrix3d::Identity() * 0.01 * 0.01; }
+};
+
+/** Position only: range to a beacon at aux[0..2], and depth. */
+class RangeDepthModel : public TestModel
+{
+   public:
+	RangeDepthModel() : TestModel(kPosition) {}
+	bool predict(const NavState& x, const Measurement& m, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		const Eigen::Vector3d b(m.aux[0], m.aux[1], m.aux[2]);
+		z << (x.p_n - b).norm(), x.p_n.z();
+		return true;
+	}
+	std::string name() const override { return "range_depth"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Vector2d(1.0, 0.05).asDiagonal(); }
+};
+
+/** Accelerometer: specific force R_nbᵀ (a_n − g e_D) + b_a. */
+class AccelModel : public TestModel
+{
+   public:
+	AccelModel() : TestModel(kAttitude | kAcceleration | kGravity | kAccelBias) {}
+	bool predict(const NavState& x, const Measurement&, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		z = x.R_nb.transpose() * (x.a_n - Eigen::Vector3d(0, 0, x.g)) + x.b_a;
+		return true;
+	}
+	std::string name() const override { return "accel"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Matrix3d::Identity() * 0.02 * 0.02; }
+};
+
+/** Reads every block (uses() = kAllBlocks): a nonlinear function of the
+ *  hydrodynamic parameters, currents, biases and motion. */
+class HydroModel : public TestModel
+{
+   public:
+	HydroModel() : TestModel(kAllBlocks) {}
+	bool predict(const NavState& x, const Measurement&, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		Eigen::Vector3d rel = x.v_n;
+		rel.head<2>() -= x.current_vehicle_ne;
+		const Eigen::Vector3d u = x.R_nb.transpose() * rel;	// velocity through water, body
+		z[0] = x.Dl_sub(0, 0) * u.x() + x.Dq_sub(0, 0) * u.x() * std::abs(u.x()) + x.M_sub(0, 2) * x.b_w.z() +
+			   x.M_sub(0, 0) * x.a_n.x();
+		z[1] = x.Dl_sub(1, 1) * u.y() + x.Dq_sub(1, 1) * u.y() * std::abs(u.y()) +
+			   x.Dq_sub(1, 2) * std::sin(x.b_adcp.x()) + x.current_far_ne.y() * x.M_sub(1, 0) +
+			   x.Dl_sub(1, 2) * x.Dq_sub(0, 1);
+		z[2] = (x.current_far_ne - x.current_vehicle_ne).squaredNorm() + x.g * x.b_a.z() +
+			   x.a_n.x() * x.Dl_sub(1, 2) + 1e-3 * x.p_n.y() + x.M_sub(1, 1) * x.b_adcp.y();
+		return true;
+	}
+	std::string name() const override { return "hydro_all_blocks"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Vector3d(0.5, 0.5, 0.01).asDiagonal(); }
+};
+
+/** Scalar heading angle with a wrapped residual. */
+class HeadingModel : public TestModel
+{
+   public:
+	HeadingModel() : TestModel(kAttitude) {}
+	bool predict(const NavState& x, const Measurement&, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
+		return true;
+	}
+	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
+				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	{
+		r[0] = std::remainder(z[0] - zp[0], 2 * M_PI);
+	}
+	std::string name() const override { return "heading_wrapped"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Matrix<double, 1, 1>::Constant(std::pow(2 * kDeg, 2)); }
+};
+
+Eigen::Vector3d gyroAt(double t)
+{
+	return Eigen::Vector3d(0.3 * std::sin(2 * t), 0.2 * std::cos(3 * t), 0.5 + 0.1 * std::sin(t));
+}
+
+Eigen::Vector3d earthRate()
+{
+	const double lat = -33 * kDeg, omega = 7.292115e-5;
+	return Eigen::Vector3d(omega * std::cos(lat), 0, -omega * std::sin(lat));
+}
+
+struct Case
+{
+	Eigen::Vector3d att_sigma;
+	double yaw;
+	unsigned seed;
+	double dt = 0.01;
+	int steps = 200, update_every = 5;
+	double gyro_bias_sigma = 0.01, rate_scale = 1;
+};
+
+struct MaxDiffs
+{
+	double pred_mean = 0, pred_cov = 0;
+	std::vector<std::string> names;
+	std::vector<double> upd_mean, upd_cov;
+	int predictions = 0, updates = 0;
+};
+
+Measurement makeMeasurement(const TestModel& model, const NavState& truth, const FilterContext& ctx,
+							std::mt19937& rng)
+{
+	Measurement m;
+	m.R = model.noise();
+	m.aux = {0.4, -0.1, 0.3, 0, 0, 0, 0, 0};
+	if (model.name() == "range_depth") m.aux = {100, -20, 0, 0, 0, 0, 0, 0};
+	m.z.resize(m.R.rows());
+	model.predict(truth, m, ctx, m.z);
+	std::normal_distribution<double> nd;
+	const Eigen::MatrixXd Lr = m.R.llt().matrixL();
+	Eigen::VectorXd e(m.z.size());
+	for (int i = 0; i < e.size(); ++i) e[i] = nd(rng);
+	m.z += Lr * e;
+	if (model.name() == "heading_wrapped") m.z[0] = std::remainder(m.z[0], 2 * M_PI);
+	return m;
+}
+
+/** `steps` predictions (default 200 at 100 Hz), an update every `update_every`
+ *  steps (models in turn). */
+MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestModel>>& models,
+					   UtParams ut_fast = {}, UtParams ut_ref = {})
+{
+	const ProcessModel pm = test::makeProcessModel();
+	const NavState x0 = test::makeState(c.yaw);
+	TangentVector sigma = test::makeSigmas(c.att_sigma);
+	sigma.segment<3>(idx::gyro_bias).setConstant(c.gyro_bias_sigma);
+	const Covariance P0 = test::correlatedCovariance(sigma, c.seed);
+
+	ManifoldUkf fast(pm, ut_fast);
+	reference::ReferenceUkf ref(pm, ut_ref);
+	fast.initialize(x0, P0);
+	ref.initialize(x0, P0);
+
+	// Truth: an offset of ~0.7σ from the initial mean, propagated noise-free.
+	std::mt19937 rng(c.seed + 1000);
+	std::normal_distribution<double> nd;
+	TangentVector xi;
+	for (int i = 0; i < idx::dim; ++i) xi[i] = 0.7 * nd(rng);
+	NavState truth = x0.boxplus(Covariance(P0.llt().matrixL()) * xi);
+
+	MaxDiffs md;
+	for (const auto& m : models) md.names.push_back(m->name());
+	md.upd_mean.assign(models.size(), 0);
+	md.upd_cov.assign(models.size(), 0);
+	FilterContext ctx;
+	ctx.omega_ie_n = earthRate();
+	const double dt = c.dt;
+	std::size_t next_model = 0;
+	for (int step = 1; step <= c.steps; ++step)
+	{
+		const double t = step * dt;
+		const Eigen::Vector3d w = c.rate_scale * gyroAt(t);
+		fast.predict(w, ctx.omega_ie_n, dt);
+		ref.predict(w, ctx.omega_ie_n, dt);
+		truth = pm.propagate(truth, w, ctx.omega_ie_n, dt);
+		++md.predictions;
+		md.pred_mean = std::max(md.pred_mean, test::meanDiff(fast.state(), ref.state(), ref.covariance()));
+		md.pred_cov = std::max(md.pred_cov, test::covDiff(fast.covariance(), ref.covariance()));
+		if (step % c.update_every != 0) continue;
+		const std::size_t k = next_model++ % models.size();
+		const TestModel& model = *models[k];
+		ctx.t_s = t;
+		ctx.omega_ib_b = w;
+		const Measurement m = makeMeasurement(model, truth, ctx, rng);
+		const UpdateResult r = fast.update(model, m, ctx);
+		EXPECT_EQ(r.status, UpdateStatus::Accepted) << model.name() << ": " << r.why;
+		EXPECT_TRUE(ref.update(model, m, ctx)) << model.name();
+		++md.updates;
+		md.upd_mean[k] = std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
+		md.upd_cov[k] = std::max(md.upd_cov[k], test::covDiff(fast.covariance(), ref.covariance()));
+	}
+	EXPECT_EQ(fast.choleskyRepairs(), 0u);
+	return md;
+}
+
+std::vector<std::unique_ptr<TestModel>> allModels()
+{
+	std::vector<std::unique_ptr<TestModel>> v;
+	v.emplace_back(std::make_unique<DvlModel>());
+	v.emplace_back(std::make_unique<RangeDepthModel>());
+	v.emplace_back(std::make_unique<AccelModel>());
+	v.emplace_back(std::make_unique<HydroModel>());
+	v.emplace_back(std::make_unique<HeadingModel>());
+	return v;
+}
+
+void report(const char* title, const MaxDiffs& md)
+{
+	std::printf("[%s] max |fast - reference| over %d predictions and %d updates\n", title, md.predictions,
+				md.updates);
+	std::printf("  %-18s mean %.2e sd   cov %.2e\n", "predict", md.pred_mean, md.pred_cov);
+	for (std::size_t i = 0; i < md.names.size(); ++i)
+		std::printf("  %-18s mean %.2e sd   cov %.2e\n", md.names[i].c_str(), md.upd_mean[i], md.upd_cov[i]);
+}
+
+void expectAgreement(const MaxDiffs& md)
+{
+	EXPECT_LT(md.pred_mean, kTol);
+	EXPECT_LT(md.pred_cov, kTol);
+	for (std::size_t i = 0; i < md.names.size(); ++i)
+	{
+		EXPECT_LT(md.upd_mean[i], kTol) << md.names[i];
+		EXPECT_LT(md.upd_cov[i], kTol) << md.names[i];
+	}
+}
+
+}  // namespace
+
+TEST(FilterVsReference, ModerateAttitudeUncertaintyAgreesWithDenseUkf)
+{
+	const MaxDiffs md = runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels());
+	report("attitude sigma 4/3/6 deg", md);
+	expectAgreement(md);
+}
+
+TEST(FilterVsReference, ThirtyDegreeHeadingUncertaintyNearWrapAgreesWithDenseUkf)
+{
+	// Heading 170° ± 30°: the heading sigma points straddle ±180°.
+	const MaxDiffs md = runSideBySide({Eigen::Vector3d(3, 3, 30) * kDeg, 170 * kDeg, 23}, allModels());
+	report("heading sigma 30 deg at 170 deg", md);
+	expectAgreement(md);
+}
+
+TEST(FilterVsReference, StronglyNonlinearLargeStepsAgreeWithDenseUkf)
+{
+	// 0.5 s steps at up to ~4 rad/s with a 0.2 rad/s gyro-bias uncertainty:
+	// the attitude/bias part of the prediction is far from linear, and the
+	// cross-covariance with the affine part carries real nonlinear terms.
+	Case c{Eigen::Vector3d(8, 6, 20) * kDeg, -100 * kDeg, 5};
+	c.dt = 0.5;
+	c.steps = 30;
+	c.update_every = 1;
+	c.gyro_bias_sigma = 0.2;
+	c.rate_scale = 5;
+	const MaxDiffs md = runSideBySide(c, allModels());
+	report("0.5 s steps, 4 rad/s, gyro bias sigma 0.2 rad/s", md);
+	expectAgreement(md);
+}
+
+TEST(FilterVsReference, TheComparisonCanFail)
+{
+	// 1. A model that reads velocity but declares only attitude + gyro bias:
+	//    the fast filter skips the velocity sigma points and must disagree.
+	{
+		std::vector<std::unique_ptr<TestModel>> wrong;
+		wrong.emplace_back(std::make_unique<DvlModel>(kAttitude | kGyroBias));
+		const MaxDiffs md = runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, wrong);
+		report("WRONG uses() mask (sanity: must disagree)", md);
+		EXPECT_GT(std::max(md.upd_mean[0], md.upd_cov[0]), 1e-2);
+	}
+	// 2. The tolerance resolves the sigma-point spread: α = 0.3 against 0.301
+	//    (a 0.3 % change of γ) must fail it, in prediction alone as well.
+	{
+		UtParams other;
+		other.alpha = 0.301;
+		const MaxDiffs md =
+			runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), UtParams{}, other);
+		report("alpha 0.300 vs 0.301 (sanity: must disagree)", md);
+		EXPECT_GT(md.pred_cov, 1e3 * kTol);
+		EXPECT_GT(md.upd_mean[0], 1e3 * kTol);
+	}
+}

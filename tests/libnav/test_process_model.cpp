@@ -1,0 +1,265 @@
+// The process model against analytic motion: constant body rate, Earth rate
+// only, constant acceleration, Gauss–Markov decay (mean and, through the UKF,
+// variance) independent of the step size, and process noise linear in dt.
+#include <auvnav/process_model.h>
+#include <auvnav/so3.h>
+#include <auvnav/ukf.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+
+#include "filter_test_util.h"
+
+using namespace auvnav;
+using auvnav::test::kDeg;
+
+namespace
+{
+double maxAbs(const Eigen::Matrix3d& A) { return A.cwiseAbs().maxCoeff(); }
+
+/** Propagates `steps` times by T/steps with constant inputs. */
+NavState propagateFor(const ProcessModel& pm, NavState x, const Eigen::Vector3d& w_ib_b,
+					  const Eigen::Vector3d& w_ie_n, double T, int steps)
+{
+	const double dt = T / steps;
+	for (int i = 0; i < steps; ++i) x = pm.propagate(x, w_ib_b, w_ie_n, dt);
+	return x;
+}
+
+/** Gauss–Markov coordinates (tangent indices), their σ and τ in `pm`. */
+struct GmCoord
+{
+	int index;
+	double sigma, tau;
+};
+std::vector<GmCoord> gaussMarkovCoordinates(const ProcessModel& pm)
+{
+	std::vector<GmCoord> c;
+	const auto& n = pm.noise;
+	for (int i = 0; i < 3; ++i) c.push_back({idx::gyro_bias + i, n.gyro_bias.sigma, n.gyro_bias.tau_s});
+	for (int i = 0; i < 3; ++i) c.push_back({idx::acc_bias + i, n.accel_bias.sigma, n.accel_bias.tau_s});
+	for (int i = 0; i < 4; ++i) c.push_back({idx::current_vehicle + i, n.current.sigma, n.current.tau_s});
+	for (int i = 0; i < 2; ++i) c.push_back({idx::adcp_bias + i, n.adcp_bias.sigma, n.adcp_bias.tau_s});
+	for (int i = 0; i < 18; ++i) c.push_back({idx::inertia + i, n.parameter_sigma[i], n.parameter_tau_s});
+	return c;
+}
+
+ProcessModel fastGaussMarkovModel()
+{
+	ProcessModel pm = test::makeProcessModel();
+	// Short correlation times so that a 50 s run decays visibly.
+	pm.noise.gyro_bias.tau_s = 30;
+	pm.noise.accel_bias.tau_s = 40;
+	pm.noise.current.tau_s = 60;
+	pm.noise.adcp_bias.tau_s = 80;
+	pm.noise.parameter_tau_s = 100;
+	// No spatial current noise: it depends on the (changing) speed through the
+	// water and is not part of the Gauss–Markov discretisation.
+	pm.noise.current_spatial_var_per_m = 0;
+	return pm;
+}
+
+}  // namespace
+
+TEST(ProcessModel, ConstantBodyRateAboutATiltedAxis)
+{
+	ProcessModel pm = test::makeProcessModel();
+	NavState x = test::makeState(35 * kDeg);
+	x.b_w.setZero();
+	pm.prior_mean.segment<3>(idx::gyro_bias).setZero();	// zero bias stays zero
+	const Eigen::Vector3d w = 0.4 * Eigen::Vector3d(1, 2, -1.5).normalized();
+	const double T = 10;  // 4 rad about the axis
+	const NavState y = propagateFor(pm, x, w, Eigen::Vector3d::Zero(), T, 1000);
+	const Eigen::Matrix3d expected = x.R_nb * so3::Exp(w * T);
+	EXPECT_LT(maxAbs(y.R_nb - expected), 1e-9);
+	std::printf("constant rate, 10 s at 100 Hz: |R - R0 Exp(wT)| = %.2e\n", maxAbs(y.R_nb - expected));
+
+	// The same with a constant gyro bias (held by its Gauss–Markov mean): the
+	// bias is subtracted from the raw rate.
+	const Eigen::Vector3d b(0.01, -0.02, 0.005);
+	x.b_w = b;
+	pm.prior_mean.segment<3>(idx::gyro_bias) = b;
+	const NavState yb = propagateFor(pm, x, w + b, Eigen::Vector3d::Zero(), T, 1000);
+	EXPECT_LT(maxAbs(yb.R_nb - expected), 1e-9);
+	EXPECT_LT((yb.b_w - b).norm(), 1e-15);
+}
+
+TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
+{
+	ProcessModel pm = test::makeProcessModel();
+	pm.prior_mean.segment<3>(idx::gyro_bias).setZero();
+	NavState x = test::makeState(-70 * kDeg);
+	x.b_w.setZero();
+	const double lat = -33 * kDeg, omega = 7.292115e-5;
+	const Eigen::Vector3d w_ie_n(omega * std::cos(lat), 0, -omega * std::sin(lat));
+	const Eigen::Vector3d w_ib_b = x.R_nb.transpose() * w_ie_n;	 // the gyro sees only the Earth turning
+
+	// 1 h at 100 Hz, re-orthonormalised every step as the filter does with its mean.
+	NavState y = x, raw = x;
+	for (int i = 0; i < 360000; ++i)
+	{
+		y = pm.propagate(y, w_ib_b, w_ie_n, 0.01);
+		y.R_nb = so3::normalized(y.R_nb);
+		raw = pm.propagate(raw, w_ib_b, w_ie_n, 0.01);
+	}
+	std::printf("Earth rate only, 1 h at 100 Hz: |R(T) - R0| = %.2e normalised each step, %.2e raw "
+				"(%.2e after one final normalisation)\n",
+				maxAbs(y.R_nb - x.R_nb), maxAbs(raw.R_nb - x.R_nb), maxAbs(so3::normalized(raw.R_nb) - x.R_nb));
+	EXPECT_LT(maxAbs(y.R_nb - x.R_nb), 1e-12);
+	// Without normalisation the 360000 products accumulate rounding
+	// systematically (~1e-16 per step; R stops being orthonormal, and then
+	// Exp(−a)·R·Exp(Rᵀa) no longer cancels exactly): ~4e-11.
+	EXPECT_LT(maxAbs(raw.R_nb - x.R_nb), 1e-10);
+
+	// Through the filter (10 Hz to keep the test short): the mean stays put.
+	// Noise-free and with a (practically) certain gyro bias: an uncertain bias
+	// makes the attitude uncertain (σ_b·T) and, correlated with it, moves the
+	// unscented mean by a genuine second-order amount (3e-11 for σ_b = 1e-6 rad/s).
+	pm.noise.gyro_arw = 0;
+	pm.noise.gyro_bias.sigma = 0;
+	Covariance P0 = Covariance::Identity() * 1e-12;
+	P0.block<3, 3>(idx::gyro_bias, idx::gyro_bias) *= 1e-18;
+	ManifoldUkf ukf(pm, UtParams{});
+	ukf.initialize(x, P0);
+	for (int i = 0; i < 36000; ++i) ukf.predict(w_ib_b, w_ie_n, 0.1);
+	std::printf("Earth rate only, 1 h of ManifoldUkf::predict at 10 Hz: |R(T) - R0| = %.2e\n",
+				maxAbs(ukf.state().R_nb - x.R_nb));
+	EXPECT_LT(maxAbs(ukf.state().R_nb - x.R_nb), 1e-12);
+}
+
+TEST(ProcessModel, ConstantAccelerationIsIntegratedExactly)
+{
+	const ProcessModel pm = test::makeProcessModel();
+	const NavState x = test::makeState(0.3);
+	for (int steps : {1, 7, 1000})
+	{
+		const double T = 10;
+		const NavState y = propagateFor(pm, x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, steps);
+		const Eigen::Vector3d p = x.p_n + x.v_n * T + 0.5 * x.a_n * T * T;
+		const Eigen::Vector3d v = x.v_n + x.a_n * T;
+		EXPECT_LT((y.p_n - p).cwiseAbs().maxCoeff(), 1e-12 * p.norm()) << steps;
+		EXPECT_LT((y.v_n - v).cwiseAbs().maxCoeff(), 1e-13) << steps;
+		EXPECT_EQ(y.a_n, x.a_n);
+		EXPECT_EQ(y.g, x.g);
+	}
+}
+
+TEST(ProcessModel, GaussMarkovMeanDecaysExactlyForAnyStep)
+{
+	const ProcessModel pm = fastGaussMarkovModel();
+	const NavState x = test::makeState(0.3);
+	const double T = 50;
+	const NavState one = propagateFor(pm, x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, 1);
+	const NavState many = propagateFor(pm, x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, 1000);
+	const TangentVector e0 = x.euclidean(), e1 = one.euclidean(), eN = many.euclidean();
+	for (const GmCoord& c : gaussMarkovCoordinates(pm))
+	{
+		const double mu = pm.prior_mean[c.index];
+		const double expected = mu + (e0[c.index] - mu) * std::exp(-T / c.tau);
+		const double scale = std::abs(e0[c.index]) + std::abs(mu);
+		EXPECT_NEAR(e1[c.index], expected, 1e-13 * scale) << tangentNames()[c.index];
+		EXPECT_NEAR(eN[c.index], expected, 1e-12 * scale) << tangentNames()[c.index];
+		EXPECT_GT(std::abs(e0[c.index] - expected), 1e-3 * scale) << tangentNames()[c.index];  // it did move
+	}
+}
+
+TEST(ProcessModel, GaussMarkovVarianceIsExactForAnyStepThroughTheUkf)
+{
+	const ProcessModel pm = fastGaussMarkovModel();
+	const NavState x = test::makeState(0.3);
+	const double T = 50, p0 = 1e-10;
+	Covariance P0 = Covariance::Identity() * p0;
+	ManifoldUkf one(pm, UtParams{}), many(pm, UtParams{});
+	one.initialize(x, P0);
+	many.initialize(x, P0);
+	one.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T);
+	for (int i = 0; i < 1000; ++i) many.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T / 1000);
+	for (const GmCoord& c : gaussMarkovCoordinates(pm))
+	{
+		const double phi = std::exp(-T / c.tau);
+		const double expected = phi * phi * p0 + c.sigma * c.sigma * (1 - phi * phi);
+		ASSERT_GT(expected, 100 * p0);
+		EXPECT_NEAR(one.covariance()(c.index, c.index), expected, 1e-9 * expected) << tangentNames()[c.index];
+		EXPECT_NEAR(many.covariance()(c.index, c.index), expected, 1e-9 * expected) << tangentNames()[c.index];
+		// And the means agree between the two step sizes.
+		EXPECT_NEAR(one.state().euclidean()[c.index], many.state().euclidean()[c.index],
+					1e-12 * (std::abs(x.euclidean()[c.index]) + 1e-3));
+	}
+	EXPECT_EQ(one.choleskyRepairs() + many.choleskyRepairs(), 0u);
+}
+
+TEST(ProcessModel, ProcessNoiseScalesLinearlyWithDt)
+{
+	ProcessModel pm = test::makeProcessModel();
+	const double dt = 0.01;
+	const Covariance Q1 = pm.noiseCovariance(dt, 0.0), Q2 = pm.noiseCovariance(2 * dt, 0.0);
+	for (int i = 0; i < 3; ++i)
+	{
+		EXPECT_NEAR(Q1(idx::att + i, idx::att + i), pm.noise.gyro_arw * pm.noise.gyro_arw * dt, 1e-20);
+		EXPECT_NEAR(Q2(idx::att + i, idx::att + i), 2 * Q1(idx::att + i, idx::att + i), 1e-20);  // not 4×
+		EXPECT_NEAR(Q1(idx::acc + i, idx::acc + i), pm.noise.jerk_psd * dt, 1e-18);
+	}
+	EXPECT_NEAR(Q2(idx::gravity, idx::gravity), 2 * Q1(idx::gravity, idx::gravity), 1e-24);
+	// Gauss–Markov increments: σ²(1 − e^{−2dt/τ}).
+	for (const GmCoord& c : gaussMarkovCoordinates(pm))
+		EXPECT_NEAR(Q1(c.index, c.index), c.sigma * c.sigma * (1 - std::exp(-2 * dt / c.tau)),
+					1e-12 * c.sigma * c.sigma)
+			<< tangentNames()[c.index];
+	// Spatial current variance: per metre moved through the water.
+	const Covariance Qs = pm.noiseCovariance(dt, 1.5);
+	for (int i = 0; i < 4; ++i)
+		EXPECT_NEAR(Qs(idx::current_vehicle + i, idx::current_vehicle + i) -
+						Q1(idx::current_vehicle + i, idx::current_vehicle + i),
+					pm.noise.current_spatial_var_per_m * 1.5 * dt, 1e-18);
+	// Symmetric positive semi-definite.
+	EXPECT_EQ(Q1, Q1.transpose());
+	EXPECT_GE(Eigen::SelfAdjointEigenSolver<Covariance>(Q1).eigenvalues().minCoeff(), -1e-18);
+}
+
+TEST(ProcessModel, DiscretisedNoiseComposesOverSubsteps)
+{
+	// Exact discretisation: N steps of T/N from zero covariance, P ← A P Aᵀ + Q(T/N),
+	// give Q(T) for the jerk-driven (p, v, a) chain and every Gauss–Markov state.
+	ProcessModel pm = fastGaussMarkovModel();
+	const double T = 2.0;
+	for (int N : {2, 10, 200})
+	{
+		Covariance P = Covariance::Zero();
+		for (int i = 0; i < N; ++i)
+		{
+			pm.applyLinearRows(P, T / N);
+			Covariance Pt = P.transpose();
+			pm.applyLinearRows(Pt, T / N);
+			P = Pt + pm.noiseCovariance(T / N, 0.8);
+		}
+		const Covariance QT = pm.noiseCovariance(T, 0.8);
+		// Rows 6.. are the linear part; the attitude/bias block has its own test.
+		const Eigen::MatrixXd d = (P - QT).bottomRightCorner(idx::dim - 6, idx::dim - 6);
+		const Eigen::VectorXd s = QT.diagonal().tail(idx::dim - 6).cwiseSqrt().cwiseMax(1e-30);
+		const double rel = (d.array() / (s * s.transpose()).array()).abs().maxCoeff();
+		EXPECT_LT(rel, 1e-10) << N;
+	}
+}
+
+TEST(ProcessModel, AttitudeRandomWalkIsIndependentOfTheStepSize)
+{
+	// ARW² per second, whatever the step: 1 step of 1 s = 100 steps of 10 ms.
+	ProcessModel pm = test::makeProcessModel();
+	pm.noise.gyro_bias.sigma = 0;  // bias noise would integrate into attitude differently per step
+	const NavState x = test::makeState(0.3);
+	Covariance P0 = Covariance::Identity() * 1e-8;
+	P0.block<3, 3>(idx::gyro_bias, idx::gyro_bias) = Eigen::Matrix3d::Identity() * 1e-20;
+	ManifoldUkf one(pm, UtParams{}), many(pm, UtParams{});
+	one.initialize(x, P0);
+	many.initialize(x, P0);
+	one.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 1.0);
+	for (int i = 0; i < 100; ++i) many.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.01);
+	const double expected = 1e-8 + pm.noise.gyro_arw * pm.noise.gyro_arw * 1.0;
+	for (int i = 0; i < 3; ++i)
+	{
+		EXPECT_NEAR(one.covariance()(i, i), expected, 1e-6 * expected);
+		EXPECT_NEAR(many.covariance()(i, i), expected, 1e-6 * expected);
+	}
+}

@@ -1,0 +1,251 @@
+// Manifold property tests of so3.h and the NavState ⊞/⊟ (in the style of
+// manif's common tester): Exp/Log round trips everywhere including at and near
+// π, group properties, and the boxplus/boxminus axioms.
+#include <auvnav/so3.h>
+#include <auvnav/state.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <set>
+#include <string>
+
+#include "filter_test_util.h"
+
+using namespace auvnav;
+
+namespace
+{
+Eigen::Vector3d randomAxis(std::mt19937& rng)
+{
+	std::normal_distribution<double> nd;
+	Eigen::Vector3d a(nd(rng), nd(rng), nd(rng));
+	return a.normalized();
+}
+
+double orthonormalityError(const Eigen::Matrix3d& R)
+{
+	return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+}
+
+/** Log(Exp(v)) == v, Exp(Log(R)) == R, R orthonormal with det 1. */
+void expectRoundTrip(const Eigen::Vector3d& v, double tol, const std::string& what)
+{
+	const Eigen::Matrix3d R = so3::Exp(v);
+	EXPECT_LT(orthonormalityError(R), 1e-15 * 8) << what;
+	EXPECT_NEAR(R.determinant(), 1.0, 1e-14) << what;
+	const Eigen::Vector3d l = so3::Log(R);
+	EXPECT_LT((l - v).norm(), tol) << what << ": v = " << v.transpose() << ", Log(Exp(v)) = " << l.transpose();
+	EXPECT_LT((so3::Exp(l) - R).cwiseAbs().maxCoeff(), tol) << what;
+}
+
+NavState randomState(std::mt19937& rng, const Eigen::Vector3d& att)
+{
+	std::normal_distribution<double> nd;
+	NavState x = test::makeState(0.3);
+	TangentVector e = x.euclidean();
+	for (int i = 3; i < idx::dim; ++i) e[i] += nd(rng);
+	x.setEuclidean(e);
+	x.R_nb = so3::Exp(att);
+	return x;
+}
+
+TangentVector randomDelta(std::mt19937& rng, const Eigen::Vector3d& att)
+{
+	std::normal_distribution<double> nd;
+	TangentVector d;
+	for (int i = 0; i < idx::dim; ++i) d[i] = 3 * nd(rng);
+	d.head<3>() = att;
+	return d;
+}
+
+}  // namespace
+
+TEST(So3, ExpAndLogAtIdentity)
+{
+	EXPECT_EQ(so3::Exp(Eigen::Vector3d::Zero()), Eigen::Matrix3d::Identity());
+	EXPECT_EQ(so3::Log(Eigen::Matrix3d::Identity()), Eigen::Vector3d::Zero());
+}
+
+TEST(So3, RoundTripNearIdentityIsRelativelyAccurate)
+{
+	std::mt19937 rng(1);
+	// Both sides of the series switches (Exp: |v| < 1e-8, Log: θ < 1e-6).
+	for (double angle : {1e-12, 1e-9, 1e-8 * 0.999, 1e-8 * 1.001, 1e-7, 1e-6 * 0.999, 1e-6, 1e-6 * 1.001, 1e-5})
+		for (int k = 0; k < 20; ++k)
+		{
+			const Eigen::Vector3d v = angle * randomAxis(rng);
+			const Eigen::Vector3d l = so3::Log(so3::Exp(v));
+			EXPECT_LT((l - v).norm(), 1e-14 * angle) << "angle " << angle;
+			// First order: Exp(v) a ≈ a + v × a.
+			const Eigen::Vector3d a(0.3, -1.2, 0.7);
+			EXPECT_LT((so3::Exp(v) * a - a - v.cross(a)).norm(), angle * angle * a.squaredNorm() + 1e-15) << angle;
+		}
+}
+
+TEST(So3, RoundTripRandom)
+{
+	std::mt19937 rng(2);
+	std::uniform_real_distribution<double> ang(0, M_PI - 1e-3);
+	for (int k = 0; k < 2000; ++k) expectRoundTrip(ang(rng) * randomAxis(rng), 1e-12, "random");
+}
+
+TEST(So3, RoundTripNearPi)
+{
+	std::mt19937 rng(3);
+	// Includes both sides of Log's switch to the near-π branch at π − 1e-3.
+	for (double eps : {1e-1, 1e-2, 1.001e-3, 1e-3, 0.999e-3, 5e-4, 1e-4, 1e-6, 1e-9, 1e-12})
+		for (int k = 0; k < 50; ++k)
+			expectRoundTrip((M_PI - eps) * randomAxis(rng), 1e-12, "pi - " + std::to_string(eps));
+}
+
+TEST(So3, ExactlyPiGivesPlusOrMinusTheVector)
+{
+	std::mt19937 rng(4);
+	std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+										 Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 1, 0).normalized(),
+										 Eigen::Vector3d(-1, 1, 1).normalized()};
+	for (int k = 0; k < 100; ++k) axes.push_back(randomAxis(rng));
+	for (const auto& a : axes)
+	{
+		const Eigen::Vector3d v = M_PI * a;
+		const Eigen::Matrix3d R = so3::Exp(v);
+		const Eigen::Vector3d l = so3::Log(R);
+		EXPECT_NEAR(l.norm(), M_PI, 1e-12);
+		EXPECT_LT(std::min((l - v).norm(), (l + v).norm()), 1e-12) << a.transpose();
+		EXPECT_LT((so3::Exp(l) - R).cwiseAbs().maxCoeff(), 1e-12) << a.transpose();
+	}
+}
+
+TEST(So3, BeyondPiWrapsToTheShorterRotation)
+{
+	std::mt19937 rng(5);
+	for (double angle : {M_PI + 1e-6, M_PI + 1e-3, 4.0, 2 * M_PI - 0.1})
+		for (int k = 0; k < 20; ++k)
+		{
+			const Eigen::Vector3d a = randomAxis(rng);
+			const Eigen::Vector3d l = so3::Log(so3::Exp(angle * a));
+			EXPECT_LT((l - (angle - 2 * M_PI) * a).norm(), 1e-12) << angle;
+		}
+}
+
+TEST(So3, GroupProperties)
+{
+	std::mt19937 rng(6);
+	std::uniform_real_distribution<double> ang(0, 3.0);
+	for (int k = 0; k < 200; ++k)
+	{
+		const Eigen::Vector3d v = ang(rng) * randomAxis(rng);
+		const Eigen::Matrix3d R = so3::Exp(v);
+		// Inverse, one-parameter subgroup, adjoint.
+		EXPECT_LT((so3::Exp(-v) - R.transpose()).cwiseAbs().maxCoeff(), 1e-14);
+		EXPECT_LT((so3::Exp(0.3 * v) * so3::Exp(0.7 * v) - R).cwiseAbs().maxCoeff(), 1e-14);
+		EXPECT_LT((so3::Log(R.transpose()) + v).norm(), 1e-12);
+		const Eigen::Matrix3d Q = so3::Exp(ang(rng) * randomAxis(rng));
+		EXPECT_LT((so3::Exp(Q * v) - Q * R * Q.transpose()).cwiseAbs().maxCoeff(), 1e-14);
+		EXPECT_LT((so3::skew(v) * Eigen::Vector3d(1, 2, 3) - v.cross(Eigen::Vector3d(1, 2, 3))).norm(), 1e-15);
+	}
+	// Convention: a positive third component is a heading (yaw) turn N → E.
+	const Eigen::Matrix3d Rz = so3::Exp(Eigen::Vector3d(0, 0, 0.5));
+	EXPECT_NEAR(Rz(1, 0), std::sin(0.5), 1e-15);
+	EXPECT_NEAR(Rz(0, 0), std::cos(0.5), 1e-15);
+}
+
+TEST(So3, NormalizedRepairsDrift)
+{
+	const Eigen::Matrix3d R = so3::Exp(Eigen::Vector3d(0.2, -1.0, 2.5));
+	Eigen::Matrix3d D = R;
+	D(0, 1) += 1e-7;
+	D(2, 2) -= 1e-7;
+	const Eigen::Matrix3d N = so3::normalized(D);
+	EXPECT_LT(orthonormalityError(N), 1e-15 * 4);
+	EXPECT_LT((N - R).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+// ---------------------------------------------------------------- NavState
+
+TEST(NavStateManifold, BoxplusZeroIsIdentity)
+{
+	std::mt19937 rng(7);
+	for (int k = 0; k < 50; ++k)
+	{
+		const NavState x = randomState(rng, 3.0 * randomAxis(rng));
+		const NavState y = x.boxplus(TangentVector::Zero());
+		EXPECT_EQ(y.R_nb, x.R_nb);
+		EXPECT_EQ(y.euclidean(), x.euclidean());
+		EXPECT_LT(x.boxminus(x).cwiseAbs().maxCoeff(), 1e-15);  // R Rᵀ is I up to rounding
+	}
+}
+
+TEST(NavStateManifold, BoxplusThenBoxminusRecoversDelta)
+{
+	std::mt19937 rng(8);
+	std::uniform_real_distribution<double> ang(0, M_PI - 1e-3);
+	for (double att_norm : {0.0, 1e-9, 1e-6, 0.5, 3.0, M_PI - 1e-3, M_PI - 1e-6, -1.0})
+		for (int k = 0; k < 50; ++k)
+		{
+			const double a = att_norm < 0 ? ang(rng) : att_norm;
+			const NavState x = randomState(rng, (M_PI - 1e-4) * randomAxis(rng));	 // base attitude near π too
+			const TangentVector d = randomDelta(rng, a * randomAxis(rng));
+			const TangentVector back = x.boxplus(d).boxminus(x);
+			EXPECT_LT((back - d).head<3>().norm(), 1e-12) << "|δ_att| = " << a;
+			EXPECT_LT((back - d).tail<40>().cwiseAbs().maxCoeff(), 1e-12);
+		}
+}
+
+TEST(NavStateManifold, BoxplusOfBoxminusReachesTheOtherState)
+{
+	std::mt19937 rng(9);
+	for (double rel : {0.1, 2.0, M_PI - 1e-3, M_PI - 1e-6})
+		for (int k = 0; k < 50; ++k)
+		{
+			const NavState x = randomState(rng, 2.5 * randomAxis(rng));
+			NavState y = randomState(rng, Eigen::Vector3d::Zero());
+			y.R_nb = so3::Exp(rel * randomAxis(rng)) * x.R_nb;	// y at angle `rel` from x
+			const NavState z = x.boxplus(y.boxminus(x));
+			EXPECT_LT((z.R_nb - y.R_nb).cwiseAbs().maxCoeff(), 1e-12) << rel;
+			EXPECT_LT((z.euclidean() - y.euclidean()).cwiseAbs().maxCoeff(), 1e-12);
+			EXPECT_NEAR(y.boxminus(x).head<3>().norm(), rel, 1e-12);
+		}
+}
+
+TEST(NavStateManifold, AttitudeErrorIsALeftPerturbationInTheNavigationFrame)
+{
+	NavState x = test::makeState(0.7);
+	TangentVector d = TangentVector::Zero();
+	d[idx::att + 2] = 0.1;	// heading error
+	const NavState y = x.boxplus(d);
+	EXPECT_LT((y.R_nb - so3::Exp(Eigen::Vector3d(0, 0, 0.1)) * x.R_nb).cwiseAbs().maxCoeff(), 1e-15);
+	const double yaw_x = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0)), yaw_y = std::atan2(y.R_nb(1, 0), y.R_nb(0, 0));
+	EXPECT_NEAR(yaw_y - yaw_x, 0.1, 1e-12);
+}
+
+TEST(NavStateManifold, EuclideanRoundTripAndLayout)
+{
+	const NavState x = test::makeState(0.2);
+	const TangentVector e = x.euclidean();
+	EXPECT_EQ(e.head<3>(), Eigen::Vector3d::Zero());
+	NavState y;
+	y.setEuclidean(e);
+	EXPECT_EQ(y.euclidean(), e);
+	EXPECT_EQ(e[idx::damping_quad + 5], x.Dq_sub(1, 2));  // row-major 2x3 blocks
+	EXPECT_EQ(e[idx::inertia + 1], x.M_sub(0, 1));
+	EXPECT_EQ(e[idx::damping_lin + 3], x.Dl_sub(1, 0));
+
+	EXPECT_EQ(tangentPrefix(0), 0);
+	EXPECT_EQ(tangentPrefix(kAttitude), 3);
+	EXPECT_EQ(tangentPrefix(kAttitude | kGyroBias), 6);
+	EXPECT_EQ(tangentPrefix(kGravity), 10);
+	EXPECT_EQ(tangentPrefix(kAttitude | kVelocity), 16);
+	EXPECT_EQ(tangentPrefix(kPosition), 19);
+	EXPECT_EQ(tangentPrefix(kAdcpBias), 25);
+	EXPECT_EQ(tangentPrefix(kDampingQuadratic), 43);
+	EXPECT_EQ(tangentPrefix(kAllBlocks), 43);
+
+	const auto& names = tangentNames();
+	ASSERT_EQ(names.size(), std::size_t(idx::dim));
+	EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size());
+	EXPECT_EQ(names[idx::att + 2], "att_d");
+	EXPECT_EQ(names[idx::gravity], "gravity");
+	EXPECT_EQ(names[idx::dim - 1], "Dq_ypsi");
+}
