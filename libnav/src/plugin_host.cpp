@@ -2,6 +2,7 @@
 #include <dlfcn.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -46,7 +47,19 @@ PluginHost::PluginHost(std::vector<std::string> search_paths) : paths_(std::move
 {
 	for (const auto& p : splitPath(std::getenv("AUVNAV_PLUGIN_PATH"))) paths_.push_back(p);
 	const std::string exe_dir = executableDir();
-	if (!exe_dir.empty()) paths_.push_back((fs::path(exe_dir) / ".." / "lib" / "auvnav" / "plugins").string());
+	if (!exe_dir.empty())
+	{
+		// Installed layout: the plugin directory relative to the program's
+		// directory (e.g. ../lib/x86_64-linux-gnu/auvnav/plugins; set by CMake from
+		// GNUInstallDirs), then the build tree's bin/../lib/auvnav/plugins.
+		std::vector<std::string> defaults;
+#ifdef AUVNAV_PLUGIN_RELDIR
+		defaults.push_back((fs::path(exe_dir) / AUVNAV_PLUGIN_RELDIR).lexically_normal().string());
+#endif
+		defaults.push_back((fs::path(exe_dir) / ".." / "lib" / "auvnav" / "plugins").lexically_normal().string());
+		for (const auto& d : defaults)
+			if (std::find(paths_.begin(), paths_.end(), d) == paths_.end()) paths_.push_back(d);
+	}
 }
 
 std::string PluginHost::resolve(const std::string& plugin) const

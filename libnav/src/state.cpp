@@ -78,14 +78,23 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 {
 	NavState y;
 	y.setEuclidean(euclidean() + delta);
-	y.R_nb = so3::Exp(delta.segment<3>(idx::att)) * R_nb;
+	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
+	y.R_nb = dR * R_nb;
+	// Velocity and acceleration turn with the attitude (SE_2(3)-like
+	// retraction): a heading perturbation moves the whole body-fixed motion.
+	y.v_n = dR * v_n + delta.segment<3>(idx::vel);
+	y.a_n = dR * a_n + delta.segment<3>(idx::acc);
 	return y;
 }
 
 TangentVector NavState::boxminus(const NavState& y) const
 {
 	TangentVector d = euclidean() - y.euclidean();
-	d.segment<3>(idx::att) = so3::Log(R_nb * y.R_nb.transpose());
+	const Eigen::Vector3d dtheta = so3::Log(R_nb * y.R_nb.transpose());
+	const Eigen::Matrix3d dR = so3::Exp(dtheta);
+	d.segment<3>(idx::att) = dtheta;
+	d.segment<3>(idx::vel) = v_n - dR * y.v_n;
+	d.segment<3>(idx::acc) = a_n - dR * y.a_n;
 	return d;
 }
 

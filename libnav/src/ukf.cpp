@@ -14,7 +14,10 @@ namespace auvnav
 namespace
 {
 constexpr int n = idx::dim;
-constexpr int kNonlinear = 6;  // attitude + gyro bias: the only non-affine part of the prediction
+// The inertial block (attitude, gyro bias, acceleration, gravity, accelerometer
+// bias, velocity, position) predicts nonlinearly under the retraction of
+// state.h; currents, ADCP bias and model parameters are affine and independent.
+constexpr int kNonlinear = idx::current_vehicle;
 
 void symmetrize(Covariance& P) { P = 0.5 * (P + P.transpose()).eval(); }
 }  // namespace
@@ -109,48 +112,45 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	constexpr int k = kNonlinear;
 	leadingCholeskyColumns(k);
 	const double g = w_.gamma;
-	// Sigma points that move attitude / gyro bias: 2k of them; all others
-	// leave that part at the mean, so they share the centre's propagation.
-	std::array<Eigen::Matrix3d, 2 * k + 1> R_out;
-	std::array<Eigen::Vector3d, 2 * k + 1> bw_out;
-	auto propagateN = [&](const Eigen::Matrix3d& R, const Eigen::Vector3d& bw, int slot) {
-		R_out[slot] = so3::Exp(-omega_ie_n * dt) * R * so3::Exp((omega_ib_b - bw) * dt);
-		const double phi = model_.noise.gyro_bias.phi(dt);
-		bw_out[slot] = phi * bw + (1 - phi) * model_.prior_mean.segment<3>(idx::gyro_bias);
-	};
-	propagateN(x_.R_nb, x_.b_w, 0);
+	// Only sigma points along the first k Cholesky columns move the inertial
+	// block; the other 2(n−k) share the centre's propagation of that block.
+	std::array<NavState, 2 * k + 1>& X = sigma_scratch_;
+	X[0] = model_.propagate(x_, omega_ib_b, omega_ie_n, dt);
 	for (int j = 0; j < k; ++j)
-		for (int s = 0; s < 2; ++s)
-		{
-			const double sign = s == 0 ? 1.0 : -1.0;
-			const Eigen::Matrix<double, n, 1> c = sign * g * L_.col(j);
-			propagateN(so3::Exp(c.segment<3>(idx::att)) * x_.R_nb, x_.b_w + c.segment<3>(idx::gyro_bias),
-					   1 + 2 * j + s);
-		}
-	// Weighted mean: the centre carries W_m0 plus the 2(n−k) points that do not move it.
+	{
+		const TangentVector c = g * L_.col(j);
+		X[1 + 2 * j] = model_.propagate(x_.boxplus(c), omega_ib_b, omega_ie_n, dt);
+		X[2 + 2 * j] = model_.propagate(x_.boxplus(-c), omega_ib_b, omega_ie_n, dt);
+	}
 	std::array<double, 2 * k + 1> wm;
 	wm.fill(w_.wi);
 	wm[0] = w_.wm0 + 2 * (n - k) * w_.wi;
-	const Eigen::Matrix3d R_mean = weightedRotationMean(R_out.data(), wm.data(), 2 * k + 1, R_out[0]);
-	Eigen::Vector3d bw_mean = Eigen::Vector3d::Zero();
-	for (int i = 0; i < 2 * k + 1; ++i) bw_mean += wm[i] * bw_out[i];
+	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
+	// already the exact mean: A x̄ + b).
+	NavState mean = X[0];
 	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> d;
-	for (int i = 0; i < 2 * k + 1; ++i)
+	for (int iter = 0; iter < 10; ++iter)
 	{
-		d[i].head<3>() = so3::Log(R_out[i] * R_mean.transpose());
-		d[i].tail<3>() = bw_out[i] - bw_mean;
+		TangentVector step = TangentVector::Zero();
+		for (int i = 0; i < 2 * k + 1; ++i)
+		{
+			d[i] = X[i].boxminus(mean).head<k>();
+			step.head<k>() += wm[i] * d[i];
+		}
+		if (step.squaredNorm() < 1e-26) break;
+		mean = mean.boxplus(step);
 	}
+	for (int i = 0; i < 2 * k + 1; ++i) d[i] = X[i].boxminus(mean).head<k>();
 	Eigen::Matrix<double, k, k> P_NN = (w_.wc0 + 2 * (n - k) * w_.wi) * d[0] * d[0].transpose();
-	for (int i = 1; i < 2 * k + 1; ++i) P_NN += w_.wi * d[i] * d[i].transpose();
+	for (int i = 1; i < 2 * k + 1; ++i) P_NN.noalias() += w_.wi * d[i] * d[i].transpose();
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
 	Eigen::Matrix<double, n, k> Ac = L_.leftCols(k);
 	model_.applyLinearRows(Ac, dt);
 	Eigen::Matrix<double, k, n - k> P_NL = Eigen::Matrix<double, k, n - k>::Zero();
 	for (int j = 0; j < k; ++j)
-		P_NL += (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]) * Ac.col(j).tail(n - k).transpose();
+		P_NL.noalias() += (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]) * Ac.col(j).tail(n - k).transpose();
 	// Affine part: A P Aᵀ exactly (rows, then columns).
-	const double speed_through_water =
-		(x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
+	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
 	model_.applyLinearRows(P_, dt);
 	Covariance Pt = P_.transpose();
 	model_.applyLinearRows(Pt, dt);
@@ -160,11 +160,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.bottomLeftCorner<n - k, k>() = P_NL.transpose();
 	P_ += model_.noiseCovariance(dt, speed_through_water);
 	symmetrize(P_);
-
-	NavState next = model_.propagate(x_, omega_ib_b, omega_ie_n, dt);  // affine part of the mean
-	next.R_nb = so3::normalized(R_mean);
-	next.b_w = bw_mean;
-	x_ = next;
+	mean.R_nb = so3::normalized(mean.R_nb);
+	x_ = mean;
 }
 
 UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,

@@ -14,7 +14,8 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(-0.3, 0, -0.6))),
 	  sigma_m_(cfg.positive("sigma_m", 3.0)),
 	  scale_by_hdop_(cfg.boolean("scale_by_hdop", false)),
-	  gate_probability_(gateProbabilityFrom(cfg))
+	  gate_probability_(gateProbabilityFrom(cfg)),
+	  min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
@@ -66,6 +67,16 @@ PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 		why = "position conversion failed";
 		return PrepareStatus::Invalid;
 	}
+	// GPS errors are correlated over tens of seconds: using every 1 Hz fix as
+	// independent would make the filter overconfident. Use one fix per
+	// min_interval_s (the error's correlation time) instead.
+	const double t_obs = mrpt::Clock::toDouble(obs.timestamp);
+	if (t_obs - last_used_s_ < min_interval_s_)
+	{
+		why = "within min_interval_s of the last fix used";
+		return PrepareStatus::Skip;
+	}
+	last_used_s_ = t_obs;
 	double sigma = sigma_m_;
 	if (scale_by_hdop_ && std::isfinite(f.HDOP) && f.HDOP > 0) sigma *= static_cast<double>(f.HDOP);
 

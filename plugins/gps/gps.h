@@ -45,5 +45,7 @@ class GpsModel final : public SafeMeasurementModel
 	double sigma_m_ = 3.0;
 	bool scale_by_hdop_ = false;
 	double gate_probability_ = 0.999;
+	double min_interval_s_ = 0;	  // fixes closer than this to the last one used are skipped
+	double last_used_s_ = -1e300;
 };
 }  // namespace auvnav::plugins

@@ -264,3 +264,23 @@ TEST(Gps, NanMeasurementNeverChangesTheState)
 	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
 	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
 }
+
+TEST(Gps, MinIntervalUsesOneFixPerCorrelationTime)
+{
+	at::TestContext tc;
+	GpsModel model(pt::configText("min_interval_s: 30\n"), "GPS");
+	int used = 0, skipped = 0;
+	for (int k = 0; k < 100; ++k)  // 100 s of 1 Hz fixes
+	{
+		auto o = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
+		o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
+		std::vector<Measurement> out;
+		std::string why;
+		const auto st = model.prepare(*o, tc.ctx(), out, why);
+		(st == PrepareStatus::Ok ? used : skipped)++;
+		if (st == PrepareStatus::Skip) EXPECT_NE(why.find("min_interval_s"), std::string::npos);
+	}
+	EXPECT_EQ(used, 4);	 // t = 0, 30, 60, 90
+	EXPECT_EQ(skipped, 96);
+	EXPECT_THROW(GpsModel(pt::configText("min_interval_s: -1\n"), "GPS"), config::ConfigError);
+}

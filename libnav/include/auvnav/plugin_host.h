@@ -6,7 +6,10 @@
  *  A plugin named in the config as a bare name `dvl` is searched as
  *  `libauvnav_plugin_dvl.so` in, in order: the directories passed to the
  *  host (the config's `plugin_paths`), the `AUVNAV_PLUGIN_PATH` environment
- *  variable (colon separated), and `<dir of the running program>/../lib/auvnav/plugins`.
+ *  variable (colon separated), the installed plugin directory relative to the
+ *  running program (`<program dir>/../<libdir>/auvnav/plugins`, libdir as
+ *  installed, e.g. lib or lib/x86_64-linux-gnu), and
+ *  `<dir of the running program>/../lib/auvnav/plugins` (the build tree).
  *  A name containing '/' or ending in ".so" is a path.
  *
  *  Refusals (PluginError, message naming plugin and path): file not found or

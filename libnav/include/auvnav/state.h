@@ -5,9 +5,9 @@
  *  manifold operations.
  *
  *  Tangent-space layout (fixed; `idx::`): the blocks are ordered so that the
- *  states the nonlinear attitude prediction reads come first, then those of the
- *  high-rate accelerometer update. The filter exploits this order (see ukf.h),
- *  so it is part of the plugin ABI.
+ *  inertial states (whose prediction is nonlinear under the retraction below)
+ *  come first, the high-rate accelerometer update's within the first 13. The
+ *  filter exploits this order (see ukf.h), so it is part of the plugin ABI.
  *
  *    0  attitude error δθ_n (3)        left perturbation, see so3.h
  *    3  gyro bias b_w (3)              [rad/s], IMU axes
@@ -79,7 +79,11 @@ struct NavState
 	Eigen::Matrix<double, 2, 3> Dl_sub = Eigen::Matrix<double, 2, 3>::Zero();
 	Eigen::Matrix<double, 2, 3> Dq_sub = Eigen::Matrix<double, 2, 3>::Zero();
 
-	/** x ⊞ δ: attitude Exp(δ_att)·R, everything else additive. */
+	/** x ⊞ δ: R ← Exp(δ_att)·R; velocity and acceleration rotate with it,
+	 *  v ← Exp(δ_att)·v + δ_v, a ← Exp(δ_att)·a + δ_a (as in invariant filters
+	 *  on SE_2(3)); everything else additive. Rotating v and a keeps a large
+	 *  heading uncertainty from turning body-frame measurements (DVL,
+	 *  accelerometer) into spurious heading information. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
 	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. */
 	TangentVector boxminus(const NavState& y) const;

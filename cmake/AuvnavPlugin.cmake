@@ -1,0 +1,82 @@
+# auvnav_add_plugin_module(): builds an auvnav sensor-model plugin, a MODULE
+# library that the navigator loads at run time (libnav/include/auvnav/plugin_api.h).
+#
+# Used in-tree by plugins/CMakeLists.txt (auvnav_add_plugin) and installed with
+# the package (lib/cmake/auvnav/), where auvnavConfig.cmake includes it for
+# out-of-tree plugin authors:
+#
+#   find_package(auvnav REQUIRED)
+#   auvnav_add_plugin_module(compass SOURCES compass.cpp CONFIG compass.yaml)
+#
+# auvnav_add_plugin_module(<target> SOURCES <src...>
+#                          [NAME <name>]              plugin name; default: <target> without a leading "auvnav_plugin_"
+#                          [CONFIG <file.yaml>]       default configuration, copied next to the module as <name>.yaml
+#                          [OUTPUT_DIRECTORY <dir>]   default: CMAKE_LIBRARY_OUTPUT_DIRECTORY, else the current binary dir
+#                          [INSTALL_DESTINATION <dir>])  install the module (and <name>.yaml) there
+#
+# The module is lib<...>auvnav_plugin_<name>.so (PREFIX "lib", OUTPUT_NAME
+# auvnav_plugin_<name>): the file name the plugin host looks for when a config
+# names the plugin `<name>`. It links auvnav::nav, is compiled with hidden
+# visibility, linked with --no-undefined and with a version script that exports
+# the entry point auvnav_plugin_entry_v1 only (define it with AUVNAV_PLUGIN).
+include_guard(GLOBAL)
+
+# The version script sits next to this file both in the source tree (cmake/)
+# and in the installed package (lib/cmake/auvnav/). A global property, so that
+# the function works whatever directory scope it is called from.
+set_property(GLOBAL PROPERTY AUVNAV_PLUGIN_EXPORTS_MAP "${CMAKE_CURRENT_LIST_DIR}/auvnav_plugin_exports.map")
+
+function(auvnav_add_plugin_module target)
+  cmake_parse_arguments(ARG "" "NAME;CONFIG;OUTPUT_DIRECTORY;INSTALL_DESTINATION" "SOURCES" ${ARGN})
+  if(ARG_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "auvnav_add_plugin_module(${target}): unknown arguments ${ARG_UNPARSED_ARGUMENTS}")
+  endif()
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "auvnav_add_plugin_module(${target}): no SOURCES")
+  endif()
+  if(NOT TARGET auvnav::nav)
+    message(FATAL_ERROR "auvnav_add_plugin_module(${target}): target auvnav::nav is missing (find_package(auvnav) first)")
+  endif()
+  set(name "${ARG_NAME}")
+  if(NOT name)
+    string(REGEX REPLACE "^auvnav_plugin_" "" name "${target}")
+  endif()
+  if(NOT name MATCHES "^[A-Za-z0-9_]+$")
+    message(FATAL_ERROR "auvnav_add_plugin_module(${target}): plugin name '${name}' must be [A-Za-z0-9_]+")
+  endif()
+  set(out_dir "${ARG_OUTPUT_DIRECTORY}")
+  if(NOT out_dir)
+    set(out_dir "${CMAKE_LIBRARY_OUTPUT_DIRECTORY}")
+  endif()
+  if(NOT out_dir)
+    set(out_dir "${CMAKE_CURRENT_BINARY_DIR}")
+  endif()
+  get_property(exports_map GLOBAL PROPERTY AUVNAV_PLUGIN_EXPORTS_MAP)
+
+  add_library(${target} MODULE ${ARG_SOURCES})
+  target_link_libraries(${target} PRIVATE auvnav::nav)
+  # Hidden visibility for the plugin's code; the version script also hides the
+  # template instantiations that libstdc++ headers mark visible: the entry is all.
+  target_link_options(${target} PRIVATE
+    "LINKER:--version-script=${exports_map}" "LINKER:--no-undefined")
+  set_target_properties(${target} PROPERTIES
+    PREFIX "lib"
+    OUTPUT_NAME auvnav_plugin_${name}
+    LIBRARY_OUTPUT_DIRECTORY "${out_dir}"
+    POSITION_INDEPENDENT_CODE ON
+    CXX_VISIBILITY_PRESET hidden
+    VISIBILITY_INLINES_HIDDEN ON
+    LINK_DEPENDS "${exports_map}")
+  set_property(TARGET ${target} PROPERTY AUVNAV_PLUGIN_NAME "${name}")
+
+  if(ARG_CONFIG)
+    get_filename_component(config "${ARG_CONFIG}" ABSOLUTE BASE_DIR "${CMAKE_CURRENT_SOURCE_DIR}")
+    configure_file("${config}" "${out_dir}/${name}.yaml" COPYONLY)
+  endif()
+  if(ARG_INSTALL_DESTINATION)
+    install(TARGETS ${target} LIBRARY DESTINATION "${ARG_INSTALL_DESTINATION}")
+    if(ARG_CONFIG)
+      install(FILES "${config}" DESTINATION "${ARG_INSTALL_DESTINATION}" RENAME "${name}.yaml")
+    endif()
+  endif()
+endfunction()

@@ -1,0 +1,83 @@
+// Example out-of-tree auvnav plugin "compass" (see compass.h and README.md).
+#include "compass.h"
+
+#include <auvnav/plugin_api.h>
+#include <mrpt/obs/CObservationIMU.h>
+
+#include <cmath>
+
+namespace compass_example
+{
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+}
+
+CompassModel::CompassModel(const auvnav::config::Node& cfg, const std::string& label)
+	: label_(label),
+	  declination_rad_(cfg.inRange("declination_deg", -180.0, 180.0, 0.0) * kDeg),
+	  sigma_rad_(cfg.positive("sigma_deg", 2.0) * kDeg),
+	  gate_probability_(cfg.inRange("gate_probability", 0.0, 1.0, 0.999))
+{
+	if (sigma_rad_ > M_PI / 2) cfg.fail("sigma_deg", "a compass sigma above 90 deg carries no heading information");
+	if (!(gate_probability_ > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
+}
+
+double CompassModel::wrapAngle(double a)
+{
+	double w = std::remainder(a, 2 * M_PI);	 // [−π, π]
+	if (w <= -M_PI) w += 2 * M_PI;
+	return w;
+}
+
+double CompassModel::yawOf(const Eigen::Matrix3d& R_nb) { return wrapAngle(std::atan2(R_nb(1, 0), R_nb(0, 0))); }
+
+void CompassModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
+							Eigen::Ref<Eigen::VectorXd> r) const noexcept
+{
+	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
+}
+
+auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext& /*ctx*/,
+											  std::vector<auvnav::Measurement>& out, std::string& why)
+{
+	using mrpt::obs::CObservationIMU;
+	out.clear();
+	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
+	if (!imu)
+	{
+		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
+		return auvnav::PrepareStatus::Invalid;
+	}
+	if (!imu->has(mrpt::obs::IMU_YAW))
+	{
+		why = "CObservationIMU without IMU_YAW (magnetic heading)";
+		return auvnav::PrepareStatus::Invalid;
+	}
+	const double heading = imu->get(mrpt::obs::IMU_YAW);
+	if (!std::isfinite(heading))
+	{
+		why = "non-finite heading";
+		return auvnav::PrepareStatus::Invalid;
+	}
+	auvnav::Measurement m;
+	m.z = Eigen::VectorXd::Constant(1, wrapAngle(heading + declination_rad_));
+	m.R = Eigen::MatrixXd::Constant(1, 1, sigma_rad_ * sigma_rad_);
+	m.label = "heading";
+	out.push_back(std::move(m));
+	return auvnav::PrepareStatus::Ok;
+}
+
+bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measurement& /*m*/,
+							 const auvnav::FilterContext& /*ctx*/, Eigen::Ref<Eigen::VectorXd> z_pred) const
+{
+	if (z_pred.size() != 1) return false;
+	z_pred[0] = yawOf(x.R_nb);
+	return true;
+}
+
+}  // namespace compass_example
+
+// The plugin's entry point: the only symbol libauvnav_plugin_compass.so exports.
+AUVNAV_PLUGIN(compass_example::CompassModel, "compass", "1.0.0",
+			  "Magnetic compass heading (CObservationIMU IMU_YAW) on the attitude; example out-of-tree plugin")

@@ -1,0 +1,190 @@
+# The installed package end to end (ctest: package.install_build_run_compass):
+#  1. cmake --install the build tree into WORK_DIR/prefix and check the layout
+#     (programs, libraries, plugins + YAML, headers, config, CMake package) and
+#     that the installed auvnav-run loads the installed libraries;
+#  2. configure, build and unit-test share/examples/compass_plugin against it
+#     (find_package(auvnav), auvnav_add_plugin_module);
+#  3. build tests/package/rawlog_generator against it and write a 20 s rawlog
+#     (IMU, pressure, compass);
+#  4. run the INSTALLED auvnav-run with the installed default configuration,
+#     its core plugins found by name in the installed plugin directory, plus
+#     the compass plugin by path; expect exit 0 and accepted compass updates.
+#   cmake -DBUILD_DIR=<auvnav build> -DSOURCE_DIR=<auvnav source> -DWORK_DIR=<scratch>
+#         -DLIBDIR=<CMAKE_INSTALL_LIBDIR> -DCXX_COMPILER=<c++> [-DBUILD_TYPE=Release] -P package_test.cmake
+foreach(var BUILD_DIR SOURCE_DIR WORK_DIR LIBDIR CXX_COMPILER)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "package_test.cmake: ${var} is not set")
+  endif()
+endforeach()
+if(NOT BUILD_TYPE)
+  set(BUILD_TYPE Release)
+endif()
+set(prefix "${WORK_DIR}/prefix")
+unset(ENV{AUVNAV_PLUGIN_PATH})  # the installed programs must find their plugins on their own
+file(REMOVE_RECURSE "${WORK_DIR}")
+file(MAKE_DIRECTORY "${WORK_DIR}")
+
+# run(<what> COMMAND ...): runs a command, fails with its output unless it exits 0.
+function(run what)
+  cmake_parse_arguments(ARG "" "OUTPUT_VARIABLE" "COMMAND" ${ARGN})
+  message(STATUS "${what}: ${ARG_COMMAND}")
+  execute_process(COMMAND ${ARG_COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${rc}):\n${out}")
+  endif()
+  if(ARG_OUTPUT_VARIABLE)
+    set(${ARG_OUTPUT_VARIABLE} "${out}" PARENT_SCOPE)
+  endif()
+endfunction()
+
+# --- 1. install
+run("install" COMMAND ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}" --config ${BUILD_TYPE})
+set(plugin_dir "${prefix}/${LIBDIR}/auvnav/plugins")
+foreach(f
+    bin/auvnav-run bin/auvnav-sim bin/auvnav-info
+    ${LIBDIR}/libauvnav_nav.so ${LIBDIR}/libauvnav_obs.so
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_inertial.so ${LIBDIR}/auvnav/plugins/inertial.yaml
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_dvl.so ${LIBDIR}/auvnav/plugins/dvl.yaml
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_pressure.so ${LIBDIR}/auvnav/plugins/pressure.yaml
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_gps.so ${LIBDIR}/auvnav/plugins/gps.yaml
+    include/auvnav/navigator.h include/auvnav/plugin_api.h include/auvnav/plugin_host.h
+    include/auvnav/measurement_model.h include/auvnav/obs/CObservationDVL.h include/auvnav/obs/register.h
+    include/auvnav/io/rawlog.h include/auvnav/testing/model_checks.h
+    share/auvnav/config/flatfish.yaml share/auvnav/config/missions/sample.yaml
+    share/auvnav/config/vehicles/flatfish.yaml share/auvnav/config/sensors/flatfish_sensors.yaml
+    share/auvnav/examples/compass_plugin/CMakeLists.txt share/auvnav/examples/compass_plugin/compass.cpp
+    ${LIBDIR}/cmake/auvnav/auvnavConfig.cmake ${LIBDIR}/cmake/auvnav/auvnavConfigVersion.cmake
+    ${LIBDIR}/cmake/auvnav/auvnavTargets.cmake ${LIBDIR}/cmake/auvnav/AuvnavPlugin.cmake
+    ${LIBDIR}/cmake/auvnav/auvnav_plugin_exports.map)
+  if(NOT EXISTS "${prefix}/${f}")
+    message(FATAL_ERROR "not installed: ${prefix}/${f}")
+  endif()
+endforeach()
+file(GLOB installed_plugins RELATIVE "${plugin_dir}" "${plugin_dir}/*.so")
+list(SORT installed_plugins)
+message(STATUS "installed plugins: ${installed_plugins}")
+foreach(p ${installed_plugins})
+  if(NOT p MATCHES "^libauvnav_plugin_(inertial|dvl|pressure|gps|adcp|model_aiding|sonar_heading)\\.so$")
+    message(FATAL_ERROR "unexpected file in the installed plugin directory (test plugin?): ${p}")
+  endif()
+endforeach()
+# The installed program resolves the installed libraries (RPATH $ORIGIN/..), not the build tree's.
+find_program(LDD ldd)
+if(LDD)
+  run("ldd" COMMAND ${LDD} "${prefix}/bin/auvnav-run" OUTPUT_VARIABLE ldd_out)
+  foreach(lib nav obs)
+    if(NOT ldd_out MATCHES "libauvnav_${lib}\\.so => ${prefix}/[^\n]*libauvnav_${lib}\\.so")
+      message(FATAL_ERROR "installed auvnav-run does not load ${prefix}/${LIBDIR}/libauvnav_${lib}.so:\n${ldd_out}")
+    endif()
+  endforeach()
+endif()
+run("installed auvnav-info --help" COMMAND "${prefix}/bin/auvnav-info" --help)
+
+# --- 2. the out-of-tree example plugin
+set(common_args -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=${BUILD_TYPE}
+  -DCMAKE_CXX_COMPILER=${CXX_COMPILER} -DCMAKE_FIND_PACKAGE_NO_PACKAGE_REGISTRY=ON)
+set(compass_build "${WORK_DIR}/compass")
+run("configure the compass example"
+  COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/share/examples/compass_plugin" -B "${compass_build}" ${common_args}
+  OUTPUT_VARIABLE out)
+if(NOT out MATCHES "auvnav 0\\.[0-9.]+: ${prefix}/${LIBDIR}/cmake/auvnav")
+  message(FATAL_ERROR "the example did not find the package in ${prefix}:\n${out}")
+endif()
+run("build the compass example" COMMAND ${CMAKE_COMMAND} --build "${compass_build}")
+set(compass_module "${compass_build}/libauvnav_plugin_compass.so")
+if(NOT EXISTS "${compass_module}" OR NOT EXISTS "${compass_build}/compass.yaml")
+  message(FATAL_ERROR "no ${compass_module} (or compass.yaml next to it)")
+endif()
+run("compass unit tests" COMMAND ${CMAKE_CTEST_COMMAND} --test-dir "${compass_build}" --output-on-failure
+  OUTPUT_VARIABLE out)
+message("${out}")
+if(NOT out MATCHES "100% tests passed, 0 tests failed out of ([0-9]+)" OR CMAKE_MATCH_1 LESS 5)
+  message(FATAL_ERROR "the compass unit tests did not all run")
+endif()
+
+# --- 3. a rawlog with IMU, pressure and compass data, from a program built against the package
+set(gen_build "${WORK_DIR}/rawlog_generator")
+run("configure the rawlog generator"
+  COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/package/rawlog_generator" -B "${gen_build}" ${common_args})
+run("build the rawlog generator" COMMAND ${CMAKE_COMMAND} --build "${gen_build}")
+set(rawlog "${WORK_DIR}/compass.rawlog")
+set(true_heading_deg 20)
+run("write the rawlog" COMMAND "${gen_build}/make_compass_rawlog" "${rawlog}" 20 ${true_heading_deg} -12.975)
+
+# --- 4. the installed navigator with the installed default config + the compass by path
+file(READ "${prefix}/share/auvnav/config/flatfish.yaml" cfg)
+string(FIND "${cfg}" "\nsensors:" at)
+if(at EQUAL -1)
+  message(FATAL_ERROR "the installed flatfish.yaml has no top-level sensors:")
+endif()
+math(EXPR at "${at} + 1")
+string(SUBSTRING "${cfg}" 0 ${at} head)
+string(SUBSTRING "${cfg}" ${at} -1 rest)        # "sensors:\n  - label: ..."
+string(REGEX MATCH "\n( *)- " item "${rest}")   # indentation of the items
+set(indent "${CMAKE_MATCH_1}")
+string(REGEX MATCH "\n[^ \t\n-]" block_end "${rest}")  # first line after the block
+if(block_end)
+  string(FIND "${rest}" "${block_end}" end)
+else()
+  string(LENGTH "${rest}" end)
+endif()
+string(SUBSTRING "${rest}" 0 ${end} sensors)
+string(SUBSTRING "${rest}" ${end} -1 tail)
+foreach(core inertial pressure)
+  if(NOT sensors MATCHES "plugin: ${core}")
+    message(FATAL_ERROR "the installed flatfish.yaml's sensors do not list the core plugin ${core}:\n${sensors}")
+  endif()
+endforeach()
+set(compass_item "\n${indent}- label: COMPASS\n${indent}  plugin: ${compass_module}\n${indent}  config: {sigma_deg: 2, declination_deg: 0}")
+file(WRITE "${WORK_DIR}/compass_run.yaml" "${head}${sensors}${compass_item}${tail}")
+
+set(out_dir "${WORK_DIR}/run")
+execute_process(
+  COMMAND "${prefix}/bin/auvnav-run" --config "${WORK_DIR}/compass_run.yaml" --out "${out_dir}" --quiet
+    --set filter.initial.position=config --set filter.initial.heading_deg=30
+    --set navigation_frame.origin.latitude_deg=-12.975 "${rawlog}"
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+message("${out}")
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the installed auvnav-run exited with ${rc}")
+endif()
+file(READ "${out_dir}/summary.json" json)
+string(JSON completed GET "${json}" completed)
+if(NOT completed STREQUAL "true")
+  message(FATAL_ERROR "summary.json: completed is ${completed}")
+endif()
+string(JSON n LENGTH "${json}" sensors)
+math(EXPR last "${n} - 1")
+set(found_compass FALSE)
+foreach(i RANGE ${last})
+  string(JSON label GET "${json}" sensors ${i} label)
+  string(JSON plugin GET "${json}" sensors ${i} plugin)
+  string(JSON accepted GET "${json}" sensors ${i} accepted)
+  string(JSON invalid GET "${json}" sensors ${i} invalid)
+  message(STATUS "sensor ${label} (${plugin}): accepted ${accepted}, invalid ${invalid}")
+  if(label STREQUAL "COMPASS")
+    set(found_compass TRUE)
+    if(NOT plugin STREQUAL "${compass_module}" OR NOT accepted GREATER 0 OR NOT invalid EQUAL 0)
+      message(FATAL_ERROR "summary.json: the compass (${plugin}) has ${accepted} accepted, ${invalid} invalid updates")
+    endif()
+  elseif(label STREQUAL "PRESSURE" AND NOT accepted GREATER 0)
+    message(FATAL_ERROR "summary.json: the installed pressure plugin accepted nothing")
+  endif()
+endforeach()
+if(NOT found_compass)
+  message(FATAL_ERROR "summary.json lists no COMPASS sensor:\n${json}")
+endif()
+
+# The compass pulled the heading from the initial 30 deg to the true 20 deg.
+file(STRINGS "${out_dir}/states.csv" rows)
+list(GET rows 0 header)
+list(GET rows -1 final)
+string(REPLACE "," ";" header "${header}")
+string(REPLACE "," ";" final "${final}")
+list(FIND header yaw_deg yaw_col)
+list(GET final ${yaw_col} yaw)
+message(STATUS "final heading ${yaw} deg (true ${true_heading_deg}, initial guess 30)")
+string(REGEX MATCH "^-?[0-9]+" yaw_int "${yaw}")   # CMake has integer arithmetic only
+if(yaw_col EQUAL -1 OR NOT yaw_int OR yaw_int LESS 18 OR yaw_int GREATER 21)
+  message(FATAL_ERROR "final heading ${yaw} deg is not within 2 deg of the compass's ${true_heading_deg} deg")
+endif()
