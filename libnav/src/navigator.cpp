@@ -159,8 +159,14 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 	if (t0_s_ < 0) t0_s_ = t;
 	if (obs.sensorLabel == imu_label_)
 	{
-		if (!denied(obs.sensorLabel, t)) handleImu(obs);
-		else ++imu_stats_.denied;
+		if (denied(obs.sensorLabel, t))
+		{
+			++imu_stats_.denied;
+			return;
+		}
+		// A sample unfit for prediction (NaN, duplicate, backwards) is dropped
+		// whole: its accelerometer part must not update the state either.
+		if (!handleImu(obs)) return;
 	}
 	// Record the first GPS fix for initialisation.
 	if (!initialized_ && position_from_gps_ && obs.sensorLabel == gps_label_ && !denied(obs.sensorLabel, t))
@@ -175,7 +181,7 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 	dispatch(obs, t);
 }
 
-void Navigator::handleImu(const mrpt::obs::CObservation& obs)
+bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 {
 	const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(&obs);
 	const double t = mrpt::Clock::toDouble(obs.timestamp);
@@ -184,7 +190,7 @@ void Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	{
 		++imu_stats_.invalid;
 		imu_stats_.last_problem = "IMU observation without gyro/accelerometer data";
-		return;
+		return false;
 	}
 	const Eigen::Vector3d w(imu->get(IMU_WX), imu->get(IMU_WY), imu->get(IMU_WZ));
 	const Eigen::Vector3d f(imu->get(IMU_X_ACC), imu->get(IMU_Y_ACC), imu->get(IMU_Z_ACC));
@@ -192,7 +198,7 @@ void Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	{
 		++imu_stats_.invalid;
 		imu_stats_.last_problem = "non-finite IMU sample";
-		return;
+		return false;
 	}
 	if (!initialized_)
 	{
@@ -204,14 +210,14 @@ void Navigator::handleImu(const mrpt::obs::CObservation& obs)
 		omega_ib_b_ = w;
 		++imu_stats_.before_init;
 		if (t - leveling_start_s_ >= leveling_s_ && (!position_from_gps_ || gps_fix_n_)) initialize();
-		return;
+		return true;
 	}
 	const double dt = t - t_s_;
 	if (dt <= 0)
 	{
 		++imu_stats_.invalid;
 		imu_stats_.last_problem = dt == 0 ? "duplicate IMU timestamp" : "IMU timestamp going backwards";
-		return;
+		return false;
 	}
 	// A gap: predict in steps no longer than the nominal limit with the new rate.
 	const int steps = dt > max_gap_s_ ? static_cast<int>(std::ceil(dt / 0.01)) : 1;
@@ -222,6 +228,7 @@ void Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	omega_ib_b_ = w;
 	++imu_stats_.accepted;
 	if (on_predict) on_predict(*this);
+	return true;
 }
 
 void Navigator::initialize()

@@ -82,7 +82,7 @@ class Navigator
 
    private:
 	struct Slot;
-	void handleImu(const mrpt::obs::CObservation& obs);
+	bool handleImu(const mrpt::obs::CObservation& obs);  // false: sample dropped
 	void initialize();
 	void dispatch(const mrpt::obs::CObservation& obs, double t_obs);
 	bool denied(const std::string& label, double t_obs) const;

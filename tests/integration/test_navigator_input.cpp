@@ -1,0 +1,165 @@
+// Bad input never crashes the navigator and never reaches the state: NaN/Inf
+// samples, duplicate and backward timestamps, gaps, observations older than
+// the filter, unknown sensors, denial windows.
+#include <auvnav/config.h>
+#include <auvnav/navigator.h>
+#include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/obs/CObservationPressure.h>
+#include <gtest/gtest.h>
+#include <mrpt/obs/CObservationIMU.h>
+
+#include <cmath>
+#include <limits>
+
+using namespace auvnav;
+
+namespace
+{
+const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/flatfish.yaml";
+constexpr double kT0 = 1492693200.0;
+
+mrpt::obs::CObservationIMU::Ptr imuAt(double t, double fx = 0.0)
+{
+	using namespace mrpt::obs;
+	auto o = CObservationIMU::Create();
+	o->sensorLabel = "IMU";
+	o->timestamp = mrpt::Clock::fromDouble(t);
+	o->set(IMU_WX, 7.1e-5);
+	o->set(IMU_WY, 0.0);
+	o->set(IMU_WZ, 1.6e-5);
+	o->set(IMU_X_ACC, fx);
+	o->set(IMU_Y_ACC, 0.0);
+	o->set(IMU_Z_ACC, -9.782);
+	return o;
+}
+
+auvnav::obs::CObservationPressure::Ptr pressureAt(double t, double pa)
+{
+	auto o = auvnav::obs::CObservationPressure::Create();
+	o->sensorLabel = "PRESSURE";
+	o->timestamp = mrpt::Clock::fromDouble(t);
+	o->pressure_pa = pa;
+	o->temperature_c = 20;
+	return o;
+}
+
+const SensorStats& statsOf(const std::vector<SensorStats>& all, const std::string& label, const std::string& plugin)
+{
+	for (const auto& s : all)
+		if (s.label == label && s.plugin == plugin) return s;
+	throw std::runtime_error("no stats for " + label);
+}
+
+/** A navigator started at rest with position from the config (no GPS). */
+struct Fixture
+{
+	config::Node cfg = config::Node::load(kConfig);
+	PluginHost host;
+	std::unique_ptr<Navigator> nav;
+	double t = kT0;
+	Fixture()
+	{
+		cfg.set("filter.initial.position", "config");
+		nav = std::make_unique<Navigator>(cfg, host);
+		for (int k = 0; k < 150; ++k) step();
+	}
+	void step()
+	{
+		t += 0.01;
+		nav->process(*imuAt(t));
+	}
+};
+}  // namespace
+
+TEST(NavigatorInput, InitialisesFromLevellingAndStaysFinite)
+{
+	Fixture f;
+	ASSERT_TRUE(f.nav->initialized());
+	EXPECT_TRUE(f.nav->filter().state().allFinite());
+	EXPECT_GT(f.nav->predictions(), 40u);
+}
+
+TEST(NavigatorInput, NonFiniteImuSamplesAreCountedAndDropped)
+{
+	Fixture f;
+	const NavState before = f.nav->filter().state();
+	const std::size_t preds = f.nav->predictions();
+	auto bad = imuAt(f.t + 0.01);
+	bad->set(mrpt::obs::IMU_WX, std::numeric_limits<double>::quiet_NaN());
+	f.nav->process(*bad);
+	auto inf = imuAt(f.t + 0.01);
+	inf->set(mrpt::obs::IMU_Z_ACC, std::numeric_limits<double>::infinity());
+	f.nav->process(*inf);
+	EXPECT_EQ(f.nav->imuStats().invalid, 2u);
+	EXPECT_EQ(f.nav->predictions(), preds);
+	EXPECT_TRUE(f.nav->filter().state().p_n == before.p_n);
+	f.step();  // a good sample afterwards works
+	EXPECT_EQ(f.nav->predictions(), preds + 1);
+	EXPECT_TRUE(f.nav->filter().state().allFinite());
+}
+
+TEST(NavigatorInput, DuplicateAndBackwardImuTimestampsAreRejected)
+{
+	Fixture f;
+	const std::size_t preds = f.nav->predictions();
+	f.nav->process(*imuAt(f.t));		 // duplicate
+	f.nav->process(*imuAt(f.t - 0.5));	 // backwards
+	EXPECT_EQ(f.nav->imuStats().invalid, 2u);
+	EXPECT_EQ(f.nav->predictions(), preds);
+	EXPECT_NE(f.nav->imuStats().last_problem.find("backwards"), std::string::npos);
+}
+
+TEST(NavigatorInput, ImuGapIsBridgedAndCounted)
+{
+	Fixture f;
+	f.t += 2.0;	 // 2 s without IMU
+	f.nav->process(*imuAt(f.t));
+	EXPECT_EQ(f.nav->imuGaps(), 1u);
+	EXPECT_TRUE(f.nav->filter().state().allFinite());
+	EXPECT_NEAR(f.nav->time(), f.t, 1e-6);
+}
+
+TEST(NavigatorInput, NanPressureIsInvalidAndNeverReachesTheState)
+{
+	Fixture f;
+	const NavState before = f.nav->filter().state();
+	const Covariance P = f.nav->filter().covariance();
+	f.nav->process(*pressureAt(f.t, std::numeric_limits<double>::quiet_NaN()));
+	f.nav->process(*pressureAt(f.t, std::numeric_limits<double>::infinity()));
+	const auto& s = statsOf(f.nav->stats(), "PRESSURE", "pressure");
+	EXPECT_EQ(s.invalid, 2u);
+	EXPECT_EQ(s.accepted, 0u);
+	EXPECT_TRUE(f.nav->filter().state().p_n == before.p_n);
+	EXPECT_TRUE(f.nav->filter().covariance() == P);
+	// A good one is accepted and moves depth toward 10 m.
+	f.nav->process(*pressureAt(f.t, 101325 + 1025 * 9.782 * (10.0 + 0.3)));
+	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").accepted, 1u);
+	EXPECT_GT(f.nav->filter().state().p_n.z(), before.p_n.z() + 1.0);
+}
+
+TEST(NavigatorInput, LateObservationsAndDeniedSensorsAreCountedNotApplied)
+{
+	Fixture f;
+	const NavState before = f.nav->filter().state();
+	f.nav->process(*pressureAt(f.t - 5.0, 200000));	 // 5 s older than the filter
+	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").late, 1u);
+	f.nav->addDenial({{"PRESSURE"}, 0.0, 1e9});
+	f.nav->process(*pressureAt(f.t, 200000));
+	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").denied, 1u);
+	EXPECT_TRUE(f.nav->filter().state().p_n == before.p_n);
+}
+
+TEST(NavigatorInput, UnknownSensorsAndWrongClassesAreHarmless)
+{
+	Fixture f;
+	auto other = pressureAt(f.t, 150000);
+	other->sensorLabel = "NOT_CONFIGURED";
+	f.nav->process(*other);
+	// A DVL observation arriving under the pressure label: the plugin refuses the class.
+	auto dvl = auvnav::obs::CObservationDVL::Create();
+	dvl->sensorLabel = "PRESSURE";
+	dvl->timestamp = mrpt::Clock::fromDouble(f.t);
+	f.nav->process(*dvl);
+	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").invalid, 1u);
+	EXPECT_TRUE(f.nav->filter().state().allFinite());
+}
