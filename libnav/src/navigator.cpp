@@ -12,15 +12,17 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 
+/** Rows x, y; columns x, y, ψ of the 6x6 diagonal matrix given by its
+ *  diagonal, in the state's stored form (logarithms on the diagonal). */
 Eigen::Matrix<double, 2, 3> subMatrix(const config::Node& n, const std::string& key)
 {
-	// Rows x, y; columns x, y, ψ of the 6x6 diagonal matrix given by its diagonal.
 	const auto d = n.numbers(key);
 	if (d.size() != 6) n.fail(key, "expected 6 diagonal values");
+	if (!(d[0] > 0) || !(d[1] > 0)) n.fail(key, "surge and sway entries must be positive");
 	Eigen::Matrix<double, 2, 3> m = Eigen::Matrix<double, 2, 3>::Zero();
 	m(0, 0) = d[0];
 	m(1, 1) = d[1];
-	return m;
+	return storedSub(m);
 }
 
 void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)

@@ -93,9 +93,18 @@ ProcessModel ProcessModel::fromConfig(const config::Node& n, const TangentVector
 	m.noise.current_spatial_var_per_m = n.nonNegative("current_spatial_var_per_m", 0.0);
 	m.noise.adcp_bias = gm("adcp_bias_mps", 1.0);
 	m.noise.parameter_tau_s = n.positive("parameter_tau_s");
+	// Diagonal entries are logarithms: a relative σ is an absolute σ there. The
+	// off-diagonal couplings get σ = relative σ × `parameter_coupling_fraction`
+	// × the geometric mean of the sub-matrix's surge and sway entries.
 	const double rel = n.nonNegative("parameter_relative_sigma");
-	for (int i = 0; i < 18; ++i)
-		m.noise.parameter_sigma[i] = rel * std::max(std::abs(prior_mean[idx::inertia + i]), 1e-3);
+	const double coupling = n.nonNegative("parameter_coupling_fraction", 0.05);
+	for (int b = 0; b < 3; ++b)
+	{
+		const int at = idx::inertia + 6 * b;
+		const double dx = std::exp(prior_mean[at + 0]), dy = std::exp(prior_mean[at + 4]);
+		const double sigma_off = rel * coupling * std::sqrt(dx * dy);
+		for (int i = 0; i < 6; ++i) m.noise.parameter_sigma[6 * b + i] = (i == 0 || i == 4) ? rel : sigma_off;
+	}
 	return m;
 }
 

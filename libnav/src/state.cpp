@@ -1,6 +1,8 @@
 #include <auvnav/so3.h>
 #include <auvnav/state.h>
 
+#include <cmath>
+
 namespace auvnav
 {
 namespace
@@ -100,6 +102,22 @@ TangentVector NavState::boxminus(const NavState& y) const
 
 bool NavState::allFinite() const { return R_nb.allFinite() && euclidean().allFinite(); }
 
+Eigen::Matrix<double, 2, 3> physicalSub(const Eigen::Matrix<double, 2, 3>& stored)
+{
+	Eigen::Matrix<double, 2, 3> m = stored;
+	m(0, 0) = std::exp(stored(0, 0));
+	m(1, 1) = std::exp(stored(1, 1));
+	return m;
+}
+
+Eigen::Matrix<double, 2, 3> storedSub(const Eigen::Matrix<double, 2, 3>& physical)
+{
+	Eigen::Matrix<double, 2, 3> m = physical;
+	m(0, 0) = std::log(physical(0, 0));
+	m(1, 1) = std::log(physical(1, 1));
+	return m;
+}
+
 const std::vector<std::string>& tangentNames()
 {
 	static const std::vector<std::string> names = [] {
@@ -122,8 +140,9 @@ const std::vector<std::string>& tangentNames()
 		n.push_back("current_far_e");
 		n.push_back("adcp_bias_x");
 		n.push_back("adcp_bias_y");
+		// Diagonal entries are stored as logarithms (see state.h).
 		for (const char* m : {"M", "Dl", "Dq"})
-			for (const char* rc : {"xx", "xy", "xpsi", "yx", "yy", "ypsi"}) n.push_back(std::string(m) + "_" + rc);
+			for (const char* rc : {"ln_xx", "xy", "xpsi", "yx", "ln_yy", "ypsi"}) n.push_back(std::string(m) + "_" + rc);
 		return n;
 	}();
 	return names;

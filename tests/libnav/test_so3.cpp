@@ -189,7 +189,8 @@ TEST(NavStateManifold, BoxplusThenBoxminusRecoversDelta)
 			const TangentVector d = randomDelta(rng, a * randomAxis(rng));
 			const TangentVector back = x.boxplus(d).boxminus(x);
 			EXPECT_LT((back - d).head<3>().norm(), 1e-12) << "|δ_att| = " << a;
-			EXPECT_LT((back - d).tail<40>().cwiseAbs().maxCoeff(), 1e-12);
+			// Velocity and acceleration are rotated and back (|v| up to ~10): 1e-11.
+			EXPECT_LT((back - d).tail<40>().cwiseAbs().maxCoeff(), 1e-11);
 		}
 }
 

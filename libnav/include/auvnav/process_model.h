@@ -35,7 +35,9 @@ struct ProcessNoise
 	double current_spatial_var_per_m = 0;  //!< extra current variance per metre moved through water [(m/s)²/m]
 	GaussMarkov adcp_bias;		  //!< [m/s]
 	double parameter_tau_s = 3600;	//!< model parameter correlation time [s]
-	Eigen::Matrix<double, 18, 1> parameter_sigma = Eigen::Matrix<double, 18, 1>::Zero();  //!< stationary σ, tangent order
+	//! Stationary σ of the 18 model parameters in tangent order (on the log
+	//! scale for the diagonal entries, see state.h).
+	Eigen::Matrix<double, 18, 1> parameter_sigma = Eigen::Matrix<double, 18, 1>::Zero();
 };
 
 struct ProcessModel

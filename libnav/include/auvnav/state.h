@@ -22,6 +22,12 @@
  *   25  inertia sub-matrix M_sub (2x3)        rows x,y; columns x,y,ψ; row-major
  *   31  linear damping sub-matrix D_l,sub (2x3)
  *   37  quadratic damping sub-matrix D_q,sub (2x3)
+ *
+ *  Model parameters: the diagonal entries of each sub-matrix (xx and yy) are
+ *  stored as natural logarithms, so that the physical values, exp(·), stay
+ *  positive under any update without a non-smooth abs(); the off-diagonal
+ *  couplings (xy, xψ, yx, yψ) are stored as they are. Use physicalSub() to
+ *  read them in SI units.
  */
 #include <Eigen/Core>
 #include <cstdint>
@@ -95,6 +101,11 @@ struct NavState
 
 	bool allFinite() const;
 };
+
+/** A parameter sub-matrix in SI units from its stored form (exp of the
+ *  diagonal entries (0,0) and (1,1)), and back. */
+Eigen::Matrix<double, 2, 3> physicalSub(const Eigen::Matrix<double, 2, 3>& stored);
+Eigen::Matrix<double, 2, 3> storedSub(const Eigen::Matrix<double, 2, 3>& physical);
 
 /** Names of the 43 tangent coordinates, for CSV headers ("att_n", "vel_e", …). */
 const std::vector<std::string>& tangentNames();
