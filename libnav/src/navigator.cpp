@@ -25,6 +25,13 @@ Eigen::Matrix<double, 2, 3> subMatrix(const config::Node& n, const std::string& 
 	return storedSub(m);
 }
 
+std::string relativeTo(const config::Node& cfg, const std::string& path)
+{
+	if (!path.empty() && path[0] == '/') return path;
+	const auto slash = cfg.file().find_last_of('/');
+	return slash == std::string::npos ? path : cfg.file().substr(0, slash + 1) + path;
+}
+
 void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
 {
 	for (int r = 0; r < 2; ++r)
@@ -53,6 +60,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	imu_position_b_ = imu.vector3("position_m");
 	leveling_s_ = imu.inRange("leveling_s", 0.01, 600, 1.0);
 	max_gap_s_ = imu.inRange("max_gap_s", 0.01, 10, 0.5);
+	alpha_tau_s_ = imu.inRange("angular_acceleration_tau_s", 0.01, 10, 0.2);
 	imu_stats_.label = imu_label_;
 	imu_stats_.plugin = "(prediction)";
 
@@ -60,7 +68,10 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	initial_ = f.child("initial");
 	// Prior means of the Gauss–Markov states: zero biases and currents,
 	// model parameters from the system identification.
-	const auto vm = f.child("vehicle_model");
+	// The parameter prior: inline `vehicle_model`, or `vehicle_model_file`
+	// (relative to this config file) shared with the model-aiding plugin.
+	const auto vm = f.has("vehicle_model_file") ? config::Node::load(relativeTo(cfg, f.string("vehicle_model_file")))
+												 : f.child("vehicle_model");
 	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
 	put23(prior_mean_, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));
@@ -120,7 +131,11 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
-		const std::string yaml = s.has("config") ? s.child("config").toYaml() : "{}\n";
+		// Plugin configuration: inline `config`, or `config_file` relative to this file.
+		if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
+		const std::string yaml = s.has("config")		 ? s.child("config").toYaml()
+								 : s.has("config_file") ? config::Node::load(relativeTo(cfg, s.string("config_file"))).toYaml()
+														 : "{}\n";
 		slot->model = host.create(slot->stats.plugin, yaml, slot->stats.label);
 		slots_.push_back(std::move(slot));
 	}
@@ -226,6 +241,8 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	if (steps > 1) ++imu_gaps_;
 	for (int i = 0; i < steps; ++i) ukf_->predict(w, earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero(), dt / steps);
 	++predictions_;
+	// Angular acceleration: first-order low-pass of the gyro's derivative.
+	alpha_b_ += ((w - omega_ib_b_) / dt - alpha_b_) * (dt / (alpha_tau_s_ + dt));
 	t_s_ = t;
 	omega_ib_b_ = w;
 	++imu_stats_.accepted;
@@ -264,6 +281,8 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 	ctx.omega_ie_n = frame_->earthRate();
 	ctx.imu_position_b = imu_position_b_;
 	ctx.frame = frame_.get();
+	ctx.alpha_b = alpha_b_;
+	ctx.mean = initialized_ ? &ukf_->state() : nullptr;
 	for (auto& slot : slots_)
 	{
 		SensorStats& st = slot->stats;
@@ -300,6 +319,11 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 		}
 		for (const Measurement& m : slot->buffer)
 		{
+			if (m.skipped)
+			{
+				++st.skipped;
+				continue;
+			}
 			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
 			const UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
 			switch (r.status)

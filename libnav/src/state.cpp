@@ -86,6 +86,12 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	// retraction): a heading perturbation moves the whole body-fixed motion.
 	y.v_n = dR * v_n + delta.segment<3>(idx::vel);
 	y.a_n = dR * a_n + delta.segment<3>(idx::acc);
+	// The water currents too (horizontal part of the turned vector): they are
+	// inferred from body-frame measurements just like the velocity.
+	y.current_vehicle_ne = (dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>() +
+						   delta.segment<2>(idx::current_vehicle);
+	y.current_far_ne = (dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>() +
+					   delta.segment<2>(idx::current_far);
 	return y;
 }
 
@@ -97,6 +103,10 @@ TangentVector NavState::boxminus(const NavState& y) const
 	d.segment<3>(idx::att) = dtheta;
 	d.segment<3>(idx::vel) = v_n - dR * y.v_n;
 	d.segment<3>(idx::acc) = a_n - dR * y.a_n;
+	d.segment<2>(idx::current_vehicle) =
+		current_vehicle_ne - (dR * Eigen::Vector3d(y.current_vehicle_ne.x(), y.current_vehicle_ne.y(), 0)).head<2>();
+	d.segment<2>(idx::current_far) =
+		current_far_ne - (dR * Eigen::Vector3d(y.current_far_ne.x(), y.current_far_ne.y(), 0)).head<2>();
 	return d;
 }
 

@@ -14,10 +14,10 @@ namespace auvnav
 namespace
 {
 constexpr int n = idx::dim;
-// The inertial block (attitude, gyro bias, acceleration, gravity, accelerometer
-// bias, velocity, position) predicts nonlinearly under the retraction of
-// state.h; currents, ADCP bias and model parameters are affine and independent.
-constexpr int kNonlinear = idx::current_vehicle;
+// The inertial block and the currents (attitude … position, the two currents)
+// predict nonlinearly under the retraction of state.h; the ADCP bias and the
+// model parameters are affine and independent of them.
+constexpr int kNonlinear = idx::adcp_bias;
 
 void symmetrize(Covariance& P) { P = 0.5 * (P + P.transpose()).eval(); }
 }  // namespace

@@ -79,7 +79,8 @@ config::Node navigatorConfig(const std::string& sensors_block)
 		out << line << '\n';
 	}
 	EXPECT_TRUE(replaced) << file << " has no top-level 'sensors:'";
-	auto cfg = config::Node::fromText(out.str(), file + " (sensors replaced)");
+	// Named as the original file: paths in it are relative to its directory.
+	auto cfg = config::Node::fromText(out.str(), file);
 	cfg.set("filter.initial.position", "config");
 	return cfg;
 }

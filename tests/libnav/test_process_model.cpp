@@ -178,6 +178,10 @@ TEST(ProcessModel, GaussMarkovVarianceIsExactForAnyStepThroughTheUkf)
 	for (int i = 0; i < 1000; ++i) many.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T / 1000);
 	for (const GmCoord& c : gaussMarkovCoordinates(pm))
 	{
+		// The currents' tangent coordinates turn with the attitude (state.h):
+		// they also collect the attitude noise (δθ × c), so they are not a pure
+		// Gauss–Markov variance any more; their mean decay is checked above.
+		if (c.index >= idx::current_vehicle && c.index < idx::adcp_bias) continue;
 		const double phi = std::exp(-T / c.tau);
 		const double expected = phi * phi * p0 + c.sigma * c.sigma * (1 - phi * phi);
 		ASSERT_GT(expected, 100 * p0);

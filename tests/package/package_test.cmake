@@ -8,7 +8,9 @@
 #     (IMU, pressure, compass);
 #  4. run the INSTALLED auvnav-run with the installed default configuration,
 #     its core plugins found by name in the installed plugin directory, plus
-#     the compass plugin by path; expect exit 0 and accepted compass updates.
+#     the compass plugin by path; expect exit 0, accepted compass updates and
+#     the heading pulled to the compass's;
+#  5. install the example into the same prefix and run again with `plugin: compass`.
 #   cmake -DBUILD_DIR=<auvnav build> -DSOURCE_DIR=<auvnav source> -DWORK_DIR=<scratch>
 #         -DLIBDIR=<CMAKE_INSTALL_LIBDIR> -DCXX_COMPILER=<c++> [-DBUILD_TYPE=Release] -P package_test.cmake
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR LIBDIR CXX_COMPILER)
@@ -112,7 +114,11 @@ set(true_heading_deg 20)
 run("write the rawlog" COMMAND "${gen_build}/make_compass_rawlog" "${rawlog}" 20 ${true_heading_deg} -12.975)
 
 # --- 4. the installed navigator with the installed default config + the compass by path
-file(READ "${prefix}/share/auvnav/config/flatfish.yaml" cfg)
+# The configs are written into a copy of the installed config directory, so that
+# the files flatfish.yaml names relative to itself (vehicles/...) come along.
+set(config_dir "${WORK_DIR}/config")
+file(COPY "${prefix}/share/auvnav/config/" DESTINATION "${config_dir}")
+file(READ "${config_dir}/flatfish.yaml" cfg)
 string(FIND "${cfg}" "\nsensors:" at)
 if(at EQUAL -1)
   message(FATAL_ERROR "the installed flatfish.yaml has no top-level sensors:")
@@ -135,56 +141,77 @@ foreach(core inertial pressure)
     message(FATAL_ERROR "the installed flatfish.yaml's sensors do not list the core plugin ${core}:\n${sensors}")
   endif()
 endforeach()
-set(compass_item "\n${indent}- label: COMPASS\n${indent}  plugin: ${compass_module}\n${indent}  config: {sigma_deg: 2, declination_deg: 0}")
-file(WRITE "${WORK_DIR}/compass_run.yaml" "${head}${sensors}${compass_item}${tail}")
-
-set(out_dir "${WORK_DIR}/run")
-execute_process(
-  COMMAND "${prefix}/bin/auvnav-run" --config "${WORK_DIR}/compass_run.yaml" --out "${out_dir}" --quiet
-    --set filter.initial.position=config --set filter.initial.heading_deg=30
-    --set navigation_frame.origin.latitude_deg=-12.975 "${rawlog}"
-  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
-message("${out}")
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the installed auvnav-run exited with ${rc}")
-endif()
-file(READ "${out_dir}/summary.json" json)
-string(JSON completed GET "${json}" completed)   # a JSON boolean: ON/OFF
-if(NOT completed)
-  message(FATAL_ERROR "summary.json: completed is ${completed}")
-endif()
-string(JSON n LENGTH "${json}" sensors)
-math(EXPR last "${n} - 1")
-set(found_compass FALSE)
-foreach(i RANGE ${last})
-  string(JSON label GET "${json}" sensors ${i} label)
-  string(JSON plugin GET "${json}" sensors ${i} plugin)
-  string(JSON accepted GET "${json}" sensors ${i} accepted)
-  string(JSON invalid GET "${json}" sensors ${i} invalid)
-  message(STATUS "sensor ${label} (${plugin}): accepted ${accepted}, invalid ${invalid}")
-  if(label STREQUAL "COMPASS")
-    set(found_compass TRUE)
-    if(NOT plugin STREQUAL "${compass_module}" OR NOT accepted GREATER 0 OR NOT invalid EQUAL 0)
-      message(FATAL_ERROR "summary.json: the compass (${plugin}) has ${accepted} accepted, ${invalid} invalid updates")
+# run_navigator(<tag> <plugin spec in the config>): writes WORK_DIR/config/<tag>.yaml (the
+# installed flatfish.yaml plus a COMPASS sensor served by <plugin spec>), runs the
+# installed auvnav-run on the rawlog into WORK_DIR/<tag>/ and checks the outcome.
+function(run_navigator tag plugin_spec)
+  set(compass_item "\n${indent}- label: COMPASS\n${indent}  plugin: ${plugin_spec}\n${indent}  config: {sigma_deg: 2, declination_deg: 0}")
+  set(config "${config_dir}/${tag}.yaml")
+  file(WRITE "${config}" "${head}${sensors}${compass_item}${tail}")
+  set(out_dir "${WORK_DIR}/${tag}")
+  execute_process(
+    COMMAND "${prefix}/bin/auvnav-run" --config "${config}" --out "${out_dir}" --quiet
+      --set filter.initial.position=config --set filter.initial.heading_deg=30
+      --set navigation_frame.origin.latitude_deg=-12.975 "${rawlog}"
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  message("${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${tag}: the installed auvnav-run exited with ${rc}")
+  endif()
+  file(READ "${out_dir}/summary.json" json)
+  string(JSON completed GET "${json}" completed)   # a JSON boolean: ON/OFF
+  if(NOT completed)
+    message(FATAL_ERROR "${tag}: summary.json: completed is ${completed}")
+  endif()
+  string(JSON n LENGTH "${json}" sensors)
+  math(EXPR last "${n} - 1")
+  set(found_compass FALSE)
+  foreach(i RANGE ${last})
+    string(JSON label GET "${json}" sensors ${i} label)
+    string(JSON plugin GET "${json}" sensors ${i} plugin)
+    string(JSON accepted GET "${json}" sensors ${i} accepted)
+    string(JSON invalid GET "${json}" sensors ${i} invalid)
+    message(STATUS "${tag}: sensor ${label} (${plugin}): accepted ${accepted}, invalid ${invalid}")
+    if(label STREQUAL "COMPASS")
+      set(found_compass TRUE)
+      if(NOT plugin STREQUAL "${plugin_spec}" OR NOT accepted GREATER 0 OR NOT invalid EQUAL 0)
+        message(FATAL_ERROR "${tag}: summary.json: the compass (${plugin}) has ${accepted} accepted, ${invalid} invalid updates")
+      endif()
+    elseif(label STREQUAL "PRESSURE" AND NOT accepted GREATER 0)
+      message(FATAL_ERROR "${tag}: summary.json: the installed pressure plugin accepted nothing")
     endif()
-  elseif(label STREQUAL "PRESSURE" AND NOT accepted GREATER 0)
-    message(FATAL_ERROR "summary.json: the installed pressure plugin accepted nothing")
+  endforeach()
+  if(NOT found_compass)
+    message(FATAL_ERROR "${tag}: summary.json lists no COMPASS sensor:\n${json}")
+  endif()
+
+  # The compass pulled the heading from the initial guess of 30 deg to the true 20 deg.
+  file(STRINGS "${out_dir}/states.csv" rows)
+  list(GET rows 0 header)
+  list(GET rows -1 final)
+  string(REPLACE "," ";" header "${header}")
+  string(REPLACE "," ";" final "${final}")
+  list(FIND header yaw_deg yaw_col)
+  if(yaw_col EQUAL -1)
+    message(FATAL_ERROR "${tag}: states.csv has no yaw_deg column")
+  endif()
+  list(GET final ${yaw_col} yaw)
+  message(STATUS "${tag}: final heading ${yaw} deg (true ${true_heading_deg}, initial guess 30)")
+  string(REGEX MATCH "^-?[0-9]+" yaw_int "${yaw}")   # CMake has integer arithmetic only
+  if(NOT yaw_int MATCHES "^(18|19|20|21)$")
+    message(FATAL_ERROR "${tag}: final heading ${yaw} deg is not within 2 deg of the compass's ${true_heading_deg} deg")
+  endif()
+endfunction()
+
+# By path, straight from the example's build tree.
+run_navigator(run_by_path "${compass_module}")
+
+# --- 5. installed next to the core plugins (the example's INSTALL_DESTINATION),
+# the compass is found by name like them.
+run("install the compass example" COMMAND ${CMAKE_COMMAND} --install "${compass_build}" --prefix "${prefix}")
+foreach(f libauvnav_plugin_compass.so compass.yaml)
+  if(NOT EXISTS "${plugin_dir}/${f}")
+    message(FATAL_ERROR "the example did not install ${plugin_dir}/${f}")
   endif()
 endforeach()
-if(NOT found_compass)
-  message(FATAL_ERROR "summary.json lists no COMPASS sensor:\n${json}")
-endif()
-
-# The compass pulled the heading from the initial 30 deg to the true 20 deg.
-file(STRINGS "${out_dir}/states.csv" rows)
-list(GET rows 0 header)
-list(GET rows -1 final)
-string(REPLACE "," ";" header "${header}")
-string(REPLACE "," ";" final "${final}")
-list(FIND header yaw_deg yaw_col)
-list(GET final ${yaw_col} yaw)
-message(STATUS "final heading ${yaw} deg (true ${true_heading_deg}, initial guess 30)")
-string(REGEX MATCH "^-?[0-9]+" yaw_int "${yaw}")   # CMake has integer arithmetic only
-if(yaw_col EQUAL -1 OR NOT yaw_int OR yaw_int LESS 18 OR yaw_int GREATER 21)
-  message(FATAL_ERROR "final heading ${yaw} deg is not within 2 deg of the compass's ${true_heading_deg} deg")
-endif()
+run_navigator(run_by_name compass)

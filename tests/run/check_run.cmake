@@ -28,15 +28,20 @@ endif()
 
 set(config "${CONFIG}")
 if(DEFINED CONFIG_REPLACE)
+  # A copy of the config's whole directory beside OUT_DIR, so that files the
+  # config names relative to itself (e.g. vehicles/...) come along.
+  get_filename_component(config_dir "${CONFIG}" DIRECTORY)
+  get_filename_component(config_name "${CONFIG}" NAME)
+  set(copy_dir "${OUT_DIR}/../config")
+  file(REMOVE_RECURSE "${copy_dir}")
+  file(COPY "${config_dir}/" DESTINATION "${copy_dir}")
   file(READ "${CONFIG}" text)
   string(FIND "${text}" "${CONFIG_REPLACE}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "${CONFIG} does not contain '${CONFIG_REPLACE}'")
   endif()
   string(REPLACE "${CONFIG_REPLACE}" "${CONFIG_REPLACE_WITH}" text "${text}")
-  # Beside OUT_DIR (relative plugin_paths, if any, would resolve against this copy).
-  get_filename_component(name "${CONFIG}" NAME_WE)
-  set(config "${OUT_DIR}/../${name}.modified.yaml")
+  set(config "${copy_dir}/${config_name}")
   file(WRITE "${config}" "${text}")
 endif()
 

@@ -38,6 +38,12 @@ struct FilterContext
 	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();  //!< Earth rate in the navigation frame
 	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< IMU lever arm in the body frame [m]
 	const earth::TangentFrame* frame = nullptr;  //!< navigation frame (origin), never null in updates
+	//! Body angular acceleration [rad/s²] from the low-pass filtered derivative
+	//! of the gyro (the state has no angular acceleration).
+	Eigen::Vector3d alpha_b = Eigen::Vector3d::Zero();
+	//! The filter's current mean (for decisions in `prepare`, e.g. near the
+	//! surface); never use it inside h, which must depend on its argument only.
+	const NavState* mean = nullptr;
 };
 
 /** One measurement for the filter. Sized by the plugin in `prepare`. */
@@ -48,6 +54,9 @@ struct Measurement
 	int tag = 0;		//!< plugin-private (e.g. ADCP cell index)
 	std::array<double, 8> aux{};  //!< plugin-private numbers h needs (e.g. cell distance)
 	std::string label;	//!< optional sub-name for statistics (e.g. "cell")
+	//! A part of the observation that is not applied (e.g. an ADCP cell below
+	//! the seabed): counted as skipped; z and R may be empty.
+	bool skipped = false;
 };
 
 enum class PrepareStatus

@@ -104,6 +104,8 @@ class Navigator
 	bool initialized_ = false;
 	double t_s_ = 0, t0_s_ = -1;
 	Eigen::Vector3d omega_ib_b_ = Eigen::Vector3d::Zero();
+	Eigen::Vector3d alpha_b_ = Eigen::Vector3d::Zero();	 // low-pass filtered gyro derivative
+	double alpha_tau_s_ = 0.2;
 	Eigen::Vector3d f_sum_ = Eigen::Vector3d::Zero(), w_sum_ = Eigen::Vector3d::Zero();
 	std::size_t leveling_samples_ = 0;
 	double leveling_start_s_ = -1;

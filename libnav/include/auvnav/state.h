@@ -87,9 +87,11 @@ struct NavState
 
 	/** x ⊞ δ: R ← Exp(δ_att)·R; velocity and acceleration rotate with it,
 	 *  v ← Exp(δ_att)·v + δ_v, a ← Exp(δ_att)·a + δ_a (as in invariant filters
-	 *  on SE_2(3)); everything else additive. Rotating v and a keeps a large
-	 *  heading uncertainty from turning body-frame measurements (DVL,
-	 *  accelerometer) into spurious heading information. */
+	 *  on SE_2(3)), and so do the two water currents (horizontal part of the
+	 *  turned vector); everything else additive. Rotating these nav-frame
+	 *  vectors keeps a large heading uncertainty from turning body-frame
+	 *  measurements (DVL, accelerometer, model aiding, ADCP) into spurious
+	 *  heading information. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
 	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. */
 	TangentVector boxminus(const NavState& y) const;

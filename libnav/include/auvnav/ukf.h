@@ -10,11 +10,11 @@
  *
  *  Speed without approximation. Sigma points along Cholesky columns j ≥ k
  *  leave the first k tangent coordinates unchanged. So
- *   - prediction: only the inertial block (k = 19: attitude, biases,
- *     acceleration, gravity, velocity, position) propagates nonlinearly; the
- *     remaining 24 coordinates (currents, ADCP bias, model parameters) are
- *     affine and independent, whose unscented transform is exactly A P Aᵀ:
- *     39 sigma points are propagated instead of 87;
+ *   - prediction: only the inertial block and the currents (k = 23: attitude,
+ *     biases, acceleration, gravity, velocity, position, currents) propagate
+ *     nonlinearly; the remaining 20 coordinates (ADCP bias, model parameters)
+ *     are affine and independent, whose unscented transform is exactly
+ *     A P Aᵀ: 47 sigma points are propagated instead of 87;
  *   - update: a model whose h reads only the first k coordinates (from its
  *     `uses()` mask) needs 2k+1 evaluations and the first k Cholesky columns.
  *  Both give the same numbers as the dense 87-point UKF (tests/libnav keeps
@@ -98,7 +98,7 @@ class ManifoldUkf
 	Eigen::Matrix<double, idx::dim, idx::dim> L_;  // scratch: leading Cholesky columns
 	// Scratch buffers for updates (sized once per measurement dimension).
 	Eigen::MatrixXd z_sigma_;
-	std::array<NavState, 2 * idx::current_vehicle + 1> sigma_scratch_;	 // prediction sigma points
+	std::array<NavState, 2 * idx::adcp_bias + 1> sigma_scratch_;	 // prediction sigma points
 	std::size_t repairs_ = 0;
 };
 

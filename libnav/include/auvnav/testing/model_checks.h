@@ -133,7 +133,8 @@ inline NavState RandomNavState(uint32_t seed)
 /** A diagonal, positive-definite covariance for update tests (1σ): attitude
  *  2°, gyro bias 1e-3 rad/s, acceleration 0.1 m/s², gravity 0.01 m/s², accel
  *  bias 0.01 m/s², velocity 0.5 m/s, position 5 m, currents 0.2 m/s, ADCP
- *  bias 0.05 m/s, model parameters 10. */
+ *  bias 0.05 m/s, model parameters 0.2 (relative for the surge/sway entries,
+ *  which the state holds as logarithms; absolute for the couplings). */
 inline Covariance TypicalCovariance()
 {
 	TangentVector s;
@@ -146,7 +147,7 @@ inline Covariance TypicalCovariance()
 	s.segment<3>(idx::pos).setConstant(5.0);
 	s.segment<4>(idx::current_vehicle).setConstant(0.2);
 	s.segment<2>(idx::adcp_bias).setConstant(0.05);
-	s.segment<18>(idx::inertia).setConstant(10.0);
+	s.segment<18>(idx::inertia).setConstant(0.2);
 	return s.cwiseAbs2().asDiagonal();
 }
 

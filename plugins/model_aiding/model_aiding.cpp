@@ -1,0 +1,182 @@
+#include "model_aiding.h"
+
+#include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/so3.h>
+
+#include <cmath>
+
+namespace auvnav::plugins
+{
+namespace
+{
+Matrix6d diagonal6(const config::Node& n, const std::string& key)
+{
+	const auto v = n.numbers(key);
+	if (v.size() != 6) n.fail(key, "expected 6 diagonal values");
+	Matrix6d D = Matrix6d::Zero();
+	for (int i = 0; i < 6; ++i)
+	{
+		if (!(v[i] >= 0)) n.fail(key, "entries must be >= 0");
+		D(i, i) = v[i];
+	}
+	return D;
+}
+
+/** Writes the 2x3 sub-matrix (rows x, y; columns x, y, ψ) into M. */
+void place(Matrix6d& M, const Eigen::Matrix<double, 2, 3>& sub)
+{
+	for (int r = 0; r < 2; ++r)
+	{
+		M(r, 0) = sub(r, 0);
+		M(r, 1) = sub(r, 1);
+		M(r, 5) = sub(r, 2);
+	}
+}
+}  // namespace
+
+Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb)
+{
+	const Eigen::Vector3d k_b = R_nb.transpose() * Eigen::Vector3d::UnitZ();  // down, body axes
+	Vector6d g;
+	g << -(vm.weight_n - vm.buoyancy_n) * k_b,
+		-(vm.r_g_b.cross(vm.weight_n * k_b) - vm.r_b_b.cross(vm.buoyancy_n * k_b));
+	return g;
+}
+
+Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
+						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
+{
+	const Eigen::Matrix3d Rt = x.R_nb.transpose();
+	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
+	Vector6d nu, nu_dot;
+	nu << Rt * (x.v_n - c_n) - omega_b.cross(r_imu_b), omega_b;
+	nu_dot << Rt * x.a_n - alpha_b.cross(r_imu_b) - omega_b.cross(omega_b.cross(r_imu_b)), alpha_b;
+	Matrix6d M = vm.M, D_l = vm.D_l, D_q = vm.D_q;
+	place(M, physicalSub(x.M_sub));
+	place(D_l, physicalSub(x.Dl_sub));
+	place(D_q, physicalSub(x.Dq_sub));
+	return M * nu_dot + D_l * nu + D_q * nu.cwiseAbs().cwiseProduct(nu) + restoringWrench(vm, x.R_nb);
+}
+
+ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
+{
+	vm_.M = diagonal6(cfg, "inertia_diag");
+	vm_.D_l = diagonal6(cfg, "linear_damping_diag");
+	vm_.D_q = diagonal6(cfg, "quadratic_damping_diag");
+	vm_.weight_n = cfg.positive("weight_n");
+	vm_.buoyancy_n = cfg.positive("buoyancy_n");
+	vm_.r_g_b = cfg.vector3("center_of_gravity_m");
+	vm_.r_b_b = cfg.vector3("center_of_buoyancy_m");
+	const std::string unit = cfg.string("effort_unit", "force");
+	if (unit == "rpm")
+	{
+		rpm_ = true;
+		rpm_coefficient_ = cfg.positive("rpm_coefficient");
+	}
+	else if (unit != "force")
+		cfg.fail("effort_unit", "expected 'force' or 'rpm', got '" + unit + "'");
+	const auto thrusters = cfg.sequence("thrusters");
+	T_.resize(6, static_cast<Eigen::Index>(thrusters.size()));
+	for (std::size_t i = 0; i < thrusters.size(); ++i)
+	{
+		const auto& t = thrusters[i];
+		const Eigen::Vector3d d = t.vector3("direction");
+		if (d.norm() < 1e-9) t.fail("direction", "must be non-zero");
+		const Eigen::Vector3d r = t.vector3("position_m");
+		T_.col(static_cast<Eigen::Index>(i)) << d.normalized(), r.cross(d.normalized());
+		gain_forward_.push_back(t.positive("gain_forward", 1.0));
+		gain_reverse_.push_back(t.positive("gain_reverse", 1.0));
+	}
+	if (thrusters.empty()) cfg.fail("thrusters", "at least one thruster");
+	const auto s = cfg.numbers("sigma");
+	if (s.size() != 6) cfg.fail("sigma", "expected 6 values: forces [N] x, y, z and torques [N m] x, y, z");
+	for (int i = 0; i < 6; ++i)
+	{
+		if (!(s[i] > 0)) cfg.fail("sigma", "all entries must be positive");
+		sigma_[i] = s[i];
+	}
+	surface_depth_m_ = cfg.nonNegative("surface_depth_m", surface_depth_m_);
+	surface_factor_ = cfg.inRange("surface_noise_factor", 1.0, 1e6, surface_factor_);
+	gate_probability_ = cfg.inRange("gate_probability", 1e-6, 1.0, gate_probability_);
+	if (cfg.has("dofs"))
+	{
+		for (double d : cfg.numbers("dofs"))
+		{
+			if (d < 0 || d > 5 || std::floor(d) != d) cfg.fail("dofs", "expected indices 0..5");
+			dofs_.push_back(static_cast<int>(d));
+		}
+	}
+	else
+		dofs_ = {0, 1, 2, 3, 4, 5};
+}
+
+Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
+{
+	Eigen::VectorXd f(static_cast<Eigen::Index>(effort.size()));
+	for (std::size_t i = 0; i < effort.size(); ++i)
+	{
+		const double u = effort[i];
+		const double force = rpm_ ? rpm_coefficient_ * u * std::abs(u) : u;
+		f[static_cast<Eigen::Index>(i)] = force * (force >= 0 ? gain_forward_[i] : gain_reverse_[i]);
+	}
+	return T_ * f;
+}
+
+PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+										  std::vector<Measurement>& out, std::string& why)
+{
+	out.clear();
+	const auto* thr = dynamic_cast<const auvnav::obs::CObservationThrusters*>(&obs);
+	if (!thr)
+	{
+		why = std::string("expected auvnav::obs::CObservationThrusters, got ") + obs.GetRuntimeClass()->className;
+		return PrepareStatus::Invalid;
+	}
+	if (static_cast<Eigen::Index>(thr->effort.size()) != T_.cols())
+	{
+		why = "observation has " + std::to_string(thr->effort.size()) + " thrusters, the configuration " +
+			  std::to_string(T_.cols());
+		return PrepareStatus::Invalid;
+	}
+	const bool rpm_obs = thr->unit == auvnav::obs::EffortUnit::Speed_rpm;
+	if (rpm_obs != rpm_)
+	{
+		why = "effort unit of the observation differs from effort_unit";
+		return PrepareStatus::Invalid;
+	}
+	for (double e : thr->effort)
+		if (!std::isfinite(e))
+		{
+			why = "non-finite thruster effort";
+			return PrepareStatus::Invalid;
+		}
+	const Vector6d tau = thrustWrench(thr->effort);
+	// Near the surface waves and the breaching hull make the model poor.
+	const bool shallow = ctx.mean && ctx.mean->p_n.z() < surface_depth_m_;
+	const double factor = shallow ? surface_factor_ : 1.0;
+	Measurement m;
+	const int k = static_cast<int>(dofs_.size());
+	m.z.resize(k);
+	m.R = Eigen::MatrixXd::Zero(k, k);
+	for (int i = 0; i < k; ++i)
+	{
+		m.z[i] = tau[dofs_[i]];
+		m.R(i, i) = std::pow(factor * sigma_[dofs_[i]], 2);
+	}
+	m.label = "wrench";
+	out.push_back(std::move(m));
+	return PrepareStatus::Ok;
+}
+
+bool ModelAidingModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+								 Eigen::Ref<Eigen::VectorXd> z_pred) const
+{
+	if (z_pred.size() != static_cast<Eigen::Index>(dofs_.size())) return false;
+	const Eigen::Vector3d omega_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
+	const Vector6d w = predictedWrench(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b);
+	for (std::size_t i = 0; i < dofs_.size(); ++i) z_pred[static_cast<Eigen::Index>(i)] = w[dofs_[i]];
+	(void)m;
+	return true;
+}
+
+}  // namespace auvnav::plugins

@@ -1,0 +1,86 @@
+#pragma once
+/** @file model_aiding.h
+ *  Model-aiding update (plugin "model_aiding"; Arnold & Medagoda 2018, II-B).
+ *
+ *  Observation: auvnav::obs::CObservationThrusters, the commanded effort of
+ *  each thruster. Measurement: the body wrench they produce,
+ *      z = T · f(u)   (6: forces [N] and torques [N·m], body FRD at the CG)
+ *  with T the thruster configuration matrix ([d_i; r_i × d_i] per column) and
+ *  f the per-thruster force model (force commands × forward/reverse gain, or
+ *  k·rpm·|rpm|). Prediction with Fossen's simplified model:
+ *      h = M·[a_b; α_b] + D_l·ν + D_q·(|ν| ∘ ν) + g(R_nb)
+ *      ν = [v_b; ω_b],  v_b = R_nbᵀ(v_n − c_n) − ω × r_imu  (relative to the water)
+ *      a_b = R_nbᵀ a_n − α × r_imu − ω × (ω × r_imu)           (at the CG)
+ *      ω = omega_ib_b − b_w − R_nbᵀ omega_ie_n,  α = the context's angular acceleration
+ *      g(R) = −[(W − B)·R_nbᵀ k; r_G × R_nbᵀ k W − r_B × R_nbᵀ k B]   (k = NED down)
+ *  Using a_b (inertial acceleration in body axes) instead of ν̇ keeps the
+ *  rigid-body Coriolis term. M, D_l, D_q are the configured diagonal matrices
+ *  with rows x, y, columns x, y, ψ replaced by the filter's parameter states
+ *  (state.h: exp() of the stored surge/sway entries, so they stay positive).
+ *  Noise: per-DOF σ, inflated by `surface_noise_factor` while the vehicle is
+ *  shallower than `surface_depth_m` (waves and partial buoyancy there).
+ *  h is a pure function of its arguments: no mutable model is shared
+ *  between sigma points.
+ */
+#include <auvnav/config.h>
+#include <auvnav/measurement_model.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace auvnav::plugins
+{
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/** The configured (non-estimated) part of the vehicle model. */
+struct VehicleModel
+{
+	Matrix6d M = Matrix6d::Identity(), D_l = Matrix6d::Zero(), D_q = Matrix6d::Zero();
+	double weight_n = 0, buoyancy_n = 0;
+	Eigen::Vector3d r_g_b = Eigen::Vector3d::Zero(), r_b_b = Eigen::Vector3d::Zero();
+};
+
+/** Fossen's simplified model: the wrench needed for state x (see file doc). */
+Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
+						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b);
+
+/** Restoring forces and moments g(R) (subtracted from thrust in the equation). */
+Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb);
+
+class ModelAidingModel final : public SafeMeasurementModel
+{
+   public:
+	ModelAidingModel(const config::Node& cfg, const std::string& label);
+
+	uint32_t uses() const noexcept override
+	{
+		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia | kDampingLinear |
+			   kDampingQuadratic;
+	}
+	double gateProbability() const noexcept override { return gate_probability_; }
+
+	/** Wrench of thruster efforts u (in the configured unit). */
+	Vector6d thrustWrench(const std::vector<double>& effort) const;
+	const VehicleModel& vehicle() const { return vm_; }
+	const Eigen::Matrix<double, 6, Eigen::Dynamic>& configurationMatrix() const { return T_; }
+
+   protected:
+	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+							std::vector<Measurement>& out, std::string& why) override;
+	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+
+   private:
+	std::string label_;
+	VehicleModel vm_;
+	Eigen::Matrix<double, 6, Eigen::Dynamic> T_;
+	std::vector<double> gain_forward_, gain_reverse_;
+	bool rpm_ = false;
+	double rpm_coefficient_ = 0;
+	Vector6d sigma_ = Vector6d::Ones();
+	double surface_depth_m_ = 1.0, surface_factor_ = 10.0, gate_probability_ = 0.999;
+	std::vector<int> dofs_;	 // rows of the wrench used (default all six)
+};
+}  // namespace auvnav::plugins
