@@ -13,52 +13,6 @@ namespace fs = std::filesystem;
 
 namespace auvnav::test
 {
-std::vector<TruthRow> readTruth(const fs::path& csv)
-{
-	std::ifstream f(csv);
-	std::string header;
-	std::getline(f, header);
-	std::vector<std::string> names;
-	{
-		std::stringstream ss(header);
-		for (std::string n; std::getline(ss, n, ',');) names.push_back(n);
-	}
-	auto col = [&](const std::string& n) {
-		for (std::size_t i = 0; i < names.size(); ++i)
-			if (names[i] == n) return i;
-		throw std::runtime_error("ground truth lacks column " + n);
-	};
-	const std::size_t c_t = col("unix_time_s"), c_n = col("north_m"), c_e = col("east_m"), c_d = col("down_m"),
-					  c_qw = col("qw"), c_qx = col("qx"), c_qy = col("qy"), c_qz = col("qz"),
-					  c_dist = col("distance_m"), c_sub = col("submerged");
-	std::vector<TruthRow> rows;
-	std::vector<double> v;
-	for (std::string line; std::getline(f, line);)
-	{
-		v.clear();
-		std::stringstream ss(line);
-		for (std::string c; std::getline(ss, c, ',');) v.push_back(std::stod(c));
-		TruthRow r;
-		r.t_unix = v[c_t];
-		r.p_n = {v[c_n], v[c_e], v[c_d]};
-		r.down_m = v[c_d];
-		r.q_nb = Eigen::Quaterniond(v[c_qw], v[c_qx], v[c_qy], v[c_qz]);
-		r.distance_m = v[c_dist];
-		r.submerged = v[c_sub] > 0.5;
-		rows.push_back(r);
-	}
-	return rows;
-}
-
-const TruthRow& truthAt(const std::vector<TruthRow>& truth, double t)
-{
-	auto it = std::lower_bound(truth.begin(), truth.end(), t,
-							   [](const TruthRow& r, double tt) { return r.t_unix < tt; });
-	if (it == truth.end()) return truth.back();
-	if (it != truth.begin() && std::abs((it - 1)->t_unix - t) < std::abs(it->t_unix - t)) --it;
-	return *it;
-}
-
 double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
 double wrapPi(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 

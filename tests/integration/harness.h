@@ -10,21 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "ground_truth.h"
+
 namespace auvnav::test
 {
-struct TruthRow
-{
-	double t_unix = 0, distance_m = 0, down_m = 0;
-	Eigen::Vector3d p_n;
-	Eigen::Quaterniond q_nb;
-	bool submerged = false;
-};
-
-/** Reads ground_truth.csv written by auvnav-sim. */
-std::vector<TruthRow> readTruth(const std::filesystem::path& csv);
-
-/** Truth at time t (nearest row; rows are 0.1 s apart). */
-const TruthRow& truthAt(const std::vector<TruthRow>& truth, double t_unix);
+using sim::readTruth;
+using sim::TruthRow;
+using sim::truthAt;
 
 struct EstimateRow
 {

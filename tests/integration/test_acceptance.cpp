@@ -23,6 +23,9 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/flatfish.yaml";
+// The acceptance is stated for inertial + DVL + pressure (+ GPS): the default
+// configuration's ADCP and model-aiding sensors are denied all along.
+const DenialWindow kInertialDvlPressureOnly{{"ADCP", "THRUSTERS"}, 0.0, 1e9};
 
 std::string fmt(double v) { return std::to_string(v); }
 
@@ -55,6 +58,7 @@ SquareOutcome runSquare(unsigned seed)
 	gps_off.from_s = truth[dive].t_unix - t0;
 	gps_off.to_s = 1e9;
 	nav.addDenial(gps_off);
+	nav.addDenial(kInertialDvlPressureOnly);
 	SquareOutcome out;
 	bool recorded = false;
 	nav.on_predict = [&](const Navigator& n) {
@@ -105,7 +109,8 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg)
 								   {"filter.initial.position", "config"},
 								   {"filter.initial.north_m", "0"},
 								   {"filter.initial.east_m", "0"}},
-								  {DenialWindow{{"GPS"}, 0.0, 1e9}});  // GPS withheld for the whole run
+								  {DenialWindow{{"GPS"}, 0.0, 1e9},	// GPS withheld for the whole run
+								   kInertialDvlPressureOnly});
 	HeadingOutcome o;
 	bool at15 = false;
 	for (const auto& r : run.rows)

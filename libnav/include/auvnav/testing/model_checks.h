@@ -298,6 +298,7 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 
 	for (std::size_t k = 0; k < out.size(); ++k)
 	{
+		if (out[k].skipped) continue;  // a part counted but not applied (e.g. an ADCP cell in the seabed)
 		const Measurement& m = out[k];
 		const auto fail = [&]() { return AssertionFailure() << "measurement " << k << " '" << m.label << "': "; };
 		const Eigen::Index dim = m.z.size();
@@ -364,7 +365,8 @@ inline ApplyResult ApplyObservation(ManifoldUkf& ukf, MeasurementModel& model, c
 	std::vector<Measurement> out;
 	res.status = model.prepare(obs, ctx, out, res.why);
 	if (res.status != PrepareStatus::Ok) return res;
-	for (const auto& m : out) res.updates.push_back(ukf.update(model, m, ctx));
+	for (const auto& m : out)
+		if (!m.skipped) res.updates.push_back(ukf.update(model, m, ctx));	// as the host: skipped parts are counted only
 	return res;
 }
 
