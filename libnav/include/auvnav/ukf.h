@@ -81,6 +81,8 @@ class ManifoldUkf
 
 	std::size_t choleskyRepairs() const { return repairs_; }
 	const UtWeights& weights() const { return w_; }
+	const ProcessModel& processModel() const { return model_; }
+	const UtParams& utParams() const { return ut_; }
 
 	/** χ² quantile for dimension `dof` at probability `p` (cached). */
 	static double chiSquareQuantile(int dof, double p);
