@@ -171,9 +171,9 @@ TEST(ModelAiding, UpdatePullsTheCurrentAndDampingTheRightWay)
 	std::string text = pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG);
 	for (std::size_t pos; (pos = text.find("gain_reverse: 0.8")) != std::string::npos;)
 		text.replace(pos, 17, "gain_reverse: 1.0");
-	const auto dofs_at = text.find("\ndofs: [0, 1]\n");
+	const auto dofs_at = text.find("\ndofs: [0]\n");
 	ASSERT_NE(dofs_at, std::string::npos);
-	text.replace(dofs_at, 15, "\ndofs: [0, 1, 5]\n");
+	text.replace(dofs_at, 11, "\ndofs: [0, 1, 5]\n");
 	ModelAidingModel m(pt::configText(text), "THRUSTERS");
 	at::TestContext tc;
 	NavState truth;
