@@ -36,11 +36,6 @@ struct Outcome
 	bool inside() const { return error_m <= two_sigma_m; }
 };
 
-std::string relativeTo(const std::string& file, const std::string& path)
-{
-	return path.empty() || path[0] == '/' ? path : (fs::path(file).parent_path() / path).string();
-}
-
 /** Runs the navigator on `rawlog` with the denial and returns the error and
  *  2σ at the end of the denial window. */
 Outcome runOne(const config::Node& nav_cfg, PluginHost& host, const fs::path& rawlog,
@@ -91,8 +86,8 @@ int main(int argc, char** argv)
 	{
 		obs::registerAllClasses();
 		const auto ex = config::Node::load(exp_file.getValue());
-		const auto spec = sim::MissionSpec::load(relativeTo(ex.file(), ex.string("mission")));
-		const auto nav_cfg = config::Node::load(relativeTo(ex.file(), ex.string("navigator")));
+		const auto spec = sim::MissionSpec::load(ex.filePath("mission"));
+		const auto nav_cfg = config::Node::load(ex.filePath("navigator"));
 		const double init_s = ex.positive("initialization_s"), denial_s = ex.positive("denial_s");
 		std::vector<unsigned> seed_list;
 		for (double s : ex.numbers("seeds")) seed_list.push_back(static_cast<unsigned>(s));

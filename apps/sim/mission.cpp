@@ -22,10 +22,9 @@ constexpr double kDeg = M_PI / 180;
 
 config::Node loadRelative(const config::Node& mission, const std::string& key)
 {
-	const fs::path base = fs::path(mission.file()).parent_path();
-	const fs::path p = base / mission.string(key);
-	if (!fs::exists(p)) mission.fail(key, "file not found: " + p.string());
-	return config::Node::load(p.string());
+	const std::string p = mission.filePath(key);
+	if (!fs::exists(p)) mission.fail(key, "file not found: " + p);
+	return config::Node::load(p);
 }
 
 /** Number of simulation steps in `period_s`; the period must be a whole

@@ -74,6 +74,15 @@ Node Node::fromText(const std::string& text, const std::string& origin)
 	}
 }
 
+std::string Node::filePath(const std::string& key) const
+{
+	const std::string p = string(key);
+	if (p.empty()) fail(key, "expected a file path");
+	if (p[0] == '/') return p;
+	const auto slash = file_.find_last_of('/');
+	return slash == std::string::npos ? p : file_.substr(0, slash + 1) + p;
+}
+
 std::string Node::toYaml() const
 {
 	if (y_.isNullNode() || (y_.isMap() && y_.empty())) return "{}\n";

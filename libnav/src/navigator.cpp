@@ -25,13 +25,6 @@ Eigen::Matrix<double, 2, 3> subMatrix(const config::Node& n, const std::string& 
 	return storedSub(m);
 }
 
-std::string relativeTo(const config::Node& cfg, const std::string& path)
-{
-	if (!path.empty() && path[0] == '/') return path;
-	const auto slash = cfg.file().find_last_of('/');
-	return slash == std::string::npos ? path : cfg.file().substr(0, slash + 1) + path;
-}
-
 void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
 {
 	for (int r = 0; r < 2; ++r)
@@ -70,7 +63,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	// model parameters from the system identification.
 	// The parameter prior: inline `vehicle_model`, or `vehicle_model_file`
 	// (relative to this config file) shared with the model-aiding plugin.
-	const auto vm = f.has("vehicle_model_file") ? config::Node::load(relativeTo(cfg, f.string("vehicle_model_file")))
+	const auto vm = f.has("vehicle_model_file") ? config::Node::load(f.filePath("vehicle_model_file"))
 												 : f.child("vehicle_model");
 	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
@@ -134,7 +127,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		// Plugin configuration: inline `config`, or `config_file` relative to this file.
 		if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
 		const std::string yaml = s.has("config")		 ? s.child("config").toYaml()
-								 : s.has("config_file") ? config::Node::load(relativeTo(cfg, s.string("config_file"))).toYaml()
+								 : s.has("config_file") ? config::Node::load(s.filePath("config_file")).toYaml()
 														 : "{}\n";
 		slot->model = host.create(slot->stats.plugin, yaml, slot->stats.label);
 		slots_.push_back(std::move(slot));

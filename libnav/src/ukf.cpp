@@ -33,20 +33,6 @@ UtWeights UtWeights::make(int dim, const UtParams& p)
 	return w;
 }
 
-Eigen::Matrix3d weightedRotationMean(const Eigen::Matrix3d* R, const double* w, int count,
-									 const Eigen::Matrix3d& start)
-{
-	Eigen::Matrix3d mean = start;
-	for (int iter = 0; iter < 10; ++iter)
-	{
-		Eigen::Vector3d d = Eigen::Vector3d::Zero();
-		for (int i = 0; i < count; ++i) d += w[i] * so3::Log(R[i] * mean.transpose());
-		mean = so3::Exp(d) * mean;
-		if (d.squaredNorm() < 1e-24) break;
-	}
-	return mean;
-}
-
 double ManifoldUkf::chiSquareQuantile(int dof, double p)
 {
 	static std::mutex mutex;

@@ -278,7 +278,10 @@ TEST(Gps, MinIntervalUsesOneFixPerCorrelationTime)
 		std::string why;
 		const auto st = model.prepare(*o, tc.ctx(), out, why);
 		(st == PrepareStatus::Ok ? used : skipped)++;
-		if (st == PrepareStatus::Skip) EXPECT_NE(why.find("min_interval_s"), std::string::npos);
+		if (st == PrepareStatus::Skip)
+		{
+			EXPECT_NE(why.find("min_interval_s"), std::string::npos);
+		}
 	}
 	EXPECT_EQ(used, 4);	 // t = 0, 30, 60, 90
 	EXPECT_EQ(skipped, 96);

@@ -25,7 +25,7 @@ TEST(ReferenceMission, FastFilterMatchesTheDenseReferenceOnTheSampleMission)
 	std::map<std::string, ModelPtr> models;
 	for (const auto& s : cfg.sequence("sensors"))
 	{
-		const std::string file = s.has("config_file") ? repo + "/config/" + s.string("config_file") : "";
+		const std::string file = s.has("config_file") ? s.filePath("config_file") : "";
 		const std::string yaml = s.has("config") ? s.child("config").toYaml()
 								 : file.empty()	 ? "{}\n"
 												 : config::Node::load(file).toYaml();

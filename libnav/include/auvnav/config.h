@@ -61,6 +61,9 @@ class Node
 	/** Required sequence of finite numbers (any length >= 1). */
 	std::vector<double> numbers(const std::string& key) const;
 
+	/** The path given under `key`, resolved relative to the folder of this
+	 *  node's file unless it is absolute (file references inside configs). */
+	std::string filePath(const std::string& key) const;
 	/** This subtree as YAML text (to hand a plugin its configuration). */
 	std::string toYaml() const;
 	/** Sets `dotted.key.path` to the scalar `value` (creating maps on the way),

@@ -104,8 +104,4 @@ class ManifoldUkf
 	std::size_t repairs_ = 0;
 };
 
-/** Unscented mean of rotations with weights (iterated on the tangent space). */
-Eigen::Matrix3d weightedRotationMean(const Eigen::Matrix3d* R, const double* w, int count,
-									 const Eigen::Matrix3d& start);
-
 }  // namespace auvnav
