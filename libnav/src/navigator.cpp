@@ -276,6 +276,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 	ctx.frame = frame_.get();
 	ctx.alpha_b = alpha_b_;
 	ctx.mean = initialized_ ? &ukf_->state() : nullptr;
+	ctx.current_far_distance_m = ukf_ ? ukf_->processModel().current_far_distance_m : 0.0;
 	for (auto& slot : slots_)
 	{
 		SensorStats& st = slot->stats;

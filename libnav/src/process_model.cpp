@@ -33,6 +33,17 @@ NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega
 	mu_term.segment<2>(idx::adcp_bias) = (1 - phi_b) * prior_mean.segment<2>(idx::adcp_bias);
 	mu_term.segment<18>(idx::inertia) = (1 - phi_p) * prior_mean.segment<18>(idx::inertia);
 	e += mu_term;
+	if (current_far_distance_m > 0)
+	{
+		// The vehicle (and the far point D below it) moved Δz along the linear
+		// profile the ADCP observes: both currents shift by Δz times its
+		// gradient, which stays; exact for any step.
+		const double dz_m = e[idx::pos + 2] - e0[idx::pos + 2];
+		const Eigen::Vector2d shift = (dz_m / current_far_distance_m) *
+									  (e.segment<2>(idx::current_far) - e.segment<2>(idx::current_vehicle));
+		e.segment<2>(idx::current_vehicle) += shift;
+		e.segment<2>(idx::current_far) += shift;
+	}
 	const double phi_g = noise.gyro_bias.phi(dt);
 	e.segment<3>(idx::gyro_bias) =
 		phi_g * e0.segment<3>(idx::gyro_bias) + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
@@ -40,7 +51,7 @@ NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega
 	return y;
 }
 
-Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps) const
+Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps, double vertical_speed_mps) const
 {
 	Covariance Q = Covariance::Zero();
 	Q.block<3, 3>(idx::att, idx::att).diagonal().setConstant(noise.gyro_arw * noise.gyro_arw * dt);
@@ -63,6 +74,8 @@ Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_m
 	const double current_var =
 		noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
 	Q.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().setConstant(current_var);
+	Q.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().array() +=
+		noise.current_vertical_var_per_m * std::abs(vertical_speed_mps) * dt;
 	Q.block<2, 2>(idx::adcp_bias, idx::adcp_bias).diagonal().setConstant(noise.adcp_bias.variance(dt));
 	const double phi_p = std::exp(-dt / noise.parameter_tau_s);
 	for (int i = 0; i < 18; ++i)
@@ -91,6 +104,8 @@ ProcessModel ProcessModel::fromConfig(const config::Node& n, const TangentVector
 	m.noise.gravity_psd = n.nonNegative("gravity_psd", m.noise.gravity_psd);
 	m.noise.current = gm("current_mps", 1.0);
 	m.noise.current_spatial_var_per_m = n.nonNegative("current_spatial_var_per_m", 0.0);
+	m.noise.current_vertical_var_per_m = n.nonNegative("current_vertical_var_per_m", 0.0);
+	m.current_far_distance_m = n.nonNegative("current_far_distance_m", 0.0);
 	m.noise.adcp_bias = gm("adcp_bias_mps", 1.0);
 	m.noise.parameter_tau_s = n.positive("parameter_tau_s");
 	// Diagonal entries are logarithms: a relative σ is an absolute σ there. The

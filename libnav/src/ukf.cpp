@@ -144,7 +144,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.topLeftCorner<k, k>() = P_NN;
 	P_.topRightCorner<k, n - k>() = P_NL;
 	P_.bottomLeftCorner<n - k, k>() = P_NL.transpose();
-	P_ += model_.noiseCovariance(dt, speed_through_water);
+	P_ += model_.noiseCovariance(dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
 	mean.R_nb = so3::normalized(mean.R_nb);
 	x_ = mean;

@@ -53,7 +53,7 @@ AdcpModel::AdcpModel(const config::Node& cfg, const std::string& label)
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
 
-PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& /*ctx*/,
+PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 								   std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
@@ -78,7 +78,12 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 		why = "no cells";
 		return PrepareStatus::Skip;
 	}
-	const double d_max = adcp->blank_distance_m + static_cast<double>(adcp->cells.size()) * adcp->cell_size_m;
+	// The far-current state belongs to the navigator when it fixes its distance
+	// (the vehicle current then follows the profile with depth); otherwise the
+	// profile's own range.
+	const double d_max = ctx.current_far_distance_m > 0
+							 ? ctx.current_far_distance_m
+							 : adcp->blank_distance_m + static_cast<double>(adcp->cells.size()) * adcp->cell_size_m;
 	if (!std::isfinite(d_max))
 	{
 		why = "profile range not finite";

@@ -304,6 +304,24 @@ TEST(Adcp, DistancesComeFromTheObservationGeometry)
 	EXPECT_DOUBLE_EQ(out[2].aux[1], 15.0);
 }
 
+TEST(Adcp, NavigatorFixedFarDistanceOverridesTheGeometry)
+{
+	// The navigator owns what current_far_ne means when it moves the currents
+	// along the profile with depth (ProcessModel::current_far_distance_m).
+	at::TestContext tc;
+	tc.ctx().current_far_distance_m = 6.0;
+	AdcpModel model(pt::defaultConfig(), "ADCP");
+	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
+	ASSERT_EQ(out.size(), 20u);
+	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.aux[1], 6.0);
+	EXPECT_DOUBLE_EQ(out[0].aux[0], 0.75);	// distances still from the observation
+	// A cell beyond that distance extrapolates the same linear profile.
+	NavState x;
+	x.current_vehicle_ne = Eigen::Vector2d(0.1, 0.0);
+	x.current_far_ne = Eigen::Vector2d(0.0, 0.0);
+	EXPECT_NEAR(plugins::adcpCellCurrent(x.current_vehicle_ne, x.current_far_ne, plugins::adcpFarWeight(9.0, 6.0)).x(), -0.05, 1e-15);
+}
+
 TEST(Adcp, CellsAtTheEndsSeeExactlyTheTwoCurrentStates)
 {
 	at::TestContext tc;

@@ -90,6 +90,8 @@ inline ProcessModel makeProcessModel()
 	n.gravity_psd = 1e-8;
 	n.current = {0.1, 600};
 	n.current_spatial_var_per_m = 1e-4;
+	n.current_vertical_var_per_m = 1e-3;
+	m.current_far_distance_m = 8;  // the currents follow the profile with depth
 	n.adcp_bias = {0.01, 1000};
 	n.parameter_tau_s = 3600;
 	const NavState x = makeState(0);

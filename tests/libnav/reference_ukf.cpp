@@ -70,7 +70,7 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 		Pn += w.wc[i] * d * d.transpose();
 	}
 	const double speed_through_water = (x.v_n.head<2>() - x.current_vehicle_ne).norm();
-	Pn += model.noiseCovariance(dt, speed_through_water);
+	Pn += model.noiseCovariance(dt, speed_through_water, x.v_n.z());
 	x_out = mean;
 	P_out = 0.5 * (Pn + Pn.transpose());
 }

@@ -58,6 +58,8 @@ ProcessModel fastGaussMarkovModel()
 	// No spatial current noise: it depends on the (changing) speed through the
 	// water and is not part of the Gauss–Markov discretisation.
 	pm.noise.current_spatial_var_per_m = 0;
+	pm.noise.current_vertical_var_per_m = 0;
+	pm.current_far_distance_m = 0;  // no transport along the profile either
 	return pm;
 }
 
@@ -220,6 +222,61 @@ TEST(ProcessModel, ProcessNoiseScalesLinearlyWithDt)
 	// Symmetric positive semi-definite.
 	EXPECT_EQ(Q1, Q1.transpose());
 	EXPECT_GE(Eigen::SelfAdjointEigenSolver<Covariance>(Q1).eigenvalues().minCoeff(), -1e-18);
+}
+
+TEST(ProcessModel, CurrentsFollowTheProfileWhenTheDepthChanges)
+{
+	ProcessModel pm = test::makeProcessModel();
+	pm.noise.current.tau_s = 1e15;	// isolate the transport from the decay
+	pm.current_far_distance_m = 8;
+	NavState x = test::makeState(0.3);
+	x.v_n = Eigen::Vector3d(0.5, -0.2, 0.2);  // diving at 0.2 m/s
+	x.a_n.setZero();
+	x.current_vehicle_ne = Eigen::Vector2d(0.10, 0.08);
+	x.current_far_ne = Eigen::Vector2d(0.02, 0.04);
+	const Eigen::Vector2d gradient_per_m = (x.current_far_ne - x.current_vehicle_ne) / 8.0;
+	const double T = 10;  // 2 m deeper
+	for (int steps : {1, 7, 1000})
+	{
+		const NavState y = propagateFor(pm, x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, steps);
+		const double dz = y.p_n.z() - x.p_n.z();
+		ASSERT_NEAR(dz, 2.0, 1e-10);
+		// c(2 m below the old depth) on the old profile, and the gradient kept.
+		EXPECT_LT((y.current_vehicle_ne - (x.current_vehicle_ne + dz * gradient_per_m)).norm(), 1e-12) << steps;
+		EXPECT_LT((y.current_far_ne - (x.current_far_ne + dz * gradient_per_m)).norm(), 1e-12) << steps;
+		// Climbing back restores both.
+		NavState up = y;
+		up.v_n.z() = -0.2;
+		const NavState back = propagateFor(pm, up, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, steps);
+		EXPECT_LT((back.current_vehicle_ne - x.current_vehicle_ne).norm(), 1e-12) << steps;
+		EXPECT_LT((back.current_far_ne - x.current_far_ne).norm(), 1e-12) << steps;
+	}
+	// Level flight: no transport; and off when the distance is 0.
+	NavState level = x;
+	level.v_n.z() = 0;
+	EXPECT_LT((pm.propagate(level, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T).current_vehicle_ne -
+			   x.current_vehicle_ne)
+				  .norm(),
+			  1e-12);
+	pm.current_far_distance_m = 0;
+	EXPECT_LT(
+		(pm.propagate(x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T).current_vehicle_ne - x.current_vehicle_ne)
+			.norm(),
+		1e-12);
+}
+
+TEST(ProcessModel, CurrentNoiseGrowsWithDepthChange)
+{
+	const ProcessModel pm = test::makeProcessModel();
+	const double dt = 0.1;
+	const Covariance Q0 = pm.noiseCovariance(dt, 0.4, 0.0), Qd = pm.noiseCovariance(dt, 0.4, -0.3);
+	for (int i = 0; i < 4; ++i)
+		EXPECT_NEAR(Qd(idx::current_vehicle + i, idx::current_vehicle + i) -
+						Q0(idx::current_vehicle + i, idx::current_vehicle + i),
+					pm.noise.current_vertical_var_per_m * 0.3 * dt, 1e-18);
+	Covariance diff = Qd - Q0;
+	diff.block<4, 4>(idx::current_vehicle, idx::current_vehicle).setZero();
+	EXPECT_EQ(diff.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(ProcessModel, DiscretisedNoiseComposesOverSubsteps)

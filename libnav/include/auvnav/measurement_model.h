@@ -44,6 +44,10 @@ struct FilterContext
 	//! The filter's current mean (for decisions in `prepare`, e.g. near the
 	//! surface); never use it inside h, which must depend on its argument only.
 	const NavState* mean = nullptr;
+	//! Distance below the vehicle [m] that NavState::current_far_ne refers to
+	//! (the navigator's ProcessModel::current_far_distance_m); 0 = not fixed by
+	//! the navigator (a current-profile model then uses its own range).
+	double current_far_distance_m = 0;
 };
 
 /** One measurement for the filter. Sized by the plugin in `prepare`. */

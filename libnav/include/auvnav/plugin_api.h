@@ -26,7 +26,7 @@
 #include <cstdio>
 #include <cstring>
 
-#define AUVNAV_PLUGIN_ABI_VERSION 2u  // 2: FilterContext::alpha_b/mean, Measurement::skipped
+#define AUVNAV_PLUGIN_ABI_VERSION 3u  // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 

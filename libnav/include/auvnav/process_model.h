@@ -33,6 +33,9 @@ struct ProcessNoise
 	double gravity_psd = 1e-12;	  //!< gravity random walk [(m/s²)²/s]
 	GaussMarkov current;		  //!< water currents [m/s]
 	double current_spatial_var_per_m = 0;  //!< extra current variance per metre moved through water [(m/s)²/m]
+	//! Current variance added per metre of depth change [(m/s)²/m]: the part of
+	//! the vertical profile the linear vehicle/far model does not capture.
+	double current_vertical_var_per_m = 0;
 	GaussMarkov adcp_bias;		  //!< [m/s]
 	double parameter_tau_s = 3600;	//!< model parameter correlation time [s]
 	//! Stationary σ of the 18 model parameters in tangent order (on the log
@@ -43,6 +46,13 @@ struct ProcessNoise
 struct ProcessModel
 {
 	ProcessNoise noise;
+	/** Distance below the vehicle [m] the far-current state refers to: the
+	 *  current profile is c(d) = c_vehicle + (d / D)(c_far − c_vehicle) for a
+	 *  point d metres below the vehicle (ADCP plugin, Arnold & Medagoda II-C).
+	 *  When > 0 both currents follow that profile as the vehicle changes depth
+	 *  (our extension: diving by Δz shifts both by Δz·(c_far − c_vehicle)/D,
+	 *  the profile's gradient, which stays); 0 disables the transport. */
+	double current_far_distance_m = 0;
 	/** Means the Gauss–Markov states relax to (tangent order, Euclidean part):
 	 *  zero biases and currents, the system-identification parameter prior. */
 	TangentVector prior_mean = TangentVector::Zero();
@@ -53,8 +63,9 @@ struct ProcessModel
 					   double dt_s) const;
 
 	/** Process noise covariance over `dt_s` (tangent space). `speed_through_water_mps`
-	 *  scales the spatial part of the current noise. */
-	Covariance noiseCovariance(double dt_s, double speed_through_water_mps) const;
+	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
+	 *  magnitude) the vertical part. */
+	Covariance noiseCovariance(double dt_s, double speed_through_water_mps, double vertical_speed_mps = 0) const;
 
 	/** The linear part (everything but attitude and gyro bias) as the map
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
