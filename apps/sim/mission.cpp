@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "sensors.h"
+#include "sonar.h"
 
 namespace fs = std::filesystem;
 
@@ -96,7 +97,17 @@ MissionSpec MissionSpec::load(const std::string& mission_file)
 			m.fail("name", "use letters, digits, '_' or '-' only (it names the rawlog file)");
 	s.vehicle = loadRelative(m, "vehicle");
 	s.sensors = loadRelative(m, "sensors");
+	// Per-mission sensor settings on top of the shared sensors file, e.g.
+	// sensor_overrides: ["sonar.enabled=true"].
+	if (m.has("sensor_overrides"))
+		for (const auto& kv : m.strings("sensor_overrides"))
+		{
+			const auto eq = kv.find('=');
+			if (eq == std::string::npos || eq == 0) m.fail("sensor_overrides", "expected KEY=VALUE, got '" + kv + "'");
+			s.sensors.set(kv.substr(0, eq), kv.substr(eq + 1));
+		}
 	s.environment = m.child("environment");
+	if (s.environment.has("pole_map")) s.poles = sonar::PoleMap::load(s.environment.filePath("pole_map"));
 	const auto o = s.environment.child("origin");
 	s.origin.lat_rad = o.inRange("latitude_deg", -85, 85) * kDeg;
 	s.origin.lon_rad = o.inRange("longitude_deg", -180, 180) * kDeg;
@@ -150,6 +161,19 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	const Schedule ctl_s{stepsOf(1.0 / thr_cfg.positive("rate_hz"), dt, thr_cfg, "rate_hz"), 0};
 	const Schedule truth_s{stepsOf(1.0 / spec.ground_truth_rate_hz, dt, spec.mission, "simulation.ground_truth_rate_hz"), 0};
 	const bool use_adcp = sc.child("adcp").boolean("enabled", true);
+	const bool use_sonar = sc.has("sonar") && sc.child("sonar").boolean("enabled", false);
+	std::unique_ptr<SonarSim> sonar;
+	Schedule sonar_s{1, 0};
+	std::unique_ptr<LineWriter> sonar_frames, sonar_truth;
+	if (use_sonar)
+	{
+		sonar = std::make_unique<SonarSim>(sc.child("sonar"), spec.poles, seed);
+		sonar_s = {stepsOf(sonar->period_s(), dt, sc.child("sonar"), "rate_hz"), std::lround(sonar->offset_s() / dt)};
+		sonar_frames = std::make_unique<LineWriter>((fs::path(out_dir) / "sonar_frames.csv").string());
+		sonar_truth = std::make_unique<LineWriter>((fs::path(out_dir) / "sonar_truth.csv").string());
+		sonar_frames->line("unix_time_s,vehicle_north_m,vehicle_east_m,sonar_heading_deg,vehicle_yaw_deg,poles_in_view");
+		sonar_truth->line("unix_time_s,pole_id,bearing_deg,range_m");
+	}
 
 	MissionSummary sum;
 	sum.rawlog_path = (fs::path(out_dir) / (spec.name + ".rawlog")).string();
@@ -212,6 +236,20 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 			sum.adcp_profiles++;
 			for (const auto& c : o->cells) sum.adcp_valid_cells += c.valid;
 			count(*o);
+		}
+		if (use_sonar && sonar_s.due(k))
+		{
+			std::vector<PoleInView> in_view;
+			count(*sonar->sample(truth, env, in_view));
+			const Eigen::Matrix3d R = x.R_nb();
+			const double unix_t = spec.start_unix_s + t;
+			sonar_frames->line(fmt("%.3f,%.4f,%.4f,%.6f,%.6f,%zu", unix_t, x.p_n.x(), x.p_n.y(),
+								   sonar->sonarHeading(truth) / kDeg, std::atan2(R(1, 0), R(0, 0)) / kDeg,
+								   in_view.size()));
+			for (const auto& p : in_view)
+				sonar_truth->line(fmt("%.3f,%s,%.6f,%.4f", unix_t, p.id.c_str(), p.bearing_rad / kDeg, p.range_m));
+			sum.sonar_frames++;
+			sum.sonar_poles_in_view += in_view.size();
 		}
 		if (pres_s.due(k)) count(*pressure.sample(truth, env, frame));
 		if (gps_s.due(k))

@@ -7,6 +7,7 @@
  *  The same seed gives byte-identical outputs.
  */
 #include <auvnav/config.h>
+#include <auvnav/sonar/landmarks.h>
 #include <auvnav/earth.h>
 
 #include <map>
@@ -34,6 +35,9 @@ struct MissionSpec
 	config::Node sensors;
 	config::Node environment;
 	config::Node mission;
+	/** Surveyed poles (environment.pole_map), empty if none: the truth the
+	 *  imaging sonar sees. */
+	sonar::PoleMap poles;
 
 	static MissionSpec load(const std::string& mission_file);
 };
@@ -48,6 +52,7 @@ struct MissionSummary
 	std::size_t dvl_locked = 0, dvl_total = 0;
 	std::size_t adcp_valid_cells = 0, adcp_profiles = 0;
 	std::size_t gps_outliers = 0;
+	std::size_t sonar_frames = 0, sonar_poles_in_view = 0;
 	bool plan_completed = false;
 	std::string rawlog_path;
 };

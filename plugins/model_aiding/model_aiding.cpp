@@ -43,6 +43,16 @@ Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb)
 	return g;
 }
 
+Vector6d coriolisWrench(const Matrix6d& M, const Vector6d& nu)
+{
+	const Matrix6d Ms = 0.5 * (M + M.transpose());
+	const Vector6d p = Ms * nu;
+	const Eigen::Vector3d v = nu.head<3>(), w = nu.tail<3>(), p1 = p.head<3>(), p2 = p.tail<3>();
+	Vector6d c;
+	c << w.cross(p1), v.cross(p1) + w.cross(p2);
+	return c;
+}
+
 Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
 						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
 {
@@ -55,7 +65,14 @@ Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen:
 	place(M, physicalSub(x.M_sub));
 	place(D_l, physicalSub(x.Dl_sub));
 	place(D_q, physicalSub(x.Dq_sub));
-	return M * nu_dot + D_l * nu + D_q * nu.cwiseAbs().cwiseProduct(nu) + restoringWrench(vm, x.R_nb);
+	Vector6d inertial = M * nu_dot;
+	if (vm.coriolis)
+	{
+		// ν̇_r = a_b − ω × v_r (a current constant in n turns in body axes).
+		nu_dot.head<3>() -= omega_b.cross(nu.head<3>());
+		inertial = M * nu_dot + coriolisWrench(M, nu);
+	}
+	return inertial + D_l * nu + D_q * nu.cwiseAbs().cwiseProduct(nu) + restoringWrench(vm, x.R_nb);
 }
 
 ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
@@ -67,6 +84,7 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& l
 	vm_.buoyancy_n = cfg.positive("buoyancy_n");
 	vm_.r_g_b = cfg.vector3("center_of_gravity_m");
 	vm_.r_b_b = cfg.vector3("center_of_buoyancy_m");
+	vm_.coriolis = cfg.boolean("coriolis", true);
 	const std::string unit = cfg.string("effort_unit", "force");
 	if (unit == "rpm")
 	{

@@ -8,13 +8,19 @@
  *  with T the thruster configuration matrix ([d_i; r_i × d_i] per column) and
  *  f the per-thruster force model (force commands × forward/reverse gain, or
  *  k·rpm·|rpm|). Prediction with Fossen's simplified model:
- *      h = M·[a_b; α_b] + D_l·ν + D_q·(|ν| ∘ ν) + g(R_nb)
- *      ν = [v_b; ω_b],  v_b = R_nbᵀ(v_n − c_n) − ω × r_imu  (relative to the water)
+ *      h = M·ν̇_r + C(ν_r)·ν_r + D_l·ν_r + D_q·(|ν_r| ∘ ν_r) + g(R_nb)
+ *      ν_r = [v_b; ω_b],  v_b = R_nbᵀ(v_n − c_n) − ω × r_imu  (relative to the water)
+ *      ν̇_r = [a_b − ω × v_b; α_b],  the body-axes rate of ν_r for a current constant in n
  *      a_b = R_nbᵀ a_n − α × r_imu − ω × (ω × r_imu)           (at the CG)
  *      ω = omega_ib_b − b_w − R_nbᵀ omega_ie_n,  α = the context's angular acceleration
+ *      C(ν)ν = [ω × p₁; v × p₁ + ω × p₂],  [p₁; p₂] = sym(M)·ν   (Fossen 2011, eq. 6.43)
  *      g(R) = −[(W − B)·R_nbᵀ k; r_G × R_nbᵀ k W − r_B × R_nbᵀ k B]   (k = NED down)
- *  Using a_b (inertial acceleration in body axes) instead of ν̇ keeps the
- *  rigid-body Coriolis term. M, D_l, D_q are the configured diagonal matrices
+ *  M is rigid body plus added mass; with a constant, irrotational current the
+ *  rigid-body and added-mass terms combine in ν_r (Fossen 2011, property 10.1).
+ *  The Coriolis–centripetal term (on by default, `coriolis: false` drops it and
+ *  uses M·[a_b; α_b], the paper's form) carries the Munk moment
+ *  (M_yy − M_xx)·u·v, through which the yaw row sees the sway velocity that
+ *  the weakly damped sway row cannot. M, D_l, D_q are the configured diagonal matrices
  *  with rows x, y, columns x, y, ψ replaced by the filter's parameter states
  *  (state.h: exp() of the stored surge/sway entries, so they stay positive).
  *  Noise: per-DOF σ, inflated by `surface_noise_factor` while the vehicle is
@@ -40,7 +46,11 @@ struct VehicleModel
 	Matrix6d M = Matrix6d::Identity(), D_l = Matrix6d::Zero(), D_q = Matrix6d::Zero();
 	double weight_n = 0, buoyancy_n = 0;
 	Eigen::Vector3d r_g_b = Eigen::Vector3d::Zero(), r_b_b = Eigen::Vector3d::Zero();
+	bool coriolis = true;  //!< include C(ν_r)ν_r (see file doc)
 };
+
+/** C(ν)ν of a (symmetrised) inertia matrix M for ν = [v; ω]. */
+Vector6d coriolisWrench(const Matrix6d& M, const Vector6d& nu);
 
 /** Fossen's simplified model: the wrench needed for state x (see file doc). */
 Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
