@@ -5,6 +5,9 @@
 #include <mrpt/obs/gnss_messages_ascii_nmea.h>
 
 #include <cmath>
+#include <filesystem>
+
+namespace fs = std::filesystem;
 
 namespace auvnav
 {
@@ -126,9 +129,14 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		slot->stats.plugin = s.string("plugin");
 		// Plugin configuration: inline `config`, or `config_file` relative to this file.
 		if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
-		const std::string yaml = s.has("config")		 ? s.child("config").toYaml()
-								 : s.has("config_file") ? config::Node::load(s.filePath("config_file")).toYaml()
-														 : "{}\n";
+		config::Node plugin_cfg = s.has("config")		   ? s.child("config")
+								  : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
+														   : config::Node::fromText("{}", cfg.file());
+		// Plugins receive YAML text: tell them where relative paths in it start.
+		const std::string origin = s.has("config_file") ? s.filePath("config_file") : cfg.file();
+		if (!plugin_cfg.has("config_dir"))
+			plugin_cfg.set("config_dir", fs::absolute(fs::path(origin)).parent_path().string());
+		const std::string yaml = plugin_cfg.toYaml();
 		slot->model = host.create(slot->stats.plugin, yaml, slot->stats.label);
 		slots_.push_back(std::move(slot));
 	}
@@ -277,6 +285,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 	ctx.alpha_b = alpha_b_;
 	ctx.mean = initialized_ ? &ukf_->state() : nullptr;
 	ctx.current_far_distance_m = ukf_ ? ukf_->processModel().current_far_distance_m : 0.0;
+	ctx.covariance = initialized_ ? &ukf_->covariance() : nullptr;
 	for (auto& slot : slots_)
 	{
 		SensorStats& st = slot->stats;

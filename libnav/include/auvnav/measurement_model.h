@@ -48,6 +48,9 @@ struct FilterContext
 	//! (the navigator's ProcessModel::current_far_distance_m); 0 = not fixed by
 	//! the navigator (a current-profile model then uses its own range).
 	double current_far_distance_m = 0;
+	//! The filter's covariance (tangent order, state.h), for decisions in
+	//! `prepare` such as data association gates; never use it inside h.
+	const Covariance* covariance = nullptr;
 };
 
 /** One measurement for the filter. Sized by the plugin in `prepare`. */

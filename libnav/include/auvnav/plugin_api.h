@@ -26,7 +26,7 @@
 #include <cstdio>
 #include <cstring>
 
-#define AUVNAV_PLUGIN_ABI_VERSION 3u  // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m
+#define AUVNAV_PLUGIN_ABI_VERSION 3u  // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 
@@ -63,6 +63,10 @@ extern "C"
 
 	typedef const AuvnavPluginEntry* (*AuvnavEntryFn)();
 }
+
+/** The configuration text a plugin receives is its YAML map plus the key
+ *  `config_dir`: the absolute folder of the file it came from, against which
+ *  the plugin resolves relative file paths in its configuration. */
 
 /** Defines the entry point of a plugin whose model class `ModelClass` has a
  *  constructor `ModelClass(const auvnav::config::Node& cfg, const std::string& label)`.

@@ -87,7 +87,8 @@ std::vector<Association> associate(const std::vector<Detection>& dets, const Pol
 		auto& all = nis_of[static_cast<std::size_t>(a.detection)];
 		std::sort(all.begin(), all.end());
 		det_used[static_cast<std::size_t>(a.detection)] = true;
-		if (all.size() >= 2 && all[1] <= gate && all[1] < p.ambiguity_ratio * std::max(all[0], 1e-9)) continue;
+		// Likelihood ratio of the two best: exp(−(NIS₂ − NIS₁)/2).
+		if (all.size() >= 2 && all[1] <= gate && all[1] - all[0] < 2 * std::log(p.ambiguity_ratio)) continue;
 		pole_used[static_cast<std::size_t>(a.pole)] = true;
 		out.push_back(a);
 	}

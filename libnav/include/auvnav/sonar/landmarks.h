@@ -8,8 +8,8 @@
  *  position and heading estimate, with covariance from the detection's σ, the
  *  heading σ and the position covariance (linearised); pairs beyond the
  *  chi-square gate are never associated. Pairs are taken best first, each
- *  detection and pole at most once, and a detection that fits two poles
- *  almost equally well is left out (ambiguous).
+ *  detection and pole at most once, and a detection whose second-best pole
+ *  is within `ambiguity_ratio` in likelihood of its best is left out.
  *
  *  Heading: pole i at horizontal offset (ΔN, ΔE) from the sonar, seen at
  *  bearing β_i, implies sonar heading atan2(ΔE, ΔN) − β_i; minus the sonar's
@@ -63,7 +63,7 @@ struct Association
 struct AssociationParams
 {
 	double gate_probability = 0.99;	 //!< chi-square(2) gate
-	double ambiguity_ratio = 4;		 //!< second-best NIS must exceed best × this
+	double ambiguity_ratio = 20;	 //!< best pole must be this many times likelier than the second (else dropped)
 };
 
 /** Predicted bearing [rad, wrapped] and range of pole `ne` from `pose`. */
