@@ -105,6 +105,30 @@ void Node::set(const std::string& dotted_path, const std::string& value)
 	std::string walked;
 	for (std::size_t i = 0; i < keys.size(); ++i)
 	{
+		if (n->isSequence())
+		{
+			// A list is entered by an element's `label` (sensors.SONAR.config.mode)
+			// or by its index.
+			yaml::node_t* found = nullptr;
+			auto& seq = n->asSequence();
+			const bool numeric = keys[i].find_first_not_of("0123456789") == std::string::npos;
+			for (std::size_t j = 0; j < seq.size() && !found; ++j)
+			{
+				if (numeric && std::stoul(keys[i]) == j) found = &seq[j];
+				else if (seq[j].isMap())
+				{
+					const auto& m = seq[j].asMap();
+					const auto it = m.find(yaml::node_t("label"));
+					if (it != m.end() && it->second.isScalar() && it->second.as<std::string>() == keys[i]) found = &seq[j];
+				}
+			}
+			if (!found)
+				throw ConfigError(file_ + ": override '" + dotted_path + "': no element '" + keys[i] + "' (label or index) in '" +
+								  walked + "'");
+			n = found;
+			walked += (walked.empty() ? "" : ".") + keys[i];
+			continue;
+		}
 		if (n->isNullNode()) n->d.emplace<yaml::map_t>();
 		if (!n->isMap())
 			throw ConfigError(file_ + ": override '" + dotted_path + "': '" + walked + "' is not a map");

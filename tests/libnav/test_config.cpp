@@ -57,3 +57,24 @@ TEST(Config, MissingOrMalformedFilesAreRefused)
 	EXPECT_NE(errorOf([] { Node::fromText("- 1\n- 2\n", "seq.yaml"); }).find("top level must be a YAML map"),
 			  std::string::npos);
 }
+
+TEST(Config, OverridesEnterListsByLabelOrIndex)
+{
+	auto n = Node::fromText(
+		"sensors:\n  - {label: DVL, plugin: dvl}\n  - {label: SONAR, plugin: sonar_heading, config: {mode: validate}}\n",
+		"nav.yaml");
+	n.set("sensors.SONAR.config.mode", "update");
+	n.set("sensors.0.plugin", "dvl2");
+	const auto s = n.sequence("sensors");
+	EXPECT_EQ(s[1].child("config").string("mode"), "update");
+	EXPECT_EQ(s[0].string("plugin"), "dvl2");
+	try
+	{
+		n.set("sensors.GPS.config.sigma_m", "2");
+		FAIL() << "override of a missing element accepted";
+	}
+	catch (const ConfigError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("no element 'GPS'"), std::string::npos) << e.what();
+	}
+}

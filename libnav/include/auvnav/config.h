@@ -67,7 +67,9 @@ class Node
 	/** This subtree as YAML text (to hand a plugin its configuration). */
 	std::string toYaml() const;
 	/** Sets `dotted.key.path` to the scalar `value` (creating maps on the way),
-	 *  for command-line overrides such as `--set filter.initial.heading_deg=25`. */
+	 *  for command-line overrides such as `--set filter.initial.heading_deg=25`.
+	 *  A list on the way is entered by the `label` of an element or by its
+	 *  index: `--set sensors.SONAR.config.mode=update`. */
 	void set(const std::string& dotted_path, const std::string& value);
 
 	const std::string& file() const { return file_; }
