@@ -127,19 +127,23 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
-		// Plugin configuration: inline `config`, or `config_file` relative to this file.
-		if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
-		config::Node plugin_cfg = s.has("config")		   ? s.child("config")
-								  : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
-														   : config::Node::fromText("{}", cfg.file());
-		// Plugins receive YAML text: tell them where relative paths in it start.
-		const std::string origin = s.has("config_file") ? s.filePath("config_file") : cfg.file();
-		if (!plugin_cfg.has("config_dir"))
-			plugin_cfg.set("config_dir", fs::absolute(fs::path(origin)).parent_path().string());
-		const std::string yaml = plugin_cfg.toYaml();
-		slot->model = host.create(slot->stats.plugin, yaml, slot->stats.label);
+		slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
 		slots_.push_back(std::move(slot));
 	}
+}
+
+std::string pluginConfigText(const config::Node& s)
+{
+	// Inline `config`, or `config_file` relative to the navigator's file.
+	if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
+	config::Node plugin_cfg = s.has("config")		   ? s.child("config")
+							  : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
+													   : config::Node::fromText("{}", s.file());
+	// Plugins receive YAML text: tell them where relative paths in it start.
+	const std::string origin = s.has("config_file") ? s.filePath("config_file") : s.file();
+	if (!plugin_cfg.has("config_dir"))
+		plugin_cfg.set("config_dir", fs::absolute(fs::path(origin)).parent_path().string());
+	return plugin_cfg.toYaml();
 }
 
 bool Navigator::denied(const std::string& label, double t_obs) const

@@ -25,11 +25,8 @@ TEST(ReferenceMission, FastFilterMatchesTheDenseReferenceOnTheSampleMission)
 	std::map<std::string, ModelPtr> models;
 	for (const auto& s : cfg.sequence("sensors"))
 	{
-		const std::string file = s.has("config_file") ? s.filePath("config_file") : "";
-		const std::string yaml = s.has("config") ? s.child("config").toYaml()
-								 : file.empty()	 ? "{}\n"
-												 : config::Node::load(file).toYaml();
-		if (s.string("label") != "GPS") models.emplace(s.string("label"), host.create(s.string("plugin"), yaml, s.string("label")));
+		if (s.string("label") != "GPS")
+			models.emplace(s.string("label"), host.create(s.string("plugin"), pluginConfigText(s), s.string("label")));
 	}
 	io::RawlogReader reader(repo + "/share/sample/sample.rawlog");
 	mrpt::obs::CObservation::Ptr o;

@@ -49,6 +49,11 @@ struct DenialWindow
 	double from_s = 0, to_s = 0;  //!< seconds from the first observation
 };
 
+/** The configuration text the navigator hands the plugin of one `sensors:`
+ *  entry: its inline `config`, or the file `config_file` (relative to the
+ *  navigator's file), plus `config_dir` (plugin_api.h). */
+std::string pluginConfigText(const config::Node& sensor_entry);
+
 class Navigator
 {
    public:
