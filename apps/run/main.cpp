@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <set>
 
 #include "run_outputs.h"
 
@@ -97,6 +98,12 @@ int main(int argc, char** argv)
 
 	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
 	nav->on_predict = [&](const auvnav::Navigator& n) { outputs->onState(n); };
+	std::set<std::string> gps_labels;  // position fixes, for position_fixes.csv
+	for (const auto& s : nav->stats())
+		if (s.plugin == "gps") gps_labels.insert(s.label);
+	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
+		if (gps_labels.count(label)) outputs->onPositionFix(label, t, m, r);
+	};
 	std::string error;
 	double next_progress = 0.5;
 	try
@@ -140,7 +147,7 @@ int main(int argc, char** argv)
 					p.x(), p.y(), p.z(), std::sqrt(P(16, 16)), std::sqrt(P(17, 17)), std::sqrt(P(18, 18)),
 					std::sqrt(P(2, 2)) * 180 / M_PI);
 	}
-	std::printf("  outputs in %s: trajectory.tum, states.csv, summary.json\n", out.getValue().c_str());
+	std::printf("  outputs in %s: trajectory.tum, states.csv, position_fixes.csv, summary.json\n", out.getValue().c_str());
 	if (!error.empty())
 	{
 		std::fprintf(stderr, "auvnav-run: error: %s\n", error.c_str());

@@ -46,7 +46,9 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	fs::create_directories(dir);
 	tum_.open(fs::path(dir) / "trajectory.tum");
 	csv_.open(fs::path(dir) / "states.csv");
-	if (!tum_ || !csv_) throw std::runtime_error("cannot write outputs in " + dir);
+	fixes_.open(fs::path(dir) / "position_fixes.csv");
+	if (!tum_ || !csv_ || !fixes_) throw std::runtime_error("cannot write outputs in " + dir);
+	fixes_ << "time_s,label,north_m,east_m,status\n";
 	tum_ << "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)\n";
 	const auto& names = tangentNames();
 	csv_ << "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
@@ -54,6 +56,19 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	csv_ << ",body_n_m,body_e_m,body_d_m";
 	for (const auto& n : names) csv_ << ",sigma_" << n;
 	csv_ << '\n';
+}
+
+void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
+{
+	if (m.z.size() != 2) return;
+	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
+						 : r.status == UpdateStatus::Recovered ? "recovered"
+						 : r.status == UpdateStatus::Rejected  ? "rejected"
+															   : "invalid";
+	char line[256];
+	std::snprintf(line, sizeof line, "%.3f,%s,%.3f,%.3f,%s\n", t, label.c_str(), m.z[0], m.z[1], status);
+	fixes_ << line;
+	fixes_.flush();
 }
 
 void RunOutputs::onState(const Navigator& nav)

@@ -8,6 +8,8 @@
  *   - states.csv: header row; time, the full state mean (attitude as
  *     quaternion and roll/pitch/yaw in degrees for reading), the body-origin
  *     position, and the standard deviation of every tangent coordinate;
+ *   - position_fixes.csv: every GPS fix offered to the filter: time, label,
+ *     north/east [m] and whether the χ² gate accepted it (for auvnav-view);
  *   - summary.json: per-sensor counts, consistency (mean NIS per dimension),
  *     final standard deviations, run time and real-time factor.
  */
@@ -24,6 +26,9 @@ class RunOutputs
 	RunOutputs(const std::string& dir, double rate_hz);
 	/** Appends a row if at least 1/rate since the last one. */
 	void onState(const Navigator& nav);
+	/** Appends a GPS-like 2-D position update (label "…GPS…" or any update
+	 *  whose measurement is a north/east position) to position_fixes.csv. */
+	void onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
 	void flush();
 	/** Writes summary.json (complete rewrite, atomically via rename). */
 	void writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
@@ -34,7 +39,7 @@ class RunOutputs
 	std::string dir_;
 	double period_s_;
 	double last_t_ = -1e300;
-	std::ofstream tum_, csv_;
+	std::ofstream tum_, csv_, fixes_;
 	std::size_t rows_ = 0;
 };
 }  // namespace auvnav::run

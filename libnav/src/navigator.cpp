@@ -333,6 +333,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 			}
 			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
 			const UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
+			if (on_update) on_update(st.label, t_obs, m, r);
 			switch (r.status)
 			{
 				case UpdateStatus::Accepted:

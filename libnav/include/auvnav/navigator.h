@@ -84,6 +84,9 @@ class Navigator
 
 	/** Called after every prediction (i.e. at IMU rate) once initialised. */
 	std::function<void(const Navigator&)> on_predict;
+	/** Called after every measurement update with the sensor label, the
+	 *  observation time, the measurement and its result (any status). */
+	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)> on_update;
 
    private:
 	struct Slot;
