@@ -12,6 +12,7 @@
 #include <iostream>
 #include <set>
 
+#include "live_view.h"
 #include "run_outputs.h"
 
 namespace
@@ -37,6 +38,9 @@ int main(int argc, char** argv)
 									  "observation, e.g. GPS:1200:1e9 (repeatable)",
 									  false, "LABEL:FROM:TO", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "No progress display", cmd);
+	TCLAP::SwitchArg view("", "view", "Live MRPT 3D window of the run (needs a display; xvfb-run works)", cmd);
+	TCLAP::ValueArg<double> view_hold("", "view-hold", "With --view: keep the window S seconds after the run (0: until a key)",
+									  false, 0, "S", cmd);
 	try
 	{
 		if (!cmd.parse(argc, argv)) return 0;
@@ -101,8 +105,27 @@ int main(int argc, char** argv)
 	std::set<std::string> gps_labels;  // position fixes, for position_fixes.csv
 	for (const auto& s : nav->stats())
 		if (s.plugin == "gps") gps_labels.insert(s.label);
+	std::unique_ptr<auvnav::run::LiveView> live;
+	if (view.getValue())
+	{
+		try
+		{
+			live = std::make_unique<auvnav::run::LiveView>("auvnav-run: " + rawlog.getValue());
+		}
+		catch (const std::exception& e)
+		{
+			std::cerr << "auvnav-run: error: " << e.what() << "\n";
+			return 2;
+		}
+		nav->on_predict = [&](const auvnav::Navigator& n) {
+			outputs->onState(n);
+			live->onState(n);
+		};
+	}
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
-		if (gps_labels.count(label)) outputs->onPositionFix(label, t, m, r);
+		if (!gps_labels.count(label)) return;
+		outputs->onPositionFix(label, t, m, r);
+		if (live) live->onFix(t, m, r);
 	};
 	std::string error;
 	double next_progress = 0.5;
@@ -148,6 +171,12 @@ int main(int argc, char** argv)
 					std::sqrt(P(2, 2)) * 180 / M_PI);
 	}
 	std::printf("  outputs in %s: trajectory.tum, states.csv, position_fixes.csv, summary.json\n", out.getValue().c_str());
+	std::fflush(stdout);
+	if (live && !g_stop)
+	{
+		std::printf("  3D view: %zu states shown\n", outputs->rows());
+		live->hold(view_hold.getValue());
+	}
 	if (!error.empty())
 	{
 		std::fprintf(stderr, "auvnav-run: error: %s\n", error.c_str());

@@ -1,0 +1,79 @@
+#include "live_view.h"
+
+#include <mrpt/gui/CDisplayWindow3D.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <thread>
+
+#include "scene.h"
+
+namespace auvnav::run
+{
+struct LiveView::Impl
+{
+	mrpt::gui::CDisplayWindow3D window;
+	view::RunData data;
+	double last_t = -1e300;
+	std::chrono::steady_clock::time_point last_draw{};
+	explicit Impl(const std::string& title) : window(title, 1280, 800) {}
+};
+
+LiveView::LiveView(const std::string& title)
+{
+	if (!std::getenv("DISPLAY")) throw std::runtime_error("--view needs a display (DISPLAY is not set; try xvfb-run)");
+	impl_ = std::make_unique<Impl>(title);
+}
+
+LiveView::~LiveView() = default;
+
+void LiveView::onState(const Navigator& nav)
+{
+	if (nav.time() - impl_->last_t < 1.0) return;
+	impl_->last_t = nav.time();
+	view::TrackPoint p;
+	p.t = nav.time();
+	p.p_ned = nav.bodyPosition_n();
+	p.q_nb = Eigen::Quaterniond(nav.filter().state().R_nb);
+	const auto& P = nav.filter().covariance();
+	p.sigma_ned = P.block<3, 3>(idx::pos, idx::pos).diagonal().cwiseMax(0.0).cwiseSqrt();
+	impl_->data.estimate.push_back(p);
+	refresh();
+}
+
+void LiveView::onFix(double t, const Measurement& m, const UpdateResult& r)
+{
+	if (m.z.size() != 2) return;
+	impl_->data.gps.push_back(
+		{t, {m.z[0], m.z[1]}, r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
+}
+
+void LiveView::refresh(bool force)
+{
+	const auto now = std::chrono::steady_clock::now();
+	if (impl_->data.estimate.empty() || (!force && now - impl_->last_draw < std::chrono::seconds(1))) return;
+	impl_->last_draw = now;
+	auto scene = view::buildScene(impl_->data);
+	impl_->window.get3DSceneAndLock() = scene;
+	impl_->window.unlockAccess3DScene();
+	impl_->window.forceRepaint();
+}
+
+void LiveView::hold(double seconds)
+{
+	refresh(true);
+	if (seconds > 0)
+	{
+		const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+		while (impl_->window.isOpen() && std::chrono::steady_clock::now() < until)
+			std::this_thread::sleep_for(std::chrono::milliseconds(100));
+		return;
+	}
+	std::printf("  close the 3D window or press a key in it to quit\n");
+	impl_->window.waitForKey();
+}
+
+}  // namespace auvnav::run
