@@ -123,6 +123,7 @@ int main(int argc, char** argv)
 		};
 	}
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
+		outputs->onUpdate(label, t, r);
 		if (!gps_labels.count(label)) return;
 		outputs->onPositionFix(label, t, m, r);
 		if (live) live->onFix(t, m, r);

@@ -55,7 +55,12 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	for (std::size_t i = 3; i < names.size(); ++i) csv_ << ',' << names[i];
 	csv_ << ",body_n_m,body_e_m,body_d_m";
 	for (const auto& n : names) csv_ << ",sigma_" << n;
+	// Off-diagonal covariances of position and attitude (for NEES in auvnav-eval).
+	csv_ << ",cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed";
 	csv_ << '\n';
+	nis_.open(fs::path(dir) / "nis.csv");
+	if (!nis_) throw std::runtime_error("cannot write outputs in " + dir);
+	nis_ << "time_s,label,updates,nis_sum,dim_sum\n";
 }
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
@@ -97,12 +102,34 @@ void RunOutputs::onState(const Navigator& nav)
 	s << ',' << p.x() << ',' << p.y() << ',' << p.z();
 	const auto& P = nav.filter().covariance();
 	for (int i = 0; i < idx::dim; ++i) s << ',' << std::sqrt(std::max(P(i, i), 0.0));
+	for (int b : {idx::pos, idx::att}) s << ',' << P(b, b + 1) << ',' << P(b, b + 2) << ',' << P(b + 1, b + 2);
 	csv_ << s.str() << '\n';
 	if (++rows_ % 50 == 0) flush();
 }
 
+void RunOutputs::onUpdate(const std::string& label, double t, const UpdateResult& r)
+{
+	if (r.status != UpdateStatus::Accepted && r.status != UpdateStatus::Recovered) return;
+	if (t - nis_t0_ >= 1.0)
+	{
+		for (const auto& [l, a] : nis_acc_)
+		{
+			char line[256];
+			std::snprintf(line, sizeof line, "%.3f,%s,%zu,%.6g,%zu\n", nis_t0_, l.c_str(), a.n, a.nis, a.dim);
+			nis_ << line;
+		}
+		nis_acc_.clear();
+		nis_t0_ = std::floor(t);
+	}
+	auto& a = nis_acc_[label];
+	++a.n;
+	a.nis += r.nis;
+	a.dim += static_cast<std::size_t>(r.dim);
+}
+
 void RunOutputs::flush()
 {
+	nis_.flush();
 	tum_.flush();
 	csv_.flush();
 }

@@ -8,6 +8,10 @@
  *   - states.csv: header row; time, the full state mean (attitude as
  *     quaternion and roll/pitch/yaw in degrees for reading), the body-origin
  *     position, and the standard deviation of every tangent coordinate;
+ *   - nis.csv: per sensor and second of data, the accepted updates' summed
+ *     NIS and dimension (consistency over time, auvnav-eval);
+ *   - states.csv also carries the position and attitude covariances'
+ *     off-diagonal terms (cov_pos_*, cov_att_*) for NEES;
  *   - position_fixes.csv: every GPS fix offered to the filter: time, label,
  *     north/east [m] and whether the χ² gate accepted it (for auvnav-view);
  *   - summary.json: per-sensor counts, consistency (mean NIS per dimension),
@@ -16,6 +20,7 @@
 #include <auvnav/navigator.h>
 
 #include <fstream>
+#include <map>
 #include <string>
 
 namespace auvnav::run
@@ -28,6 +33,9 @@ class RunOutputs
 	void onState(const Navigator& nav);
 	/** Appends a GPS-like 2-D position update (label "…GPS…" or any update
 	 *  whose measurement is a north/east position) to position_fixes.csv. */
+	/** Accumulates accepted updates' NIS per sensor; one nis.csv row per
+	 *  sensor and second of data: time, label, updates, ΣNIS, Σdim. */
+	void onUpdate(const std::string& label, double t, const UpdateResult& r);
 	void onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
 	void flush();
 	/** Writes summary.json (complete rewrite, atomically via rename). */
@@ -39,7 +47,14 @@ class RunOutputs
 	std::string dir_;
 	double period_s_;
 	double last_t_ = -1e300;
-	std::ofstream tum_, csv_, fixes_;
+	std::ofstream tum_, csv_, fixes_, nis_;
+	struct NisAcc
+	{
+		std::size_t n = 0, dim = 0;
+		double nis = 0;
+	};
+	std::map<std::string, NisAcc> nis_acc_;
+	double nis_t0_ = -1e300;
 	std::size_t rows_ = 0;
 };
 }  // namespace auvnav::run

@@ -1,0 +1,240 @@
+// auvnav-eval: a run against the simulator's ground truth; figures and a table.
+//   auvnav-eval --run RUN --truth SIM/ground_truth.csv --out DIR
+//   auvnav-eval --run R1 --truth T1 --run R2 --truth T2 ... --out DIR   (Monte Carlo: averaged NEES)
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "eval.h"
+#include "plot.h"
+
+namespace fs = std::filesystem;
+using namespace auvnav::eval;
+
+namespace
+{
+constexpr double kDeg = 180 / M_PI;
+const cv::Scalar kBlue(200, 90, 30), kRed(40, 40, 220), kGreen(60, 160, 40), kGrey(150, 150, 150), kOrange(0, 140, 255),
+	kPurple(160, 60, 140);
+
+std::vector<double> minutes(const std::vector<Sample>& s)
+{
+	std::vector<double> m;
+	for (const auto& x : s) m.push_back((x.t - s.front().t) / 60);
+	return m;
+}
+template <typename F>
+std::vector<double> col(const std::vector<Sample>& s, F f)
+{
+	std::vector<double> v;
+	for (const auto& x : s) v.push_back(f(x));
+	return v;
+}
+
+struct Fractions
+{
+	double pos = 0, att = 0;
+};
+
+/** Figures and table lines of one run. */
+std::string singleRun(const Evaluation& ev, const fs::path& out, std::vector<std::string>& figures)
+{
+	const auto& s = ev.samples;
+	const auto t = minutes(s);
+	auto fig = [&](Plot& p, const std::string& name) {
+		p.save((out / name).string());
+		figures.push_back(name);
+	};
+	{
+		Plot p("Horizontal position error with 1-sigma / 2-sigma", "time [min]", "[m]");
+		const auto s1 = col(s, [](const Sample& x) { return std::sqrt(x.P_pos(0, 0) + x.P_pos(1, 1)); });
+		std::vector<double> s2, zero(s.size(), 0.0);
+		for (double v : s1) s2.push_back(2 * v);
+		p.band(t, zero, s2, kGrey, "2 sigma");
+		p.band(t, zero, s1, kBlue, "1 sigma");
+		p.line(t, col(s, [](const Sample& x) { return x.pos_err_ned.head<2>().norm(); }), kRed, "error");
+		fig(p, "position_error.png");
+	}
+	{
+		Plot p("Heading error with +-1 / +-2 sigma", "time [min]", "[deg]");
+		const auto sg = col(s, [](const Sample& x) { return x.heading_sigma_rad * kDeg; });
+		std::vector<double> lo1, hi1, lo2, hi2;
+		for (double v : sg) lo1.push_back(-v), hi1.push_back(v), lo2.push_back(-2 * v), hi2.push_back(2 * v);
+		p.band(t, lo2, hi2, kGrey, "2 sigma");
+		p.band(t, lo1, hi1, kBlue, "1 sigma");
+		p.line(t, col(s, [](const Sample& x) { return x.heading_err_rad * kDeg; }), kRed, "error");
+		const double lim = 3 * *std::max_element(sg.begin() + static_cast<long>(sg.size() / 10), sg.end());
+		p.yRange(-std::max(lim, 0.5), std::max(lim, 0.5));
+		fig(p, "heading_error.png");
+	}
+	for (int k = 0; k < 2; ++k)
+	{
+		Plot p(std::string("Water current ") + (k ? "east" : "north") + ": estimate with 2 sigma, truth", "time [min]",
+			   "[m/s]");
+		std::vector<double> lo, hi;
+		for (const auto& x : s) lo.push_back(x.current_est[k] - 2 * x.current_sigma[k]), hi.push_back(x.current_est[k] + 2 * x.current_sigma[k]);
+		p.band(t, lo, hi, kGrey, "2 sigma");
+		p.line(t, col(s, [k](const Sample& x) { return x.current_est[k]; }), kBlue, "estimate");
+		p.line(t, col(s, [k](const Sample& x) { return x.current_true[k]; }), kGreen, "truth");
+		fig(p, k ? "current_east.png" : "current_north.png");
+	}
+	const char* dnames[4] = {"linear damping surge D_l,xx [N/(m/s)]", "linear damping sway D_l,yy [N/(m/s)]",
+							 "quadratic damping surge D_q,xx [N/(m/s)^2]", "quadratic damping sway D_q,yy [N/(m/s)^2]"};
+	const char* dfiles[4] = {"damping_l_xx.png", "damping_l_yy.png", "damping_q_xx.png", "damping_q_yy.png"};
+	for (int k = 0; k < 4; ++k)
+	{
+		Plot p(std::string("Estimated ") + dnames[k] + " with 2 sigma", "time [min]", "");
+		p.band(t, col(s, [k](const Sample& x) { return x.damping_lo[k]; }), col(s, [k](const Sample& x) { return x.damping_hi[k]; }),
+			   kGrey, "2 sigma");
+		p.line(t, col(s, [k](const Sample& x) { return x.damping[k]; }), kBlue, "estimate");
+		fig(p, dfiles[k]);
+	}
+	const auto [lo, hi] = chi2MeanBounds(3, 1);
+	Fractions in;
+	{
+		Plot p("NEES (3 dof) with the 95 % chi-square bounds", "time [min]", "NEES");
+		p.line(t, col(s, [](const Sample& x) { return x.nees_pos; }), kBlue, "position", 1);
+		p.line(t, col(s, [](const Sample& x) { return x.nees_att; }), kOrange, "attitude", 1);
+		p.hline(lo, kRed, "95 % bounds");
+		p.hline(hi, kRed, "");
+		p.yRange(0, 3 * hi);
+		fig(p, "nees.png");
+		for (const auto& x : s) in.pos += x.nees_pos >= lo && x.nees_pos <= hi, in.att += x.nees_att >= lo && x.nees_att <= hi;
+	}
+	// NIS per sensor: mean NIS/dim over 60 s windows.
+	std::string nis_rows;
+	{
+		Plot p("NIS per dimension (60 s means) per sensor", "time [min]", "NIS / dim");
+		const cv::Scalar colours[] = {kBlue, kOrange, kGreen, kPurple, kRed, kGrey};
+		int ci = 0;
+		for (const auto& [label, bins] : ev.nis)
+		{
+			std::vector<double> x, y;
+			double w_nis = 0, w_dim = 0, t0 = bins.empty() ? 0 : bins.front().t;
+			std::size_t inside = 0, windows = 0;
+			double tot_nis = 0, tot_dim = 0;
+			for (const auto& b : bins)
+			{
+				w_nis += b.nis, w_dim += static_cast<double>(b.dim);
+				tot_nis += b.nis, tot_dim += static_cast<double>(b.dim);
+				if (b.t - t0 >= 60 && w_dim > 0)
+				{
+					x.push_back((t0 - s.front().t) / 60);
+					y.push_back(w_nis / w_dim);
+					const auto [l, h] = chi2MeanBounds(static_cast<int>(w_dim), 1);
+					inside += w_nis >= l && w_nis <= h;
+					++windows;
+					w_nis = w_dim = 0;
+					t0 = b.t;
+				}
+			}
+			p.line(x, y, colours[ci++ % 6], label, 1);
+			char row[256];
+			std::snprintf(row, sizeof row, "| %s | %.2f | %zu/%zu |\n", label.c_str(), tot_dim > 0 ? tot_nis / tot_dim : NAN,
+						  inside, windows);
+			nis_rows += row;
+		}
+		p.hline(1.0, kRed, "expected 1");
+		p.yRange(0, 3);
+		fig(p, "nis.png");
+	}
+	const auto& last = s.back();
+	double max_err = 0, sq_head = 0;
+	for (const auto& x : s) max_err = std::max(max_err, x.pos_err_ned.head<2>().norm()), sq_head += x.heading_err_rad * x.heading_err_rad;
+	char buf[2048];
+	std::snprintf(buf, sizeof buf,
+				  "| final horizontal error | of distance travelled | worst | final 2σ | heading error RMS | position NEES inside "
+				  "95 %% | attitude NEES inside 95 %% |\n|---|---|---|---|---|---|---|\n"
+				  "| %.2f m | %.3f %% (%.0f m) | %.2f m | %.2f m | %.3f° | %.1f %% | %.1f %% |\n\n"
+				  "| sensor | mean NIS/dim | 60 s windows inside 95 %% |\n|---|---|---|\n",
+				  last.pos_err_ned.head<2>().norm(), 100 * last.pos_err_ned.head<2>().norm() / std::max(last.distance_m, 1e-9),
+				  last.distance_m, max_err, 2 * std::sqrt(last.P_pos(0, 0) + last.P_pos(1, 1)),
+				  std::sqrt(sq_head / s.size()) * kDeg, 100 * in.pos / s.size(), 100 * in.att / s.size());
+	return std::string(buf) + nis_rows;
+}
+
+/** Averaged NEES over runs (samples matched by index from each run's start). */
+std::string monteCarlo(const std::vector<Evaluation>& evs, const fs::path& out, std::vector<std::string>& figures)
+{
+	std::size_t n = evs.front().samples.size();
+	for (const auto& e : evs) n = std::min(n, e.samples.size());
+	const int M = static_cast<int>(evs.size());
+	std::vector<double> t, pos(n, 0.0), att(n, 0.0);
+	for (std::size_t i = 0; i < n; ++i)
+	{
+		t.push_back((evs.front().samples[i].t - evs.front().samples.front().t) / 60);
+		for (const auto& e : evs) pos[i] += e.samples[i].nees_pos / M, att[i] += e.samples[i].nees_att / M;
+	}
+	const auto [lo, hi] = chi2MeanBounds(3, M);
+	Plot p("NEES averaged over " + std::to_string(M) + " runs, 95 % bounds", "time [min]", "mean NEES");
+	p.line(t, pos, kBlue, "position", 1);
+	p.line(t, att, kOrange, "attitude", 1);
+	p.hline(lo, kRed, "95 % bounds");
+	p.hline(hi, kRed, "");
+	p.yRange(0, 3 * hi);
+	p.save((out / "nees_monte_carlo.png").string());
+	figures.push_back("nees_monte_carlo.png");
+	std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0;
+	for (std::size_t i = 0; i < n; ++i)
+	{
+		in_pos += pos[i] >= lo && pos[i] <= hi, in_att += att[i] >= lo && att[i] <= hi;
+		above_pos += pos[i] > hi, above_att += att[i] > hi;
+	}
+	char buf[512];
+	std::snprintf(buf, sizeof buf,
+				  "| runs | samples | bounds | position NEES inside | above | attitude NEES inside | above |\n"
+				  "|---|---|---|---|---|---|---|\n| %d | %zu | [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | %.1f %% |\n",
+				  M, n, lo, hi, 100.0 * in_pos / n, 100.0 * above_pos / n, 100.0 * in_att / n, 100.0 * above_att / n);
+	return buf;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd("Evaluates auvnav-run outputs against auvnav-sim ground truth: PNG figures and DIR/eval.md.", ' ',
+					   "0.1.0");
+	TCLAP::MultiArg<std::string> runs("r", "run", "auvnav-run output folder (repeat for Monte Carlo)", true, "DIR", cmd);
+	TCLAP::MultiArg<std::string> truths("t", "truth", "ground_truth.csv, one per --run (or one for all)", true, "FILE", cmd);
+	TCLAP::ValueArg<std::string> out("o", "out", "Output folder", true, "", "DIR", cmd);
+	TCLAP::ValueArg<double> every("", "every", "Seconds between evaluated samples", false, 1.0, "S", cmd);
+	try
+	{
+		if (!cmd.parse(argc, argv)) return 0;
+	}
+	catch (const TCLAP::ArgException& e)
+	{
+		std::cerr << "auvnav-eval: " << e.error() << "\n";
+		return 1;
+	}
+	try
+	{
+		const auto& r = runs.getValue();
+		const auto& tr = truths.getValue();
+		if (tr.size() != r.size() && tr.size() != 1)
+			throw std::runtime_error("give one --truth per --run, or one for all");
+		if (!(every.getValue() > 0)) throw std::runtime_error("--every must be positive");
+		fs::create_directories(out.getValue());
+		std::vector<Evaluation> evs;
+		for (std::size_t i = 0; i < r.size(); ++i)
+			evs.push_back(evaluate(r[i], tr.size() == 1 ? tr[0] : tr[i], every.getValue()));
+		std::vector<std::string> figures;
+		std::string md = "# Evaluation of " + r.front() + "\n\n" + singleRun(evs.front(), out.getValue(), figures);
+		if (evs.size() > 1) md += "\n## Monte Carlo\n\n" + monteCarlo(evs, out.getValue(), figures);
+		md += "\nFigures:";
+		for (const auto& f : figures) md += " " + f;
+		md += "\n";
+		std::ofstream(fs::path(out.getValue()) / "eval.md") << md;
+		std::cout << md;
+	}
+	catch (const std::exception& e)
+	{
+		std::cerr << "auvnav-eval: error: " << e.what() << "\n";
+		return 2;
+	}
+	return 0;
+}
