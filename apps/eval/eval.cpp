@@ -156,6 +156,11 @@ Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, do
 		s.distance_m = tr.distance;
 		s.nees_pos = mahalanobis(s.pos_err_ned, s.P_pos);
 		s.nees_att = mahalanobis(s.att_err, s.P_att);
+		{
+			const Eigen::Matrix2d Ph = s.P_pos.topLeftCorner<2, 2>();
+			const Eigen::Vector2d eh = s.pos_err_ned.head<2>();
+			s.nees_hpos = Ph.determinant() > 0 ? eh.dot(Ph.inverse() * eh) : NAN;
+		}
 		ev.samples.push_back(s);
 	}
 	if (ev.samples.empty()) throw std::runtime_error(run_dir + "/states.csv: no state within the truth's time span");

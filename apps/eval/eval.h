@@ -28,6 +28,7 @@ struct Sample
 					damping_hi = Eigen::Vector4d::Zero();
 	double distance_m = 0;	//!< travelled so far (truth)
 	double nees_pos = 0, nees_att = 0;
+	double nees_hpos = 0;  //!< horizontal position only (2 dof)
 };
 
 struct NisBin

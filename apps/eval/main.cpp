@@ -96,6 +96,8 @@ std::string singleRun(const Evaluation& ev, const fs::path& out, std::vector<std
 	}
 	const auto [lo, hi] = chi2MeanBounds(3, 1);
 	Fractions in;
+	double in_h = 0;
+	const auto [lo2, hi2] = chi2MeanBounds(2, 1);
 	{
 		Plot p("NEES (3 dof) with the 95 % chi-square bounds", "time [min]", "NEES");
 		p.line(t, col(s, [](const Sample& x) { return x.nees_pos; }), kBlue, "position", 1);
@@ -104,7 +106,11 @@ std::string singleRun(const Evaluation& ev, const fs::path& out, std::vector<std
 		p.hline(hi, kRed, "");
 		p.yRange(0, 3 * hi);
 		fig(p, "nees.png");
-		for (const auto& x : s) in.pos += x.nees_pos >= lo && x.nees_pos <= hi, in.att += x.nees_att >= lo && x.nees_att <= hi;
+		for (const auto& x : s)
+		{
+			in.pos += x.nees_pos >= lo && x.nees_pos <= hi, in.att += x.nees_att >= lo && x.nees_att <= hi;
+			in_h += x.nees_hpos >= lo2 && x.nees_hpos <= hi2;
+		}
 	}
 	// NIS per sensor: mean NIS/dim over 60 s windows.
 	std::string nis_rows;
@@ -149,12 +155,12 @@ std::string singleRun(const Evaluation& ev, const fs::path& out, std::vector<std
 	char buf[2048];
 	std::snprintf(buf, sizeof buf,
 				  "| final horizontal error | of distance travelled | worst | final 2σ | heading error RMS | position NEES inside "
-				  "95 %% | attitude NEES inside 95 %% |\n|---|---|---|---|---|---|---|\n"
-				  "| %.2f m | %.3f %% (%.0f m) | %.2f m | %.2f m | %.3f° | %.1f %% | %.1f %% |\n\n"
+				  "95 %% | horizontal NEES inside 95 %% | attitude NEES inside 95 %% |\n|---|---|---|---|---|---|---|---|\n"
+				  "| %.2f m | %.3f %% (%.0f m) | %.2f m | %.2f m | %.3f° | %.1f %% | %.1f %% | %.1f %% |\n\n"
 				  "| sensor | mean NIS/dim | 60 s windows inside 95 %% |\n|---|---|---|\n",
 				  last.pos_err_ned.head<2>().norm(), 100 * last.pos_err_ned.head<2>().norm() / std::max(last.distance_m, 1e-9),
 				  last.distance_m, max_err, 2 * std::sqrt(last.P_pos(0, 0) + last.P_pos(1, 1)),
-				  std::sqrt(sq_head / s.size()) * kDeg, 100 * in.pos / s.size(), 100 * in.att / s.size());
+				  std::sqrt(sq_head / s.size()) * kDeg, 100 * in.pos / s.size(), 100 * in_h / s.size(), 100 * in.att / s.size());
 	return std::string(buf) + nis_rows;
 }
 
@@ -164,32 +170,39 @@ std::string monteCarlo(const std::vector<Evaluation>& evs, const fs::path& out, 
 	std::size_t n = evs.front().samples.size();
 	for (const auto& e : evs) n = std::min(n, e.samples.size());
 	const int M = static_cast<int>(evs.size());
-	std::vector<double> t, pos(n, 0.0), att(n, 0.0);
+	std::vector<double> t, pos(n, 0.0), att(n, 0.0), hpos(n, 0.0);
 	for (std::size_t i = 0; i < n; ++i)
 	{
 		t.push_back((evs.front().samples[i].t - evs.front().samples.front().t) / 60);
-		for (const auto& e : evs) pos[i] += e.samples[i].nees_pos / M, att[i] += e.samples[i].nees_att / M;
+		for (const auto& e : evs)
+			pos[i] += e.samples[i].nees_pos / M, att[i] += e.samples[i].nees_att / M, hpos[i] += e.samples[i].nees_hpos / M;
 	}
 	const auto [lo, hi] = chi2MeanBounds(3, M);
 	Plot p("NEES averaged over " + std::to_string(M) + " runs, 95 % bounds", "time [min]", "mean NEES");
 	p.line(t, pos, kBlue, "position", 1);
 	p.line(t, att, kOrange, "attitude", 1);
-	p.hline(lo, kRed, "95 % bounds");
+	p.line(t, hpos, kGreen, "horizontal (2 dof)", 1);
+	p.hline(lo, kRed, "95 % bounds (3 dof)");
 	p.hline(hi, kRed, "");
 	p.yRange(0, 3 * hi);
 	p.save((out / "nees_monte_carlo.png").string());
 	figures.push_back("nees_monte_carlo.png");
-	std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0;
+	std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0, in_h = 0, above_h = 0;
+	const auto [lo2, hi2] = chi2MeanBounds(2, M);
 	for (std::size_t i = 0; i < n; ++i)
 	{
+		in_h += hpos[i] >= lo2 && hpos[i] <= hi2, above_h += hpos[i] > hi2;
 		in_pos += pos[i] >= lo && pos[i] <= hi, in_att += att[i] >= lo && att[i] <= hi;
 		above_pos += pos[i] > hi, above_att += att[i] > hi;
 	}
-	char buf[512];
+	char buf[1024];
 	std::snprintf(buf, sizeof buf,
-				  "| runs | samples | bounds | position NEES inside | above | attitude NEES inside | above |\n"
-				  "|---|---|---|---|---|---|---|\n| %d | %zu | [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | %.1f %% |\n",
-				  M, n, lo, hi, 100.0 * in_pos / n, 100.0 * above_pos / n, 100.0 * in_att / n, 100.0 * above_att / n);
+				  "| runs | samples | bounds (3 dof / 2 dof) | position NEES inside | above | horizontal NEES inside | above | "
+				  "attitude NEES inside | above |\n"
+				  "|---|---|---|---|---|---|---|---|---|\n| %d | %zu | [%.3f, %.3f] / [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | "
+				  "%.1f %% | %.1f %% | %.1f %% |\n",
+				  M, n, lo, hi, lo2, hi2, 100.0 * in_pos / n, 100.0 * above_pos / n, 100.0 * in_h / n, 100.0 * above_h / n,
+				  100.0 * in_att / n, 100.0 * above_att / n);
 	return buf;
 }
 }  // namespace

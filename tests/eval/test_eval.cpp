@@ -52,6 +52,7 @@ TEST(Eval, ErrorsAndNeesOnAHandMadeRun)
 	EXPECT_NEAR(s.pos_err_ned.x(), 1.0, 1e-12);
 	EXPECT_NEAR(s.pos_err_ned.y(), 2.0, 1e-12);
 	EXPECT_NEAR(s.nees_pos, 1.0 / 1 + 4.0 / 4, 1e-9);  // 2
+	EXPECT_NEAR(s.nees_hpos, 2.0, 1e-9);
 	EXPECT_NEAR(s.heading_err_rad, 0.01, 1e-9);
 	EXPECT_NEAR(s.att_err.z(), 0.01, 1e-9);
 	EXPECT_NEAR(s.nees_att, 1.0, 1e-6);
