@@ -90,7 +90,6 @@ void Plot::save(const std::string& png) const
 		cv::line(img, {L, Y(v)}, {L + pw, Y(v)}, grey, 1);
 		cv::putText(img, fmt(v), {8, Y(v) + 5}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
 	}
-	cv::Mat plot_area = img(cv::Rect(L, T, pw + 1, ph + 1));
 	// Bands first (translucent), then lines.
 	for (const auto& s : series_)
 	{
@@ -108,7 +107,6 @@ void Plot::save(const std::string& png) const
 		}
 		cv::addWeighted(overlay, 0.35, img, 0.65, 0, img);
 	}
-	cv::Mat clip_mask;
 	for (const auto& s : series_)
 	{
 		if (s.kind == Series::HLine)
@@ -133,7 +131,6 @@ void Plot::save(const std::string& png) const
 		}
 		flush();
 	}
-	(void)plot_area;
 	// Frame, labels, legend.
 	cv::rectangle(img, {L, T}, {L + pw, T + ph}, black, 1);
 	cv::putText(img, title_, {L, 26}, cv::FONT_HERSHEY_SIMPLEX, 0.6, black, 1, cv::LINE_AA);

@@ -26,19 +26,7 @@ SonarSim::SonarSim(const config::Node& n, sonar::PoleMap poles, uint32_t seed)
 	  shadow_factor_(n.inRange("shadow_factor", 0, 1)),
 	  label_(n.string("label", "SONAR"))
 {
-	geom_.beam_count = n.integer("beam_count");
-	geom_.range_bins = n.integer("range_bins");
-	geom_.aperture_rad = n.inRange("aperture_deg", 1, 359) * kDeg;
-	geom_.min_range_m = n.nonNegative("min_range_m");
-	geom_.max_range_m = n.positive("max_range_m");
-	try
-	{
-		geom_.validate();
-	}
-	catch (const std::exception& e)
-	{
-		n.fail("beam_count", e.what());
-	}
+	geom_ = sonar::PolarGeometry::fromConfig(n);
 	rng_.randomize(seed * 7919u + 101u);
 }
 

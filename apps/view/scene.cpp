@@ -1,5 +1,7 @@
 #include "scene.h"
 
+#include <auvnav/io/csv_table.h>
+
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CEllipsoid3D.h>
 #include <mrpt/opengl/CFBORender.h>
@@ -13,9 +15,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <map>
-#include <sstream>
 #include <stdexcept>
 
 namespace fs = std::filesystem;
@@ -24,52 +23,6 @@ namespace auvnav::view
 {
 namespace
 {
-/** CSV with a header row: column index by name. */
-struct Csv
-{
-	std::string file;
-	std::map<std::string, std::size_t> col;
-	std::ifstream in;
-	int line_no = 1;
-	explicit Csv(const std::string& f) : file(f), in(f)
-	{
-		if (!in) throw std::runtime_error("cannot read " + f);
-		std::string header;
-		if (!std::getline(in, header)) throw std::runtime_error(f + ": empty");
-		std::stringstream ss(header);
-		std::size_t i = 0;
-		for (std::string name; std::getline(ss, name, ',');) col[name] = i++;
-	}
-	std::size_t need(const std::string& name) const
-	{
-		const auto it = col.find(name);
-		if (it == col.end()) throw std::runtime_error(file + ": no column '" + name + "'");
-		return it->second;
-	}
-	bool next(std::vector<std::string>& v)
-	{
-		std::string line;
-		if (!std::getline(in, line)) return false;
-		++line_no;
-		v.clear();
-		std::stringstream ss(line);
-		for (std::string f; std::getline(ss, f, ',');) v.push_back(f);
-		return true;
-	}
-	double num(const std::vector<std::string>& v, std::size_t i) const
-	{
-		if (i >= v.size()) throw std::runtime_error(file + ":" + std::to_string(line_no) + ": too few fields");
-		try
-		{
-			return std::stod(v[i]);
-		}
-		catch (const std::exception&)
-		{
-			throw std::runtime_error(file + ":" + std::to_string(line_no) + ": '" + v[i] + "' is not a number");
-		}
-	}
-};
-
 mrpt::math::TPoint3D enu(const Eigen::Vector3d& ned) { return {ned.y(), ned.x(), -ned.z()}; }
 
 mrpt::opengl::CSetOfLines::Ptr strip(const std::vector<TrackPoint>& pts, const unsigned char rgb[3], float width)
@@ -89,31 +42,32 @@ mrpt::opengl::CSetOfLines::Ptr strip(const std::vector<TrackPoint>& pts, const u
 RunData loadRun(const std::string& dir)
 {
 	RunData run;
-	Csv csv((fs::path(dir) / "states.csv").string());
-	const std::size_t t = csv.need("time_s"), qw = csv.need("qw"), qx = csv.need("qx"), qy = csv.need("qy"),
-					  qz = csv.need("qz"), n = csv.need("body_n_m"), e = csv.need("body_e_m"), d = csv.need("body_d_m"),
-					  sn = csv.need("sigma_pos_n"), se = csv.need("sigma_pos_e"), sd = csv.need("sigma_pos_d");
-	std::vector<std::string> v;
-	while (csv.next(v))
+	io::CsvTable csv((fs::path(dir) / "states.csv").string());
+	const std::size_t t = csv.column("time_s"), qw = csv.column("qw"), qx = csv.column("qx"), qy = csv.column("qy"),
+					  qz = csv.column("qz"), n = csv.column("body_n_m"), e = csv.column("body_e_m"),
+					  d = csv.column("body_d_m"), sn = csv.column("sigma_pos_n"), se = csv.column("sigma_pos_e"),
+					  sd = csv.column("sigma_pos_d");
+	while (csv.next())
 	{
 		TrackPoint p;
-		p.t = csv.num(v, t);
-		p.q_nb = Eigen::Quaterniond(csv.num(v, qw), csv.num(v, qx), csv.num(v, qy), csv.num(v, qz)).normalized();
-		p.p_ned = {csv.num(v, n), csv.num(v, e), csv.num(v, d)};
-		p.sigma_ned = {csv.num(v, sn), csv.num(v, se), csv.num(v, sd)};
-		if (!p.p_ned.allFinite()) throw std::runtime_error(csv.file + ":" + std::to_string(csv.line_no) + ": non-finite position");
+		p.t = csv.number(t);
+		p.q_nb = Eigen::Quaterniond(csv.number(qw), csv.number(qx), csv.number(qy), csv.number(qz)).normalized();
+		p.p_ned = {csv.number(n), csv.number(e), csv.number(d)};
+		p.sigma_ned = {csv.number(sn), csv.number(se), csv.number(sd)};
+		if (!p.p_ned.allFinite()) throw std::runtime_error(csv.where() + ": non-finite position");
 		run.estimate.push_back(p);
 	}
-	if (run.estimate.empty()) throw std::runtime_error(csv.file + ": no states");
+	if (run.estimate.empty()) throw std::runtime_error(csv.file() + ": no states");
 	const fs::path fixes = fs::path(dir) / "position_fixes.csv";
 	if (fs::exists(fixes))
 	{
-		Csv f(fixes.string());
-		const std::size_t ft = f.need("time_s"), fn = f.need("north_m"), fe = f.need("east_m"), fs_ = f.need("status");
-		while (f.next(v))
+		io::CsvTable f(fixes.string());
+		const std::size_t ft = f.column("time_s"), fn = f.column("north_m"), fe = f.column("east_m"),
+						  status = f.column("status");
+		while (f.next())
 		{
-			if (fs_ >= v.size()) throw std::runtime_error(f.file + ":" + std::to_string(f.line_no) + ": too few fields");
-			run.gps.push_back({f.num(v, ft), {f.num(v, fn), f.num(v, fe)}, v[fs_] == "accepted" || v[fs_] == "recovered"});
+			const std::string& st = f.text(status);
+			run.gps.push_back({f.number(ft), {f.number(fn), f.number(fe)}, st == "accepted" || st == "recovered"});
 		}
 	}
 	return run;
@@ -121,19 +75,18 @@ RunData loadRun(const std::string& dir)
 
 std::vector<TrackPoint> loadTruth(const std::string& file)
 {
-	Csv csv(file);
-	const std::size_t t = csv.need("unix_time_s"), n = csv.need("north_m"), e = csv.need("east_m"), d = csv.need("down_m"),
-					  qw = csv.need("qw"), qx = csv.need("qx"), qy = csv.need("qy"), qz = csv.need("qz"),
-					  sb = csv.need("seabed_depth_m");
+	io::CsvTable csv(file);
+	const std::size_t t = csv.column("unix_time_s"), n = csv.column("north_m"), e = csv.column("east_m"),
+					  d = csv.column("down_m"), qw = csv.column("qw"), qx = csv.column("qx"), qy = csv.column("qy"),
+					  qz = csv.column("qz"), sb = csv.column("seabed_depth_m");
 	std::vector<TrackPoint> out;
-	std::vector<std::string> v;
-	while (csv.next(v))
+	while (csv.next())
 	{
 		TrackPoint p;
-		p.t = csv.num(v, t);
-		p.p_ned = {csv.num(v, n), csv.num(v, e), csv.num(v, d)};
-		p.q_nb = Eigen::Quaterniond(csv.num(v, qw), csv.num(v, qx), csv.num(v, qy), csv.num(v, qz)).normalized();
-		p.seabed_depth_m = csv.num(v, sb);
+		p.t = csv.number(t);
+		p.p_ned = {csv.number(n), csv.number(e), csv.number(d)};
+		p.q_nb = Eigen::Quaterniond(csv.number(qw), csv.number(qx), csv.number(qy), csv.number(qz)).normalized();
+		p.seabed_depth_m = csv.number(sb);
 		out.push_back(p);
 	}
 	if (out.empty()) throw std::runtime_error(file + ": no rows");

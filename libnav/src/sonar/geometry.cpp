@@ -15,6 +15,25 @@ void PolarGeometry::validate() const
 	if (!(max_range_m > min_range_m) || !std::isfinite(max_range_m)) bad("max_range_m must exceed min_range_m");
 }
 
+PolarGeometry PolarGeometry::fromConfig(const config::Node& n)
+{
+	PolarGeometry g;
+	g.beam_count = n.integer("beam_count");
+	g.range_bins = n.integer("range_bins");
+	g.aperture_rad = n.inRange("aperture_deg", 1, 359) * M_PI / 180;
+	g.min_range_m = n.nonNegative("min_range_m");
+	g.max_range_m = n.positive("max_range_m");
+	try
+	{
+		g.validate();
+	}
+	catch (const std::exception& e)
+	{
+		n.fail("beam_count", e.what());
+	}
+	return g;
+}
+
 Eigen::Vector2d PolarGeometry::toCartesian(double bearing_rad, double range_m)
 {
 	return {range_m * std::cos(bearing_rad), range_m * std::sin(bearing_rad)};

@@ -20,25 +20,7 @@ SonarConfig SonarConfig::fromConfig(const config::Node& n)
 		c.position_b = m.vector3("position_m", c.position_b);
 		c.mount_yaw_rad = m.inRange("yaw_deg", -180, 180, 0) * kDeg;
 	}
-	if (n.has("geometry"))
-	{
-		const auto g = n.child("geometry");
-		PolarGeometry pg;
-		pg.beam_count = g.integer("beam_count");
-		pg.range_bins = g.integer("range_bins");
-		pg.aperture_rad = g.inRange("aperture_deg", 1, 359) * kDeg;
-		pg.min_range_m = g.nonNegative("min_range_m");
-		pg.max_range_m = g.positive("max_range_m");
-		try
-		{
-			pg.validate();
-		}
-		catch (const std::exception& e)
-		{
-			g.fail("beam_count", e.what());
-		}
-		c.geometry = pg;
-	}
+	if (n.has("geometry")) c.geometry = PolarGeometry::fromConfig(n.child("geometry"));
 	if (n.has("detector"))
 	{
 		const auto d = n.child("detector");

@@ -13,6 +13,8 @@
  *  In a CObservationImage the geometry is carried by the camera model as
  *  linear "polar intrinsics" (see frame.h): column = cx + fx·θ, row = cy + fy·ρ.
  */
+#include <auvnav/config.h>
+
 #include <Eigen/Core>
 #include <string>
 
@@ -28,6 +30,9 @@ struct PolarGeometry
 
 	/** Throws std::invalid_argument naming the field if not usable. */
 	void validate() const;
+	/** From `beam_count, range_bins, aperture_deg, min_range_m, max_range_m`;
+	 *  a bad value fails naming the key. */
+	static PolarGeometry fromConfig(const config::Node& n);
 
 	double bearingStep_rad() const { return aperture_rad / beam_count; }
 	double rangeStep_m() const { return (max_range_m - min_range_m) / (range_bins - 1); }
