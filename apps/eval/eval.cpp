@@ -30,6 +30,21 @@ Eigen::Matrix3d symmetric(double xx, double yy, double zz, double xy, double xz,
 	return P;
 }
 
+/** The truth at time t, a.t <= t <= b.t: linear, the attitude along the
+ *  geodesic. */
+TruthRow interpolate(const TruthRow& a, const TruthRow& b, double t)
+{
+	const double span = b.t - a.t;
+	const double w = span > 0 ? (t - a.t) / span : 0.0;
+	TruthRow r;
+	r.t = t;
+	r.p = a.p + w * (b.p - a.p);
+	r.R = so3::Exp(w * so3::Log(b.R * a.R.transpose())) * a.R;
+	r.current = a.current + w * (b.current - a.current);
+	r.distance = a.distance + w * (b.distance - a.distance);
+	return r;
+}
+
 double mahalanobis(const Eigen::Vector3d& e, const Eigen::Matrix3d& P)
 {
 	const Eigen::LDLT<Eigen::Matrix3d> ldlt(P);
@@ -47,7 +62,7 @@ std::pair<double, double> chi2MeanBounds(int dof, int runs, double probability)
 
 Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s)
 {
-	// Truth first (10 Hz), then the states matched to the nearest truth row.
+	// Truth first (10 Hz), then the states, with the truth interpolated to their times.
 	std::vector<TruthRow> truth;
 	{
 		io::CsvTable c(truth_csv);
@@ -81,9 +96,16 @@ Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, do
 	{
 		const double time = c.number(t);
 		if (time < next_t) continue;
-		while (ti + 1 < truth.size() && std::abs(truth[ti + 1].t - time) <= std::abs(truth[ti].t - time)) ++ti;
-		const TruthRow& tr = truth[ti];
-		if (std::abs(tr.t - time) > 0.2) continue;	// no truth here
+		while (ti + 1 < truth.size() && truth[ti + 1].t <= time) ++ti;
+		// The states are stamped at IMU times, between the truth's rows: at a
+		// 19 deg/s turn the nearest row alone is up to 1 deg off in heading.
+		TruthRow tr;
+		if (truth[ti].t <= time && ti + 1 < truth.size() && truth[ti + 1].t - truth[ti].t <= 0.5)
+			tr = interpolate(truth[ti], truth[ti + 1], time);
+		else if (std::abs(truth[ti].t - time) < 1e-6)
+			tr = truth[ti];
+		else
+			continue;  // no truth here
 		next_t = time + every_s;
 		Sample s;
 		s.t = time;

@@ -15,7 +15,9 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	  sigma_m_(cfg.positive("sigma_m", 3.0)),
 	  scale_by_hdop_(cfg.boolean("scale_by_hdop", false)),
 	  gate_probability_(gateProbabilityFrom(cfg)),
-	  min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0))
+	  min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0)),
+	  correlated_sigma_m_(cfg.inRange("correlated_sigma_m", 0.0, 1000.0, 0.0)),
+	  correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
@@ -76,16 +78,28 @@ PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 		why = "within min_interval_s of the last fix used";
 		return PrepareStatus::Skip;
 	}
+	const double since_last_s = t_obs - last_used_s_;
 	last_used_s_ = t_obs;
 	double sigma = sigma_m_;
 	if (scale_by_hdop_ && std::isfinite(f.HDOP) && f.HDOP > 0) sigma *= static_cast<double>(f.HDOP);
 
 	Measurement m;
 	m.z = p_n.head<2>();
-	m.R = Eigen::Matrix2d::Identity() * (sigma * sigma);
+	m.R = Eigen::Matrix2d::Identity() * (sigma * sigma + correlatedVariance(since_last_s));
 	m.label = "position";
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;
+}
+
+double GpsModel::correlatedVariance(double since_last_s) const
+{
+	if (correlated_sigma_m_ <= 0) return 0.0;
+	// A first-order Gauss-Markov error sampled every Δt has lag-one correlation
+	// ρ = exp(-Δt/τ). A filter that treats the samples as independent averages
+	// them; the variance of such an average is (1+ρ)/(1-ρ) times what it
+	// assumes, so that is what each fix is given (effective sample size).
+	const double rho = std::exp(-std::max(since_last_s, 0.0) / correlation_time_s_);
+	return correlated_sigma_m_ * correlated_sigma_m_ * (1 + rho) / std::max(1 - rho, 1e-6);
 }
 
 bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,

@@ -11,7 +11,12 @@
  *      z = antenna north, east in the navigation frame (2) [m]
  *      h = (p_n + R_nb (r_a − r_imu)).head<2>()
  *
- *  Noise (sigma_m)² I₂, optionally scaled by the fix's HDOP. Observations
+ *  Noise (sigma_m)² I₂ (the white part, optionally scaled by the fix's HDOP)
+ *  plus, when correlated_sigma_m > 0, the slowly varying part (multipath,
+ *  atmosphere; Gauss-Markov with correlation_time_s) inflated by (1+ρ)/(1−ρ),
+ *  ρ = exp(−Δt/τ), Δt the time since the last fix used: consecutive fixes
+ *  share that error, and the filter, which takes them as independent, must
+ *  not average it down faster than it really averages out. Observations
  *  without a GGA message or without a fix (fix_quality 0) are skipped; gross
  *  outliers fail the χ² gate (gate_probability).
  */
@@ -40,12 +45,18 @@ class GpsModel final : public SafeMeasurementModel
 				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
    private:
+	/** Variance [m²] of the correlated error for a fix `since_last_s` after
+	 *  the last one used (0 when correlated_sigma_m is 0). */
+	double correlatedVariance(double since_last_s) const;
+
 	std::string label_;
 	Eigen::Vector3d position_b_;
 	double sigma_m_ = 3.0;
 	bool scale_by_hdop_ = false;
 	double gate_probability_ = 0.999;
 	double min_interval_s_ = 0;	  // fixes closer than this to the last one used are skipped
+	double correlated_sigma_m_ = 0;	  // Gauss-Markov part of the error, per axis [m]
+	double correlation_time_s_ = 60;  // its time constant [s]
 	double last_used_s_ = -1e300;
 };
 }  // namespace auvnav::plugins

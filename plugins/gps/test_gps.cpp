@@ -287,3 +287,29 @@ TEST(Gps, MinIntervalUsesOneFixPerCorrelationTime)
 	EXPECT_EQ(skipped, 96);
 	EXPECT_THROW(GpsModel(pt::configText("min_interval_s: -1\n"), "GPS"), config::ConfigError);
 }
+
+TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
+{
+	at::TestContext tc;
+	GpsModel model(pt::configText("sigma_m: 1.0\ncorrelated_sigma_m: 1.5\ncorrelation_time_s: 60\n"), "GPS");
+	auto fixAt = [&](double t) {
+		auto o = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
+		o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + t);
+		return prepareOne(model, *o, tc.ctx()).R;
+	};
+	// First fix: nothing to share an error with: 1 + 1.5².
+	EXPECT_NEAR(fixAt(0)(0, 0), 1 + 2.25, 1e-9);
+	// 30 s later: ρ = exp(-0.5), variance 1 + 2.25 (1+ρ)/(1-ρ) = 10.18 (σ 3.19 m).
+	const double rho = std::exp(-0.5);
+	const Eigen::MatrixXd R30 = fixAt(30);
+	EXPECT_NEAR(R30(1, 1), 1 + 2.25 * (1 + rho) / (1 - rho), 1e-9);
+	EXPECT_NEAR(std::sqrt(R30(0, 0)), 3.19, 0.01);
+	EXPECT_EQ(R30(0, 1), 0.0);
+	// After a 20-minute dive the errors are unrelated again.
+	EXPECT_NEAR(fixAt(1230)(0, 0), 1 + 2.25, 1e-6);
+	// Off by default: sigma_m alone.
+	GpsModel plain(pt::configText("sigma_m: 2.0\n"), "GPS");
+	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0, 1e-12);
+	EXPECT_THROW(GpsModel(pt::configText("correlated_sigma_m: -1\n"), "GPS"), config::ConfigError);
+	EXPECT_THROW(GpsModel(pt::configText("correlation_time_s: 0\n"), "GPS"), config::ConfigError);
+}

@@ -182,3 +182,65 @@ TEST(Pressure, NanMeasurementNeverChangesTheState)
 	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
 	EXPECT_TRUE(ukf.covariance() == P_before);
 }
+
+TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	const double pa_per_m = 1025 * PressureModel::kNominalGravity;
+	const double floor_m = 60 / pa_per_m;  // ~6 mm
+	auto run = [&](const char* cfg, double& sigma_d, double& first_err) {
+		PressureModel model(pt::configText(cfg), "PRESSURE");
+		NavState truth;
+		truth.g = 9.81;
+		truth.p_n = Eigen::Vector3d(20, 30, 10);
+		NavState x0 = truth;
+		x0.p_n.z() = 12;
+		// Gravity and tilt known well: otherwise their share of the depth
+		// sigma (10 m x δg/g, the lever arm) would hide the averaging.
+		Covariance P0 = at::TypicalCovariance();
+		P0.row(idx::gravity).setZero();
+		P0.col(idx::gravity).setZero();
+		P0(idx::gravity, idx::gravity) = 1e-14;
+		P0.topRows<3>().setZero();
+		P0.leftCols<3>().setZero();
+		P0.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 1e-8;
+		ManifoldUkf ukf(ProcessModel{}, UtParams{});
+		ukf.initialize(x0, P0);
+		tc.ctx().covariance = &ukf.covariance();
+		for (int k = 0; k < 200; ++k)
+		{
+			const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
+			ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
+			ASSERT_EQ(res.updates.at(0).status, UpdateStatus::Accepted) << res.updates[0].why;
+			if (k == 0) first_err = std::abs(ukf.state().p_n.z() - truth.p_n.z());
+		}
+		sigma_d = std::sqrt(ukf.covariance()(idx::pos + 2, idx::pos + 2));
+		tc.ctx().covariance = nullptr;
+	};
+	double with_floor = 0, without = 0, err_with = 0, err_without = 0;
+	run("sigma_pa: 30\nbias_sigma_pa: 60\n", with_floor, err_with);
+	run("sigma_pa: 30\n", without, err_without);
+	// 200 readings average the noise down to 30/sqrt(200) Pa (0.2 mm) without
+	// the floor; with it the depth sigma stays at the bias (+ the sensor
+	// lever arm's share of the attitude sigma, which the floor ignores).
+	EXPECT_LT(without, 0.25 * floor_m);
+	EXPECT_GE(with_floor, floor_m * (1 - 1e-3)) << with_floor << " m";
+	EXPECT_LT(with_floor, floor_m * 1.05) << with_floor << " m";
+	// The first reading still removes the 2 m depth error.
+	EXPECT_LT(err_with, 0.05);
+	EXPECT_LT(err_without, 0.05);
+	// Below the floor an update changes (almost) nothing; without a covariance
+	// in the context the noise is sigma_pa alone.
+	PressureModel model(pt::configText("sigma_pa: 30\nbias_sigma_pa: 60\n"), "PRESSURE");
+	std::vector<Measurement> out;
+	std::string why;
+	ASSERT_EQ(model.prepare(*pressureObs(2e5), tc.ctx(), out, why), PrepareStatus::Ok);
+	EXPECT_DOUBLE_EQ(out[0].R(0, 0), 900);
+	Covariance P = at::TypicalCovariance();
+	P(idx::pos + 2, idx::pos + 2) = 0.5 * floor_m * floor_m;
+	tc.ctx().covariance = &P;
+	ASSERT_EQ(model.prepare(*pressureObs(2e5), tc.ctx(), out, why), PrepareStatus::Ok);
+	EXPECT_GT(out[0].R(0, 0), 1e5 * 3600 * 0.5);
+	EXPECT_THROW(PressureModel(pt::configText("bias_sigma_pa: -1"), "P"), config::ConfigError);
+}

@@ -75,6 +75,50 @@ TEST(Eval, ErrorsAndNeesOnAHandMadeRun)
 	}
 }
 
+TEST(Eval, TruthIsInterpolatedToTheStateTimes)
+{
+	// The truth turns at 0.2 rad/s and moves 1 m/s north, sampled at 10 Hz;
+	// the states sit between its rows, exactly on the true trajectory.
+	const fs::path dir = fs::temp_directory_path() / "auvnav_eval_interp_test";
+	fs::create_directories(dir);
+	auto yawAt = [](double t) { return 0.2 * (t - 1000); };
+	{
+		std::ofstream t(dir / "truth.csv");
+		t.precision(17);
+		t << "unix_time_s,north_m,east_m,down_m,qw,qx,qy,qz,current_n_mps,current_e_mps,distance_m\n";
+		for (int k = 0; k <= 50; ++k)
+		{
+			const double tt = 1000 + 0.1 * k, h = 0.5 * yawAt(tt);
+			t << tt << "," << tt - 1000 << ",0,5," << std::cos(h) << ",0,0," << std::sin(h) << ",0,0," << tt - 1000
+			  << "\n";
+		}
+	}
+	{
+		std::ofstream s(dir / "states.csv");
+		s.precision(17);
+		s << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d,sigma_att_n,sigma_att_e,"
+			 "sigma_att_d,cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed,current_n,current_e,"
+			 "sigma_current_n,sigma_current_e,Dl_ln_xx,Dl_ln_yy,Dq_ln_xx,Dq_ln_yy,sigma_Dl_ln_xx,sigma_Dl_ln_yy,"
+			 "sigma_Dq_ln_xx,sigma_Dq_ln_yy\n";
+		for (double t : {1000.02, 1001.37, 1003.05, 1004.99})
+		{
+			const double h = 0.5 * yawAt(t);
+			s << t << "," << std::cos(h) << ",0,0," << std::sin(h) << "," << t - 1000
+			  << ",0,5,1,1,1,0.01,0.01,0.01,0,0,0,0,0,0,0,0,0.01,0.01,0,0,0,0,0.1,0.1,0.1,0.1\n";
+		}
+	}
+	const Evaluation ev = evaluate(dir.string(), (dir / "truth.csv").string(), 0.0);
+	ASSERT_EQ(ev.samples.size(), 4u);
+	for (const Sample& s : ev.samples)
+	{
+		// The nearest row would be up to 0.05 s x 0.2 rad/s = 0.01 rad and 5 cm off.
+		EXPECT_LT(std::abs(s.heading_err_rad), 1e-9) << s.t;
+		EXPECT_LT(s.att_err.norm(), 1e-9) << s.t;
+		EXPECT_LT(s.pos_err_ned.norm(), 1e-9) << s.t;
+		EXPECT_NEAR(s.distance_m, s.t - 1000, 1e-9);
+	}
+}
+
 TEST(Eval, PlotDrawsItsSeries)
 {
 	Plot p("test", "x", "y", 400, 300);
