@@ -165,7 +165,8 @@ std::string singleRun(const Evaluation& ev, const fs::path& out, std::vector<std
 }
 
 /** Averaged NEES over runs (samples matched by index from each run's start). */
-std::string monteCarlo(const std::vector<Evaluation>& evs, const fs::path& out, std::vector<std::string>& figures)
+std::string monteCarlo(const std::vector<Evaluation>& evs, double settle_s, const fs::path& out,
+					   std::vector<std::string>& figures)
 {
 	std::size_t n = evs.front().samples.size();
 	for (const auto& e : evs) n = std::min(n, e.samples.size());
@@ -184,25 +185,44 @@ std::string monteCarlo(const std::vector<Evaluation>& evs, const fs::path& out, 
 	p.line(t, hpos, kGreen, "horizontal (2 dof)", 1);
 	p.hline(lo, kRed, "95 % bounds (3 dof)");
 	p.hline(hi, kRed, "");
+	{
+		const auto [l2, h2] = chi2MeanBounds(2, M);
+		p.hline(l2, kGreen, "95 % bounds (2 dof)");
+		p.hline(h2, kGreen, "");
+	}
 	p.yRange(0, 3 * hi);
 	p.save((out / "nees_monte_carlo.png").string());
 	figures.push_back("nees_monte_carlo.png");
-	std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0, in_h = 0, above_h = 0;
 	const auto [lo2, hi2] = chi2MeanBounds(2, M);
-	for (std::size_t i = 0; i < n; ++i)
+	// One row for the whole run and, with --settle, one from that time on
+	// (after the initial alignment).
+	auto row = [&](const char* from, std::size_t first) {
+		std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0, in_h = 0, above_h = 0;
+		for (std::size_t i = first; i < n; ++i)
+		{
+			in_h += hpos[i] >= lo2 && hpos[i] <= hi2, above_h += hpos[i] > hi2;
+			in_pos += pos[i] >= lo && pos[i] <= hi, in_att += att[i] >= lo && att[i] <= hi;
+			above_pos += pos[i] > hi, above_att += att[i] > hi;
+		}
+		const double k = std::max<double>(1.0, static_cast<double>(n - first));
+		char buf[512];
+		std::snprintf(buf, sizeof buf, "| %d | %s | %zu | [%.3f, %.3f] / [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% |\n",
+					  M, from, n - first, lo, hi, lo2, hi2, 100.0 * in_pos / k, 100.0 * above_pos / k, 100.0 * in_h / k,
+					  100.0 * above_h / k, 100.0 * in_att / k, 100.0 * above_att / k);
+		return std::string(buf);
+	};
+	std::string buf =
+		"| runs | from | samples | bounds (3 dof / 2 dof) | position NEES inside | above | horizontal NEES inside | above | "
+		"attitude NEES inside | above |\n|---|---|---|---|---|---|---|---|---|---|\n" +
+		row("start", 0);
+	if (settle_s > 0)
 	{
-		in_h += hpos[i] >= lo2 && hpos[i] <= hi2, above_h += hpos[i] > hi2;
-		in_pos += pos[i] >= lo && pos[i] <= hi, in_att += att[i] >= lo && att[i] <= hi;
-		above_pos += pos[i] > hi, above_att += att[i] > hi;
+		std::size_t first = 0;
+		while (first < n && t[first] * 60 < settle_s) ++first;
+		char from[64];
+		std::snprintf(from, sizeof from, "%.0f s", settle_s);
+		buf += row(from, first);
 	}
-	char buf[1024];
-	std::snprintf(buf, sizeof buf,
-				  "| runs | samples | bounds (3 dof / 2 dof) | position NEES inside | above | horizontal NEES inside | above | "
-				  "attitude NEES inside | above |\n"
-				  "|---|---|---|---|---|---|---|---|---|\n| %d | %zu | [%.3f, %.3f] / [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | "
-				  "%.1f %% | %.1f %% | %.1f %% |\n",
-				  M, n, lo, hi, lo2, hi2, 100.0 * in_pos / n, 100.0 * above_pos / n, 100.0 * in_h / n, 100.0 * above_h / n,
-				  100.0 * in_att / n, 100.0 * above_att / n);
 	return buf;
 }
 }  // namespace
@@ -215,6 +235,7 @@ int main(int argc, char** argv)
 	TCLAP::MultiArg<std::string> truths("t", "truth", "ground_truth.csv, one per --run (or one for all)", true, "FILE", cmd);
 	TCLAP::ValueArg<std::string> out("o", "out", "Output folder", true, "", "DIR", cmd);
 	TCLAP::ValueArg<double> every("", "every", "Seconds between evaluated samples", false, 1.0, "S", cmd);
+	TCLAP::ValueArg<double> settle("", "settle", "Monte Carlo: also report the NEES fractions from S seconds after the start (after the initial alignment)", false, 0.0, "S", cmd);
 	try
 	{
 		if (!cmd.parse(argc, argv)) return 0;
@@ -231,13 +252,14 @@ int main(int argc, char** argv)
 		if (tr.size() != r.size() && tr.size() != 1)
 			throw std::runtime_error("give one --truth per --run, or one for all");
 		if (!(every.getValue() > 0)) throw std::runtime_error("--every must be positive");
+		if (!(settle.getValue() >= 0)) throw std::runtime_error("--settle must be zero or positive");
 		fs::create_directories(out.getValue());
 		std::vector<Evaluation> evs;
 		for (std::size_t i = 0; i < r.size(); ++i)
 			evs.push_back(evaluate(r[i], tr.size() == 1 ? tr[0] : tr[i], every.getValue()));
 		std::vector<std::string> figures;
 		std::string md = "# Evaluation of " + r.front() + "\n\n" + singleRun(evs.front(), out.getValue(), figures);
-		if (evs.size() > 1) md += "\n## Monte Carlo\n\n" + monteCarlo(evs, out.getValue(), figures);
+		if (evs.size() > 1) md += "\n## Monte Carlo\n\n" + monteCarlo(evs, settle.getValue(), out.getValue(), figures);
 		md += "\nFigures:";
 		for (const auto& f : figures) md += " " + f;
 		md += "\n";
