@@ -92,6 +92,8 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 						   delta.segment<2>(idx::current_vehicle);
 	y.current_far_ne = (dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>() +
 					   delta.segment<2>(idx::current_far);
+	// The accelerometer bias is stored in IMU axes but perturbed in NED axes.
+	y.b_a = b_a + y.R_nb.transpose() * delta.segment<3>(idx::acc_bias);
 	return y;
 }
 
@@ -107,6 +109,7 @@ TangentVector NavState::boxminus(const NavState& y) const
 		current_vehicle_ne - (dR * Eigen::Vector3d(y.current_vehicle_ne.x(), y.current_vehicle_ne.y(), 0)).head<2>();
 	d.segment<2>(idx::current_far) =
 		current_far_ne - (dR * Eigen::Vector3d(y.current_far_ne.x(), y.current_far_ne.y(), 0)).head<2>();
+	d.segment<3>(idx::acc_bias) = R_nb * (b_a - y.b_a);
 	return d;
 }
 
@@ -141,7 +144,7 @@ const std::vector<std::string>& tangentNames()
 		add3("gyro_bias_", "x", "y", "z");
 		add3("acc_", "n", "e", "d");
 		n.push_back("gravity");
-		add3("acc_bias_", "x", "y", "z");
+		add3("acc_bias_", "n", "e", "d");  // tangent in NED axes (state.h)
 		add3("vel_", "n", "e", "d");
 		add3("pos_", "n", "e", "d");
 		n.push_back("current_n");

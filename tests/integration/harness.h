@@ -25,6 +25,7 @@ struct EstimateRow
 	Eigen::Matrix3d R_nb;
 	Eigen::Matrix2d P_ne;	   //!< horizontal position covariance
 	double heading_sigma = 0;  //!< [rad]
+	Eigen::Matrix3d P_att;	   //!< attitude covariance (NED axes) [rad²]
 };
 
 struct RunResult

@@ -287,7 +287,12 @@ TEST(Unscented, PredictionStepMatchesMonteCarlo)
 				"uniform weights: mean %.2e sd, cov %.2e\n",
 				shift, dm, dc, bm, bc);
 	EXPECT_GT(shift, 0.05);	 // ≫ the Monte Carlo error of ~2e-3 sd
-	constexpr double kMeanTol = 0.015, kCovTol = 0.04;
+	// The accelerometer-bias coordinates are NED (state.h): a bias fixed in
+	// the body turns in them with the body's uncertain turn (here 0.1 rad/s of
+	// gyro-bias σ over 1 s), another such higher-order term: 0.059 of the
+	// (acc_bias_d, acc_bias_n) correlation (0.04 before, with IMU-axis
+	// coordinates); uniform weights: 0.91.
+	constexpr double kMeanTol = 0.015, kCovTol = 0.07;
 	EXPECT_LT(dm, kMeanTol);
 	EXPECT_LT(dc, kCovTol);
 	EXPECT_GT(bm, kMeanTol);

@@ -13,7 +13,8 @@
  *    3  gyro bias b_w (3)              [rad/s], IMU axes
  *    6  acceleration a_n (3)           [m/s²] of the IMU point, NED
  *    9  gravity g (1)                  [m/s²], magnitude, down
- *   10  accelerometer bias b_a (3)     [m/s²], IMU axes
+ *   10  accelerometer bias b_a (3)     [m/s²], stored in IMU axes, perturbed
+ *                                      in NED axes: b_a ⊞ δ = b_a + R_nbᵀ δ
  *   13  velocity v_n (3)               [m/s] of the IMU point, NED
  *   16  position p_n (3)               [m] of the IMU point, NED tangent frame
  *   19  water current at the vehicle (2)     [m/s] N, E
@@ -91,7 +92,11 @@ struct NavState
 	 *  turned vector); everything else additive. Rotating these nav-frame
 	 *  vectors keeps a large heading uncertainty from turning body-frame
 	 *  measurements (DVL, accelerometer, model aiding, ADCP) into spurious
-	 *  heading information. */
+	 *  heading information. The accelerometer bias, a body-fixed vector, is
+	 *  perturbed in NED axes (b_a ← b_a + R_newᵀ δ_ba): tilt and bias are
+	 *  told apart only by turning the body, and with IMU-axis coordinates a
+	 *  changing heading estimate looked like such a turn, so roll and bias
+	 *  separated spuriously while the heading converged. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
 	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. */
 	TangentVector boxminus(const NavState& y) const;
