@@ -51,8 +51,9 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	fixes_ << "time_s,label,north_m,east_m,status\n";
 	tum_ << "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)\n";
 	const auto& names = tangentNames();
+	const auto& stored = storedNames();
 	csv_ << "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
-	for (std::size_t i = 3; i < names.size(); ++i) csv_ << ',' << names[i];
+	for (std::size_t i = 3; i < stored.size(); ++i) csv_ << ',' << stored[i];
 	csv_ << ",body_n_m,body_e_m,body_d_m";
 	for (const auto& n : names) csv_ << ",sigma_" << n;
 	// Off-diagonal covariances of position and attitude (for NEES in auvnav-eval).

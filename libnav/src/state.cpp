@@ -161,4 +161,16 @@ const std::vector<std::string>& tangentNames()
 	return names;
 }
 
+const std::vector<std::string>& storedNames()
+{
+	static const std::vector<std::string> names = [] {
+		std::vector<std::string> n = tangentNames();
+		n[idx::acc_bias] = "acc_bias_x";
+		n[idx::acc_bias + 1] = "acc_bias_y";
+		n[idx::acc_bias + 2] = "acc_bias_z";
+		return n;
+	}();
+	return names;
+}
+
 }  // namespace auvnav

@@ -250,4 +250,32 @@ TEST(NavStateManifold, EuclideanRoundTripAndLayout)
 	EXPECT_EQ(names[idx::att + 2], "att_d");
 	EXPECT_EQ(names[idx::gravity], "gravity");
 	EXPECT_EQ(names[idx::dim - 1], "Dq_ypsi");
+
+	// The stored values differ from the tangent coordinates only in the
+	// accelerometer bias's axes.
+	const auto& stored = storedNames();
+	ASSERT_EQ(stored.size(), names.size());
+	for (int i = 0; i < idx::dim; ++i)
+		if (i < idx::acc_bias || i >= idx::acc_bias + 3) EXPECT_EQ(stored[i], names[i]) << i;
+	EXPECT_EQ(names[idx::acc_bias], "acc_bias_n");
+	EXPECT_EQ(stored[idx::acc_bias], "acc_bias_x");
+	EXPECT_EQ(stored[idx::acc_bias + 2], "acc_bias_z");
+}
+
+TEST(NavStateManifold, AccelerometerBiasIsPerturbedInNedAxes)
+{
+	// Body yawed 90°: x forward points east, y right points south, z down.
+	NavState x = test::makeState(0.3);
+	x.R_nb = so3::Exp(Eigen::Vector3d(0, 0, M_PI / 2));
+	TangentVector d = TangentVector::Zero();
+	d[idx::acc_bias + 1] = 1e-3;  // east
+	const NavState y = x.boxplus(d);
+	EXPECT_NEAR(y.b_a.x() - x.b_a.x(), 1e-3, 1e-15);  // along body x
+	EXPECT_NEAR(y.b_a.y() - x.b_a.y(), 0, 1e-15);
+	EXPECT_NEAR(y.b_a.z() - x.b_a.z(), 0, 1e-15);
+	EXPECT_NEAR(y.boxminus(x)[idx::acc_bias + 1], 1e-3, 1e-15);
+	// A heading change alone leaves the bias (a body-fixed vector) as it is.
+	TangentVector h = TangentVector::Zero();
+	h[idx::att + 2] = 0.5;
+	EXPECT_EQ(x.boxplus(h).b_a, x.b_a);
 }

@@ -116,5 +116,9 @@ Eigen::Matrix<double, 2, 3> storedSub(const Eigen::Matrix<double, 2, 3>& physica
 
 /** Names of the 43 tangent coordinates, for CSV headers ("att_n", "vel_e", …). */
 const std::vector<std::string>& tangentNames();
+/** Names of euclidean()'s entries (the stored values): tangentNames() except
+ *  the accelerometer bias, stored in IMU axes ("acc_bias_x" …) but perturbed
+ *  in NED axes ("acc_bias_n" …). */
+const std::vector<std::string>& storedNames();
 
 }  // namespace auvnav
