@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace auvnav::sim
 {
@@ -35,7 +36,18 @@ double gaussMarkovSigmaForAllanFloor(double random_walk, double bias_instability
 {
 	if (bias_instability <= 0) return 0;
 	if (allanFloor(random_walk, 0, tau_c) >= bias_instability) return 0;
-	double lo = 0, hi = 10 * bias_instability;
+	// The floor grows with σ; bracket it first. With little white noise the
+	// σ needed can be many times the floor (about B²√(1.5τc)/(2N)): a fixed
+	// bracket of 10·B once gave a silently wrong 5 °/h for ARW 0.012 °/√h,
+	// B 0.5 °/h, τc 3000 s (11.6 °/h is right).
+	double lo = 0, hi = bias_instability;
+	while (allanFloor(random_walk, hi, tau_c) < bias_instability)
+	{
+		lo = hi;
+		hi *= 2;
+		if (hi > 1e6 * bias_instability)
+			throw std::invalid_argument("bias instability unattainable with this random walk and correlation time");
+	}
 	for (int i = 0; i < 60; ++i)
 	{
 		const double mid = 0.5 * (lo + hi);

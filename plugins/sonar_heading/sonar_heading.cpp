@@ -35,7 +35,7 @@ SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string&
 	const std::string mode = cfg.string("mode", "validate");
 	if (mode != "validate" && mode != "update") cfg.fail("mode", "expected 'validate' or 'update', got '" + mode + "'");
 	validate_only_ = mode == "validate";
-	sigma_floor_rad_ = cfg.inRange("bearing_sigma_floor_deg", 0, 10, 0.2) * kDeg;
+	sigma_floor_rad_ = cfg.inRange("bearing_sigma_floor_deg", 0, 10, 0.5) * kDeg;
 	gate_probability_ = cfg.inRange("gate_probability", 1e-6, 1.0, gate_probability_);
 	if (cfg.has("validation_csv"))
 	{

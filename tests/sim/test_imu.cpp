@@ -86,13 +86,21 @@ TEST(ImuAtRest, MeanSpecificForceIsNormalGravityAndMeanRateIsEarthRate)
 
 TEST(ImuNoise, GaussMarkovSigmaPutsTheAllanFloorAtTheBiasInstability)
 {
-	const double arw = 0.012 * kDeg / 60, bi = 0.05 * kDeg / 3600, tau_c = 3000;
-	const double s = gaussMarkovSigmaForAllanFloor(arw, bi, tau_c);
-	ASSERT_GT(s, 0);
-	double floor = INFINITY;
-	for (double T = 0.01; T <= tau_c; T *= 1.01)
-		floor = std::min(floor, std::sqrt(arw * arw / T + gaussMarkovAllanVariance(s, tau_c, T)));
-	EXPECT_NEAR(floor, bi, 0.01 * bi);
+	const double tau_c = 3000;
+	// KVH-1750 figures, and a floor 10x higher with the same white noise,
+	// where σ is ~100x the floor's (B²√(1.5τc)/(2N): 0.116 and 11.6 °/h).
+	for (const double bi_deg_h : {0.05, 0.5})
+	{
+		const double arw = 0.012 * kDeg / 60, bi = bi_deg_h * kDeg / 3600;
+		const double s = gaussMarkovSigmaForAllanFloor(arw, bi, tau_c);
+		ASSERT_GT(s, 0);
+		double floor = INFINITY;
+		for (double T = 0.01; T <= tau_c; T *= 1.01)
+			floor = std::min(floor, std::sqrt(arw * arw / T + gaussMarkovAllanVariance(s, tau_c, T)));
+		EXPECT_NEAR(floor, bi, 0.01 * bi) << bi_deg_h;
+		const double approx = bi * bi * std::sqrt(1.5 * tau_c) / (2 * arw);
+		EXPECT_NEAR(s, approx, 0.1 * approx) << bi_deg_h;
+	}
 	// AVAR limits: rate random walk q T / 3 and white 2σ²τc/T.
 	EXPECT_NEAR(gaussMarkovAllanVariance(1.0, 100, 0.1), 2.0 / 100 * 0.1 / 3, 1e-6);
 	EXPECT_NEAR(gaussMarkovAllanVariance(1.0, 100, 1e6), 2.0 * 100 / 1e6, 1e-7);
