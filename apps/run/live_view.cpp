@@ -19,6 +19,7 @@ struct LiveView::Impl
 	view::RunData data;
 	double last_t = -1e300;
 	std::chrono::steady_clock::time_point last_draw{};
+	bool user_camera = false;  //!< set after the final framing in hold()
 	explicit Impl(const std::string& title) : window(title, 1280, 800) {}
 };
 
@@ -59,12 +60,16 @@ void LiveView::refresh(bool force)
 	auto scene = view::buildScene(impl_->data);
 	impl_->window.get3DSceneAndLock() = scene;
 	impl_->window.unlockAccess3DScene();
+	// Follow the growing trajectory while the run lasts; the camera is the
+	// user's once the run has ended (hold).
+	if (!impl_->user_camera) view::frameWindowLikeScene(impl_->window, *scene);
 	impl_->window.forceRepaint();
 }
 
 void LiveView::hold(double seconds)
 {
 	refresh(true);
+	impl_->user_camera = true;
 	if (seconds > 0)
 	{
 		const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);

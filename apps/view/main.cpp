@@ -70,6 +70,7 @@ int main(int argc, char** argv)
 			mrpt::gui::CDisplayWindow3D win("auvnav-view: " + run.getValue(), 1280, 800);
 			win.get3DSceneAndLock() = scene;
 			win.unlockAccess3DScene();
+			auvnav::view::frameWindowLikeScene(win, *scene);
 			win.forceRepaint();
 			if (window_s.getValue() > 0)
 			{

@@ -57,6 +57,18 @@ inline constexpr unsigned char kTruthRgb[3] = {20, 200, 60};
 
 mrpt::opengl::COpenGLScene::Ptr buildScene(const RunData& run, const SceneOptions& opt = {});
 
+/** Points an interactive window's camera (mrpt::gui::CDisplayWindow3D keeps
+ *  its own, mouse-driven one) the way buildScene framed the scene. */
+template <class Window>
+void frameWindowLikeScene(Window& window, const mrpt::opengl::COpenGLScene& scene)
+{
+	const auto& cam = scene.getViewport()->getCamera();
+	window.setCameraPointingToPoint(cam.getPointingAtX(), cam.getPointingAtY(), cam.getPointingAtZ());
+	window.setCameraZoom(cam.getZoomDistance());
+	window.setCameraAzimuthDeg(cam.getAzimuthDegrees());
+	window.setCameraElevationDeg(cam.getElevationDegrees());
+}
+
 /** Renders `scene` off screen (EGL, no display server) into a PNG. Throws on failure. */
 void renderToPng(const mrpt::opengl::COpenGLScene& scene, const std::string& png, unsigned width, unsigned height);
 
