@@ -105,7 +105,11 @@ void Plot::save(const std::string& png) const
 												 {X(s.x[i - 1]), Y(s.y2[i - 1])}};
 			cv::fillConvexPoly(overlay, quad, s.bgr, cv::LINE_AA);
 		}
-		cv::addWeighted(overlay, 0.35, img, 0.65, 0, img);
+		// Blend inside the frame only: a band beyond a fixed y range (the
+		// heading's σ in the first minute) must not spill over the labels.
+		const cv::Rect frame(L, T, pw + 1, ph + 1);
+		cv::Mat inside = img(frame);
+		cv::addWeighted(overlay(frame), 0.35, inside, 0.65, 0, inside);
 	}
 	for (const auto& s : series_)
 	{

@@ -136,3 +136,24 @@ TEST(Eval, PlotDrawsItsSeries)
 		}
 	EXPECT_GT(red, 300);
 }
+
+TEST(Eval, BandBeyondAFixedRangeStaysInsideTheFrame)
+{
+	// A band ten times the fixed y range (the heading's σ in the first
+	// minute): it fills the frame and leaves the margins white.
+	Plot p("test", "x", "y", 400, 300);
+	p.band({0, 1, 2}, {-10, -10, -10}, {10, 10, 10}, cv::Scalar(255, 0, 0), "band");
+	p.yRange(-1, 1);
+	const fs::path png = fs::temp_directory_path() / "auvnav_eval_band.png";
+	p.save(png.string());
+	const cv::Mat img = cv::imread(png.string());
+	ASSERT_FALSE(img.empty());
+	auto tinted = [&](int x, int y) {
+		const auto& px = img.at<cv::Vec3b>(y, x);
+		return px[0] > px[2] + 40;	// blue over white at 35 %: (255, 166, 166)
+	};
+	EXPECT_TRUE(tinted(200, 150)) << "inside the frame";
+	EXPECT_FALSE(tinted(40, 150)) << "left margin (tick labels)";
+	EXPECT_FALSE(tinted(200, 10)) << "top margin (title)";
+	EXPECT_FALSE(tinted(200, 290)) << "bottom margin (axis label)";
+}
