@@ -36,7 +36,6 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 		r.R_nb = n.filter().state().R_nb;
 		const auto& P = n.filter().covariance();
 		r.P_ne = P.block<2, 2>(idx::pos, idx::pos);
-		r.heading_sigma = std::sqrt(P(idx::att + 2, idx::att + 2));
 		r.P_att = P.block<3, 3>(idx::att, idx::att);
 		res.rows.push_back(r);
 	};

@@ -6,6 +6,7 @@
 #include <auvnav/navigator.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -24,8 +25,8 @@ struct EstimateRow
 	Eigen::Vector3d p_n;	   //!< body origin
 	Eigen::Matrix3d R_nb;
 	Eigen::Matrix2d P_ne;	   //!< horizontal position covariance
-	double heading_sigma = 0;  //!< [rad]
 	Eigen::Matrix3d P_att;	   //!< attitude covariance (NED axes) [rad²]
+	double headingSigma() const { return std::sqrt(P_att(2, 2)); }	//!< [rad]
 };
 
 struct RunResult

@@ -125,13 +125,12 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg)
 	bool at15 = false;
 	for (const auto& r : run.rows)
 	{
-		const double err =
-			wrapPi(yawOf(r.R_nb) - yawOf(truthAt(truth, r.t_unix).q_nb.toRotationMatrix()));
-		if (r.t_unix - t0 > 60) o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.heading_sigma);
+		const Eigen::Matrix3d R_true = truthAt(truth, r.t_unix).q_nb.toRotationMatrix();
+		const double err = wrapPi(yawOf(r.R_nb) - yawOf(R_true));
+		if (r.t_unix - t0 > 60) o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.headingSigma());
 		if (r.t_unix - t0 > 60 && r.t_unix - t0 < 420)
 		{
 			// Roll: the tilt error about the vehicle's horizontal forward axis.
-			const Eigen::Matrix3d R_true = truthAt(truth, r.t_unix).q_nb.toRotationMatrix();
 			const Eigen::Vector3d tilt = so3::Log(r.R_nb * R_true.transpose());
 			Eigen::Vector3d fwd(R_true(0, 0), R_true(1, 0), 0);
 			fwd.normalize();
@@ -142,7 +141,7 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg)
 		{
 			at15 = true;
 			o.error_15min_deg = err / kDeg;
-			o.sigma_15min_deg = r.heading_sigma / kDeg;
+			o.sigma_15min_deg = r.headingSigma() / kDeg;
 		}
 	}
 	EXPECT_TRUE(at15);

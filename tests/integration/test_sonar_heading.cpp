@@ -34,7 +34,7 @@ HeadingError headingError(const RunResult& r, const std::vector<TruthRow>& truth
 		const double err = wrapPi(yawOf(row.R_nb) - yawOf(truthAt(truth, row.t_unix).q_nb.toRotationMatrix())) / kDeg;
 		sq += err * err;
 		e.worst_deg = std::max(e.worst_deg, std::abs(err));
-		e.final_sigma_deg = row.heading_sigma / kDeg;
+		e.final_sigma_deg = row.headingSigma() / kDeg;
 		++n;
 	}
 	e.rms_deg = n ? std::sqrt(sq / n) : NAN;

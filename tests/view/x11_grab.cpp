@@ -36,19 +36,22 @@ int main(int argc, char** argv)
 		XCloseDisplay(display);
 		return 2;
 	}
-	// Channel of a pixel from its mask (8 bits per channel on Xvfb's 24-bit screens).
-	auto channel = [](unsigned long pixel, unsigned long mask) {
+	// Channel of a pixel from its mask (8 bits per channel on Xvfb's 24-bit
+	// screens); the shifts once, not per pixel.
+	auto shiftOf = [](unsigned long mask) {
 		int shift = 0;
 		while (mask && !(mask & 1)) mask >>= 1, ++shift;
-		return static_cast<int>((pixel >> shift) & mask & 0xff);
+		return shift;
 	};
+	const int r_shift = shiftOf(image->red_mask), g_shift = shiftOf(image->green_mask),
+			  b_shift = shiftOf(image->blue_mask);
 	cv::Mat bgr(attr.height, attr.width, CV_8UC3);
 	std::size_t blue = 0;
 	for (int y = 0; y < attr.height; ++y)
 		for (int x = 0; x < attr.width; ++x)
 		{
 			const unsigned long p = XGetPixel(image, x, y);
-			const int r = channel(p, image->red_mask), g = channel(p, image->green_mask), b = channel(p, image->blue_mask);
+			const int r = (p >> r_shift) & 0xff, g = (p >> g_shift) & 0xff, b = (p >> b_shift) & 0xff;
 			bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(b, g, r);
 			// Blue-dominant: the 1-pixel line is blended with the grey
 			// background; nothing else in the scene (grey, brown grid, red
