@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <auvnav/config.h>
 #include <yaml.h>
 
@@ -150,6 +151,28 @@ void Node::fail(const std::string& key, const std::string& what) const
 }
 
 bool Node::has(const std::string& key) const { return y_.isMap() && y_.has(key); }
+bool Node::isScalar(const std::string& key) const { return has(key) && yaml(y_[key].node()).isScalar(); }
+bool Node::isSequence(const std::string& key) const { return has(key) && yaml(y_[key].node()).isSequence(); }
+bool Node::isMapAt(const std::string& key) const { return has(key) && yaml(y_[key].node()).isMap(); }
+
+std::vector<std::string> Node::keys() const
+{
+	std::vector<std::string> out;
+	if (!y_.isMap()) return out;
+	for (const auto& kv : y_.asMap()) out.push_back(kv.first.as<std::string>());
+	return out;
+}
+
+void Node::allowOnly(const std::vector<std::string>& allowed) const
+{
+	for (const auto& k : keys())
+		if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+		{
+			std::string list;
+			for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+			fail(k, "unknown key (expected one of: " + list + ")");
+		}
+}
 
 Node Node::child(const std::string& key) const
 {

@@ -34,6 +34,15 @@ class Node
 
 	bool has(const std::string& key) const;
 	bool isMap() const { return y_.isMap(); }
+	/** The value under `key` is a scalar / a list / a map (false if absent). */
+	bool isScalar(const std::string& key) const;
+	bool isSequence(const std::string& key) const;
+	bool isMapAt(const std::string& key) const;
+	/** The keys of this map (sorted: MRPT keeps maps ordered). */
+	std::vector<std::string> keys() const;
+	/** Throws ConfigError naming the first key not in `allowed` (a misspelled
+	 *  key must not fall back to a default silently). */
+	void allowOnly(const std::vector<std::string>& allowed) const;
 	/** Required sub-map. */
 	Node child(const std::string& key) const;
 	/** Required sequence of maps/scalars, as nodes. */

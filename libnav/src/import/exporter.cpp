@@ -1,0 +1,405 @@
+#include <auvnav/import/exporter.h>
+#include <auvnav/import/record.h>
+#include <auvnav/import/time_format.h>
+#include <auvnav/io/rawlog.h>
+#include <auvnav/obs/CObservationADCP.h>
+#include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/obs/CObservationThrusters.h>
+#include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CObservationImage.h>
+#include <mrpt/system/filesystem.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+namespace auvnav::import
+{
+namespace
+{
+/** Shortest text that reads back as the same double ("nan" for NaN). */
+std::string exact(double v)
+{
+	if (std::isnan(v)) return "nan";
+	if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+	char buf[32];
+	std::snprintf(buf, sizeof buf, "%.17g", v);
+	return buf;
+}
+
+std::string fileSafe(const std::string& label)
+{
+	std::string s = label;
+	for (char& c : s)
+		if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) c = '_';
+	return s.empty() ? "unnamed" : s;
+}
+
+const char* frameName(auvnav::obs::DvlFrame f)
+{
+	using auvnav::obs::DvlFrame;
+	switch (f)
+	{
+		case DvlFrame::Instrument: return "instrument";
+		case DvlFrame::Vehicle: return "vehicle";
+		case DvlFrame::EarthNed: return "earth_ned";
+		case DvlFrame::EarthEnu: return "earth_enu";
+		case DvlFrame::Beam: return "beam";
+	}
+	return "instrument";
+}
+
+const char* signName(auvnav::obs::DvlSign s)
+{
+	return s == auvnav::obs::DvlSign::BottomOverInstrument ? "bottom_over_instrument" : "vehicle_over_bottom";
+}
+
+std::string classOf(const mrpt::obs::CObservation& o)
+{
+	if (dynamic_cast<const mrpt::obs::CObservationIMU*>(&o)) return "imu";
+	if (const auto* g = dynamic_cast<const mrpt::obs::CObservationGPS*>(&o)) return g->has_GGA_datum() ? "gps" : "";
+	if (dynamic_cast<const auvnav::obs::CObservationDVL*>(&o)) return "dvl";
+	if (dynamic_cast<const auvnav::obs::CObservationADCP*>(&o)) return "adcp";
+	if (dynamic_cast<const auvnav::obs::CObservationPressure*>(&o)) return "pressure";
+	if (dynamic_cast<const auvnav::obs::CObservationThrusters*>(&o)) return "thrusters";
+	if (dynamic_cast<const mrpt::obs::CObservationImage*>(&o)) return "image";
+	return "";
+}
+
+const char* kPoseColumns = "pose_x_m,pose_y_m,pose_z_m,pose_qw,pose_qx,pose_qy,pose_qz";
+
+std::string poseCells(const mrpt::poses::CPose3D& p)
+{
+	mrpt::math::CQuaternionDouble q;
+	p.getAsQuaternion(q);
+	return exact(p.x()) + "," + exact(p.y()) + "," + exact(p.z()) + "," + exact(q.r()) + "," + exact(q.x()) + "," +
+		   exact(q.y()) + "," + exact(q.z());
+}
+
+/** One label's CSV file and what its layout needs to know from pass 1. */
+struct LabelOut
+{
+	std::string cls, file_name;
+	std::size_t max_array = 0;	// beams, cells or thrusters
+	std::string thruster_unit = "N";
+	std::unique_ptr<std::ofstream> out;
+	std::size_t rows = 0;
+};
+
+std::string header(const std::string& cls, std::size_t n)
+{
+	std::ostringstream h;
+	h << "t_s,";
+	auto indexed = [&](std::initializer_list<const char*> pattern) {
+		for (std::size_t i = 0; i < n; ++i)
+			for (const char* p : pattern)
+			{
+				std::string c = p;
+				c.replace(c.find('#'), 1, std::to_string(i));
+				h << c << ",";
+			}
+	};
+	if (cls == "imu")
+		h << "gyro_x_radps,gyro_y_radps,gyro_z_radps,acc_x_mps2,acc_y_mps2,acc_z_mps2,mag_x_G,mag_y_G,mag_z_G,"
+			 "quat_w,quat_x,quat_y,quat_z,temperature_degC,";
+	else if (cls == "gps")
+		h << "latitude_deg,longitude_deg,altitude_msl_m,geoid_separation_m,fix_quality,satellites,hdop,";
+	else if (cls == "pressure")
+		h << "pressure_Pa,temperature_degC,";
+	else if (cls == "dvl")
+	{
+		h << "frame,sign,bottom_lock,vel_x_mps,vel_y_mps,vel_z_mps,cov_00,cov_01,cov_02,cov_10,cov_11,cov_12,cov_20,"
+			 "cov_21,cov_22,altitude_m,beam_inclination_rad,beam_velocity_sigma_mps,beam_count,";
+		indexed({"beam_#_range_m", "beam_#_valid", "beam_#_velocity_mps", "beam_#_azimuth_rad"});
+	}
+	else if (cls == "adcp")
+	{
+		h << "blank_distance_m,cell_size_m,velocity_sigma_mps,cell_count,";
+		indexed({"cell_#_vx_mps", "cell_#_vy_mps", "cell_#_vz_mps", "cell_#_correlation", "cell_#_valid"});
+	}
+	else if (cls == "thrusters")
+	{
+		h << "thruster_count,";
+		indexed({"effort_#"});
+		std::string s = h.str();
+		s.pop_back();  // thrusters have no pose
+		return s;
+	}
+	else if (cls == "image")
+		h << "file,ncols,nrows,fx,fy,cx,cy,camera_name,";
+	h << kPoseColumns;
+	return h.str();
+}
+
+std::string imuRow(const mrpt::obs::CObservationIMU& o)
+{
+	using namespace mrpt::obs;
+	const TIMUDataIndex idx[] = {IMU_WX,	IMU_WY,		IMU_WZ,			IMU_X_ACC,		IMU_Y_ACC,
+								 IMU_Z_ACC, IMU_MAG_X,	IMU_MAG_Y,		IMU_MAG_Z,		IMU_ORI_QUAT_W,
+								 IMU_ORI_QUAT_X, IMU_ORI_QUAT_Y, IMU_ORI_QUAT_Z, IMU_TEMPERATURE};
+	std::string row;
+	for (auto i : idx) row += (o.has(i) ? exact(o.get(i)) : std::string()) + ",";
+	return row + poseCells(o.sensorPose);
+}
+
+std::string gpsRow(const mrpt::obs::CObservationGPS& o)
+{
+	const auto& f = o.getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields;
+	return exact(f.latitude_degrees) + "," + exact(f.longitude_degrees) + "," + exact(f.altitude_meters) + "," +
+		   exact(f.geoidal_distance) + "," + std::to_string(f.fix_quality) + "," + std::to_string(f.satellitesUsed) +
+		   "," + (f.thereis_HDOP ? exact(f.HDOP) : std::string()) + "," + poseCells(o.sensorPose);
+}
+
+std::string dvlRow(const auvnav::obs::CObservationDVL& o, std::size_t n)
+{
+	std::string row = std::string(frameName(o.frame)) + "," + signName(o.sign) + "," + (o.bottom_lock ? "1" : "0");
+	for (double v : o.velocity_s_mps) row += "," + exact(v);
+	for (double c : o.velocity_cov) row += "," + exact(c);
+	row += "," + exact(o.altitude_m) + "," + exact(o.beam_inclination_rad) + "," + exact(o.beam_velocity_sigma_mps) +
+		   "," + std::to_string(o.beams.size());
+	for (std::size_t i = 0; i < n; ++i)
+	{
+		if (i < o.beams.size())
+		{
+			const auto& b = o.beams[i];
+			row += "," + exact(b.range_m) + "," + (b.valid ? "1" : "0") + "," + exact(b.velocity_mps) + "," +
+				   exact(b.azimuth_rad);
+		}
+		else
+			row += ",,,,";
+	}
+	return row + "," + poseCells(o.sensorPose);
+}
+
+std::string adcpRow(const auvnav::obs::CObservationADCP& o, std::size_t n)
+{
+	std::string row = exact(o.blank_distance_m) + "," + exact(o.cell_size_m) + "," + exact(o.velocity_sigma_mps) +
+					  "," + std::to_string(o.cells.size());
+	for (std::size_t i = 0; i < n; ++i)
+	{
+		if (i < o.cells.size())
+		{
+			const auto& c = o.cells[i];
+			row += "," + exact(c.velocity_s_mps[0]) + "," + exact(c.velocity_s_mps[1]) + "," +
+				   exact(c.velocity_s_mps[2]) + "," + exact(c.correlation) + "," + (c.valid ? "1" : "0");
+		}
+		else
+			row += ",,,,,";
+	}
+	return row + "," + poseCells(o.sensorPose);
+}
+
+std::string thrusterRow(const auvnav::obs::CObservationThrusters& o, std::size_t n)
+{
+	std::string row = std::to_string(o.effort.size());
+	for (std::size_t i = 0; i < n; ++i) row += "," + (i < o.effort.size() ? exact(o.effort[i]) : std::string());
+	return row;
+}
+
+std::string csvQuoted(const std::string& s)
+{
+	if (s.find_first_of(",\"\n") == std::string::npos) return s;
+	std::string q = "\"";
+	for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+	return q + "\"";
+}
+
+// ---------------------------------------------------------------- spec text
+
+std::string poseSpec() { return "    mounting: {fields: [pose_x_m, pose_y_m, pose_z_m, pose_qw, pose_qx, pose_qy, pose_qz]}   # sensorPose per row\n"; }
+
+std::string sensorSpec(const std::string& label, const std::string& cls, const std::string& thruster_unit,
+					   bool optional)
+{
+	const std::string file = fileSafe(label) + ".csv";
+	std::ostringstream s;
+	s << "  - label: " << label << "\n    class: " << cls << "\n";
+	if (optional) s << "    optional: true   # skipped when the export has no " << file << "\n";
+	s << "    source: {csv: " << file << "}\n"
+	  << "    time: {field: t_s, format: s}   # UNIX seconds, 7 decimals (MRPT's 100 ns)\n";
+	if (cls == "imu")
+		s << "    angular_velocity: {fields: [gyro_x_radps, gyro_y_radps, gyro_z_radps], unit: rad/s, optional: true}\n"
+			 "    linear_acceleration: {fields: [acc_x_mps2, acc_y_mps2, acc_z_mps2], unit: 'm/s^2', optional: true}\n"
+			 "    magnetic_field: {fields: [mag_x_G, mag_y_G, mag_z_G], unit: G, optional: true}   # MRPT keeps gauss\n"
+			 "    orientation: {fields: [quat_w, quat_x, quat_y, quat_z], optional: true}\n"
+			 "    temperature: {field: temperature_degC, unit: degC, optional: true}\n"
+		  << poseSpec();
+	else if (cls == "gps")
+		s << "    latitude: {field: latitude_deg, unit: deg}\n    longitude: {field: longitude_deg, unit: deg}\n"
+			 "    altitude: {field: altitude_msl_m, unit: m}\n    altitude_reference: msl   # GGA: above mean sea level\n"
+			 "    geoid_separation: {field: geoid_separation_m, unit: m}\n    fix_quality: {field: fix_quality}\n"
+			 "    satellites: {field: satellites}\n    hdop: {field: hdop}\n"
+		  << poseSpec();
+	else if (cls == "pressure")
+		s << "    pressure: {field: pressure_Pa, unit: Pa}\n    pressure_reference: absolute\n"
+			 "    temperature: {field: temperature_degC, unit: degC}\n"
+		  << poseSpec();
+	else if (cls == "dvl")
+		s << "    frame: {field: frame}   # instrument | vehicle | earth_ned | earth_enu | beam, per row\n"
+			 "    sign: {field: sign}     # vehicle_over_bottom | bottom_over_instrument, per row\n"
+			 "    bottom_lock: {field: bottom_lock}\n"
+			 "    velocity: {fields: [vel_x_mps, vel_y_mps, vel_z_mps], unit: m/s}\n"
+			 "    velocity_covariance: {fields: [cov_00, cov_01, cov_02, cov_10, cov_11, cov_12, cov_20, cov_21, cov_22], "
+			 "unit: 'm^2/s^2'}\n"
+			 "    altitude: {field: altitude_m, unit: m}\n"
+			 "    beam_inclination: {field: beam_inclination_rad, unit: rad}\n"
+			 "    beam_velocity_sigma: {field: beam_velocity_sigma_mps, unit: m/s}\n"
+			 "    beams:\n      count: {field: beam_count}\n      range: {field: 'beam_{i}_range_m', unit: m}\n"
+			 "      range_is: slant\n      valid: {field: 'beam_{i}_valid'}\n"
+			 "      velocity: {field: 'beam_{i}_velocity_mps', unit: m/s}\n"
+			 "      azimuth: {field: 'beam_{i}_azimuth_rad', unit: rad}\n"
+		  << poseSpec();
+	else if (cls == "adcp")
+		s << "    blank_distance: {field: blank_distance_m, unit: m}\n    cell_size: {field: cell_size_m, unit: m}\n"
+			 "    velocity_sigma: {field: velocity_sigma_mps, unit: m/s}\n"
+			 "    cells:\n      count: {field: cell_count}\n"
+			 "      velocity: {fields: ['cell_{i}_vx_mps', 'cell_{i}_vy_mps', 'cell_{i}_vz_mps'], unit: m/s}\n"
+			 "      correlation: {field: 'cell_{i}_correlation'}\n      valid: {field: 'cell_{i}_valid'}\n"
+		  << poseSpec();
+	else if (cls == "thrusters")
+		s << "    effort: {count: {field: thruster_count}, field: 'effort_{i}', unit: " << thruster_unit << "}\n";
+	else if (cls == "image")
+		s << "    file: {field: file}   # PNG next to the CSV\n"
+			 "    camera: {ncols: {field: ncols}, nrows: {field: nrows}, fx: {field: fx}, fy: {field: fy}, cx: {field: cx}, "
+			 "cy: {field: cy}, name: {field: camera_name}}\n"
+		  << poseSpec();
+	return s.str();
+}
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> simulatorLabels()
+{
+	// The simulator's write order at equal stamps (apps/sim/mission.cpp), which
+	// the importer keeps for equal stamps.
+	return {{"THRUSTERS", "thrusters"}, {"IMU", "imu"},		   {"DVL", "dvl"}, {"ADCP", "adcp"},
+			{"SONAR", "image"},			{"PRESSURE", "pressure"}, {"GPS", "gps"}};
+}
+
+std::string exportSpecText(const std::vector<std::pair<std::string, std::string>>& labels_and_classes,
+						   const std::map<std::string, std::string>& thruster_units, bool optional_sensors)
+{
+	std::ostringstream s;
+	s << "# auvnav-import spec for the CSV layout auvnav-export writes (docs/import.md).\n"
+		 "# Every quantity is in the unit its column name says; times are UNIX seconds.\n"
+		 "# Rerun: auvnav-import --spec THIS_FILE --out OUT.rawlog THIS_FOLDER\n"
+		 "format_version: 1\n"
+		 "reorder_window_s: 1.0   # rows are already in time order per file\n"
+		 "sensors:\n";
+	for (const auto& [label, cls] : labels_and_classes)
+	{
+		const auto u = thruster_units.find(label);
+		s << sensorSpec(label, cls, u == thruster_units.end() ? "N" : u->second, optional_sensors);
+	}
+	return s.str();
+}
+
+void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportReport& report)
+{
+	report = ExportReport{};
+	std::map<std::string, LabelOut> labels;
+	std::vector<std::string> order;
+	// Pass 1: classes and array sizes per label.
+	{
+		io::RawlogReader in(rawlog);
+		while (auto o = in.next())
+		{
+			const std::string cls = classOf(*o);
+			if (cls.empty())
+			{
+				report.skipped_by_reason[std::string("class ") + o->GetRuntimeClass()->className + " not exported"]++;
+				continue;
+			}
+			auto it = labels.find(o->sensorLabel);
+			if (it == labels.end())
+			{
+				it = labels.emplace(o->sensorLabel, LabelOut{}).first;
+				it->second.cls = cls;
+				order.push_back(o->sensorLabel);
+			}
+			LabelOut& l = it->second;
+			if (l.cls != cls)
+			{
+				report.skipped_by_reason["label " + o->sensorLabel + " also used by class " + cls + ": not exported"]++;
+				continue;
+			}
+			if (const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(o.get()))
+				l.max_array = std::max(l.max_array, d->beams.size());
+			if (const auto* a = dynamic_cast<const auvnav::obs::CObservationADCP*>(o.get()))
+				l.max_array = std::max(l.max_array, a->cells.size());
+			if (const auto* t = dynamic_cast<const auvnav::obs::CObservationThrusters*>(o.get()))
+			{
+				l.max_array = std::max(l.max_array, t->effort.size());
+				l.thruster_unit = t->unit == auvnav::obs::EffortUnit::Speed_rpm ? "rpm" : "N";
+			}
+		}
+	}
+	if (!mrpt::system::directoryExists(out_dir) && !mrpt::system::createDirectory(out_dir))
+		throw ImportError(out_dir + ": cannot create the output folder");
+	std::map<std::string, std::string> units;
+	std::vector<std::pair<std::string, std::string>> spec_labels;
+	for (const auto& label : order)
+	{
+		LabelOut& l = labels[label];
+		l.file_name = fileSafe(label) + ".csv";
+		const std::string path = out_dir + "/" + l.file_name;
+		l.out = std::make_unique<std::ofstream>(path);
+		if (!*l.out) throw ImportError(path + ": cannot write");
+		*l.out << header(l.cls, l.max_array) << "\n";
+		if (l.cls == "image" && !mrpt::system::directoryExists(out_dir + "/" + fileSafe(label)))
+			mrpt::system::createDirectory(out_dir + "/" + fileSafe(label));
+		spec_labels.emplace_back(label, l.cls);
+		if (l.cls == "thrusters") units[label] = l.thruster_unit;
+	}
+	// Pass 2: the rows.
+	io::RawlogReader in(rawlog);
+	while (auto o = in.next())
+	{
+		auto it = labels.find(o->sensorLabel);
+		if (it == labels.end() || classOf(*o) != it->second.cls) continue;
+		LabelOut& l = it->second;
+		std::string row = formatSeconds7(fromMrptTime(o->timestamp)) + ",";
+		if (const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get()))
+			row += imuRow(*imu);
+		else if (const auto* g = dynamic_cast<const mrpt::obs::CObservationGPS*>(o.get()))
+			row += gpsRow(*g);
+		else if (const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(o.get()))
+			row += exact(p->pressure_pa) + "," + exact(p->temperature_c) + "," + poseCells(p->sensorPose);
+		else if (const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(o.get()))
+			row += dvlRow(*d, l.max_array);
+		else if (const auto* a = dynamic_cast<const auvnav::obs::CObservationADCP*>(o.get()))
+			row += adcpRow(*a, l.max_array);
+		else if (const auto* t = dynamic_cast<const auvnav::obs::CObservationThrusters*>(o.get()))
+			row += thrusterRow(*t, l.max_array);
+		else if (const auto* im = dynamic_cast<const mrpt::obs::CObservationImage*>(o.get()))
+		{
+			char name[32];
+			std::snprintf(name, sizeof name, "%06zu.png", l.rows);
+			const std::string rel = fileSafe(o->sensorLabel) + "/" + name;
+			if (!im->image.saveToFile(out_dir + "/" + rel))
+				throw ImportError(out_dir + "/" + rel + ": cannot write the image");
+			const auto& c = im->cameraParams;
+			row += csvQuoted(rel) + "," + std::to_string(c.ncols) + "," + std::to_string(c.nrows) + "," +
+				   exact(c.fx()) + "," + exact(c.fy()) + "," + exact(c.cx()) + "," + exact(c.cy()) + "," +
+				   csvQuoted(c.cameraName) + "," + poseCells(im->cameraPose);
+		}
+		*l.out << row << "\n";
+		l.rows++;
+	}
+	for (const auto& label : order)
+	{
+		LabelOut& l = labels[label];
+		l.out->flush();
+		if (!*l.out) throw ImportError(out_dir + "/" + l.file_name + ": write failed (disk full?)");
+		report.sensors.push_back({label, l.cls, l.file_name, l.rows});
+	}
+	report.spec_file = out_dir + "/import.yaml";
+	std::ofstream spec(report.spec_file);
+	spec << exportSpecText(spec_labels, units);
+	if (!spec) throw ImportError(report.spec_file + ": cannot write");
+}
+
+}  // namespace auvnav::import
