@@ -1,0 +1,158 @@
+// The real SONIA pool runs (../shared/data/sonia-pool-2016, when present):
+// each run imports in one command with the shipped spec, the DVL read from the
+// team's own bag message type agrees with the CSV, and the navigator runs to
+// the end without NaN. Skipped when the data folder is absent.
+#include <auvnav/import/importer.h>
+#include <auvnav/io/rawlog.h>
+#include <auvnav/obs/CObservationDVL.h>
+#include <gtest/gtest.h>
+#include <mrpt/obs/CObservationIMU.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace auvnav::import;
+
+namespace
+{
+const std::string kSource = AUVNAV_SOURCE_DIR;
+const std::string kBin = AUVNAV_BIN_DIR;
+const fs::path kData = AUVNAV_SONIA_DIR;
+
+#define SKIP_WITHOUT_DATA()                            \
+	if (!fs::is_directory(kData))                      \
+	{                                                  \
+		GTEST_SKIP() << kData << " not present";       \
+	}
+
+fs::path scratch(const std::string& name)
+{
+	const fs::path p = fs::temp_directory_path() / ("auvnav_sonia_" + name);
+	fs::remove_all(p);
+	fs::create_directories(p);
+	return p;
+}
+
+ImportReport importRun(const std::string& spec, const std::vector<std::string>& inputs, const fs::path& out)
+{
+	ImportOptions opt;
+	opt.spec_path = kSource + "/config/import/" + spec;
+	opt.inputs = inputs;
+	opt.out_rawlog = out.string();
+	ImportReport rep;
+	runImport(opt, rep);
+	return rep;
+}
+
+const SensorReport& sensor(const ImportReport& r, const std::string& label)
+{
+	for (const auto& s : r.sensors)
+		if (s.label == label) return s;
+	throw std::runtime_error("no sensor " + label);
+}
+
+std::vector<const auvnav::obs::CObservationDVL*> dvls(const std::vector<mrpt::obs::CObservation::Ptr>& obs)
+{
+	std::vector<const auvnav::obs::CObservationDVL*> out;
+	for (const auto& o : obs)
+		if (const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(o.get())) out.push_back(d);
+	return out;
+}
+
+std::vector<mrpt::obs::CObservation::Ptr> readAll(const fs::path& p)
+{
+	auvnav::io::RawlogReader r(p.string());
+	std::vector<mrpt::obs::CObservation::Ptr> out;
+	while (auto o = r.next()) out.push_back(o);
+	return out;
+}
+}  // namespace
+
+TEST(ImportSonia, EachRunImportsWithTheShippedSpec)
+{
+	SKIP_WITHOUT_DATA();
+	const fs::path d = scratch("csv");
+	const std::map<std::string, std::size_t> imu_rows = {{"2016-01-23_run1", 7807}, {"2016-01-23_run2_heading", 8932}};
+	for (const auto& [run, rows] : imu_rows)
+	{
+		const ImportReport rep = importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
+		ASSERT_TRUE(rep.completed) << run;
+		EXPECT_EQ(sensor(rep, "IMU").written, rows) << run;
+		EXPECT_EQ(sensor(rep, "MAG").written, rows) << run;
+		EXPECT_EQ(sensor(rep, "IMU").rejected + sensor(rep, "DVL").rejected, 0u) << run;
+		EXPECT_NEAR(sensor(rep, "IMU").median_rate_hz, 100, 0.5) << run;
+		EXPECT_NEAR(sensor(rep, "DVL").median_rate_hz, 3.47, 0.1) << run;
+		const auto obs = readAll(d / (run + ".rawlog"));
+		for (std::size_t i = 1; i < obs.size(); ++i) ASSERT_LE(obs[i - 1]->timestamp, obs[i]->timestamp);
+		const auto d0 = dvls(obs);
+		ASSERT_GT(d0.size(), 270u);
+		for (const auto* x : d0)
+		{
+			ASSERT_EQ(x->frame, auvnav::obs::DvlFrame::EarthEnu);  // PD0 coord_sys 3 in every packet
+			ASSERT_EQ(x->sign, auvnav::obs::DvlSign::BottomOverInstrument);
+			if (x->bottom_lock)
+			{
+				ASSERT_NEAR(x->altitude_m, 3.25, 0.75);  // over the pool floor
+			}
+		}
+		// At rest the raw accelerometer z reads +9.8: in FRD the specific force is −g on z.
+		const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(obs.front().get());
+		ASSERT_NE(imu, nullptr);
+		EXPECT_NEAR(imu->get(mrpt::obs::IMU_Z_ACC), -9.8, 0.3);
+	}
+}
+
+TEST(ImportSonia, BagDvlWithTheTeamsMessageTypeAgreesWithTheCsv)
+{
+	SKIP_WITHOUT_DATA();
+	const fs::path d = scratch("bag");
+	const std::string run = (kData / "2016-01-23_run1").string();
+	importRun("sonia_pool_2016.yaml", {run}, d / "csv.rawlog");
+	const ImportReport rep =
+		importRun("sonia_dvl_bag.yaml", {run, (kData / "bags" / "2016-01-23-22-29-09_dvl.bag").string()}, d / "bag.rawlog");
+	EXPECT_EQ(sensor(rep, "DVL").written, 278u);
+	const auto obs_csv = readAll(d / "csv.rawlog");
+	const auto obs_bag = readAll(d / "bag.rawlog");
+	const auto a = dvls(obs_csv);
+	const auto b = dvls(obs_bag);
+	ASSERT_EQ(a.size(), b.size());
+	for (std::size_t i = 0; i < a.size(); ++i)
+	{
+		// The CSV holds the bag's float32 values printed to ~9 digits and times to 1 µs.
+		EXPECT_NEAR(std::chrono::duration<double>(a[i]->timestamp - b[i]->timestamp).count(), 0, 1e-6);
+		EXPECT_EQ(a[i]->bottom_lock, b[i]->bottom_lock);
+		for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[i]->velocity_s_mps[k], b[i]->velocity_s_mps[k], 1e-8);
+		EXPECT_NEAR(a[i]->altitude_m, b[i]->altitude_m, 1e-6);
+	}
+}
+
+TEST(ImportSonia, NavigatorRunsToTheEndWithoutNan)
+{
+	SKIP_WITHOUT_DATA();
+	const fs::path d = scratch("run");
+	importRun("sonia_pool_2016.yaml", {(kData / "2016-01-23_run2_heading").string()}, d / "run2.rawlog");
+	const std::string cmd = kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
+							(d / "out").string() + " --set filter.initial.position=config " + (d / "run2.rawlog").string() +
+							" > " + (d / "run.log").string() + " 2>&1";
+	const int rc = std::system(cmd.c_str());
+	ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
+	std::ifstream tum(d / "out" / "trajectory.tum");
+	std::string line;
+	std::size_t rows = 0;
+	double last_t = 0;
+	while (std::getline(tum, line))
+	{
+		if (line.empty() || line[0] == '#') continue;
+		ASSERT_EQ(line.find("nan"), std::string::npos) << line;
+		std::istringstream s(line);
+		s >> last_t;
+		++rows;
+	}
+	EXPECT_GT(rows, 800u);	// 10 Hz over ~89 s
+	EXPECT_NEAR(last_t, 1453606358.0, 2.0);	 // the last IMU sample of the run
+}
