@@ -101,7 +101,9 @@ TEST(ImportSonia, EachRunImportsWithTheShippedSpec)
 			}
 		}
 		// At rest the raw accelerometer z reads +9.8: in FRD the specific force is −g on z.
-		const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(obs.front().get());
+		const mrpt::obs::CObservationIMU* imu = nullptr;
+		for (const auto& o : obs)
+			if (o->sensorLabel == "IMU" && (imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get()))) break;
 		ASSERT_NE(imu, nullptr);
 		EXPECT_NEAR(imu->get(mrpt::obs::IMU_Z_ACC), -9.8, 0.3);
 	}
