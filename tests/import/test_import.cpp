@@ -15,6 +15,9 @@
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CObservationImage.h>
+
+#include <opencv2/core.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -580,4 +583,78 @@ TEST(ImportExport, SpecTextReadsTheLayoutBack)
 											 {"ADCP", "adcp"}, {"THRUSTERS", "thrusters"}, {"SONAR", "image"}},
 											{{"THRUSTERS", "N"}}));
 	EXPECT_NO_THROW(validateSpec((dir / "spec.yaml").string()));
+}
+
+TEST(Import, IsoTimesAndPerSensorOffset)
+{
+	const auto dir = scratch("iso");
+	write(dir / "p.csv", "when,p\n2016-01-24T03:29:08.5Z,101325\n2016-01-24T03:29:09.5Z,101400\n");
+	ImportReport rep;
+	ASSERT_EQ(importError(dir, R"(
+sensors:
+  - {label: P, class: pressure, source: {csv: p.csv}, time: {field: when, format: iso8601, offset_s: -0.25},
+     pressure: {field: p, unit: Pa}, pressure_reference: absolute}
+)",
+						  rep),
+			  "");
+	const auto obs = readAll((dir / "out.rawlog").string());
+	ASSERT_EQ(obs.size(), 2u);
+	EXPECT_EQ(fromMrptTime(obs[0]->timestamp), 1453606148250000000LL);
+	EXPECT_EQ(fromMrptTime(obs[1]->timestamp), 1453606149250000000LL);
+}
+
+TEST(ImportExport, ImagesRoundTripAsPng)
+{
+	const auto dir = scratch("images");
+	{
+		auvnav::io::RawlogWriter w((dir / "in.rawlog").string());
+		for (int k = 0; k < 2; ++k)
+		{
+			auto o = mrpt::obs::CObservationImage::Create();
+			o->sensorLabel = "SONAR";
+			o->timestamp = toMrptTime(1000000000000LL + k * 500000000LL);
+			cv::Mat img(40, 32, CV_8UC1);
+			for (int r = 0; r < img.rows; ++r)
+				for (int c = 0; c < img.cols; ++c) img.at<uchar>(r, c) = static_cast<uchar>((r * 7 + c * 3 + k) % 251);
+			o->image = mrpt::img::CImage(img, mrpt::img::DEEP_COPY);
+			o->cameraParams.ncols = 32;
+			o->cameraParams.nrows = 40;
+			o->cameraParams.fx(110.5);
+			o->cameraParams.fy(20.25);
+			o->cameraParams.cx(15.5);
+			o->cameraParams.cy(-3.0);
+			o->cameraParams.cameraName = "polar, sonar";
+			o->cameraPose = mrpt::poses::CPose3D(1, 0, 0.5, 0, 0, 0);
+			w.write(*o);
+		}
+	}
+	ExportReport ex;
+	exportRawlog((dir / "in.rawlog").string(), (dir / "csv").string(), ex);
+	ASSERT_EQ(ex.sensors.size(), 1u);
+	EXPECT_EQ(ex.sensors[0].rows, 2u);
+	EXPECT_TRUE(fs::exists(dir / "csv" / "SONAR" / "000001.png"));
+	ImportOptions opt;
+	opt.spec_path = (dir / "csv" / "import.yaml").string();
+	opt.inputs = {(dir / "csv").string()};
+	opt.out_rawlog = (dir / "out.rawlog").string();
+	ImportReport rep;
+	runImport(opt, rep);
+	const auto a = readAll((dir / "in.rawlog").string());
+	const auto b = readAll((dir / "out.rawlog").string());
+	ASSERT_EQ(a.size(), b.size());
+	for (std::size_t i = 0; i < a.size(); ++i)
+	{
+		const auto* x = dynamic_cast<const mrpt::obs::CObservationImage*>(a[i].get());
+		const auto* y = dynamic_cast<const mrpt::obs::CObservationImage*>(b[i].get());
+		ASSERT_NE(y, nullptr);
+		EXPECT_EQ(x->timestamp, y->timestamp);
+		EXPECT_EQ(y->cameraParams.cameraName, "polar, sonar");
+		EXPECT_EQ(y->cameraParams.fx(), 110.5);
+		EXPECT_EQ(y->cameraParams.cy(), -3.0);
+		EXPECT_NEAR(y->cameraPose.z(), 0.5, 1e-15);
+		const cv::Mat mx = x->image.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
+		const cv::Mat my = y->image.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
+		ASSERT_EQ(my.type(), CV_8UC1);
+		EXPECT_EQ(cv::countNonZero(mx != my), 0);
+	}
 }
