@@ -10,6 +10,8 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/import/importer.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -445,3 +447,85 @@ void checkBagRoundTrip(const std::string& kind)
 
 TEST(ImportBagRoundTrip, Ros1BagGivesTheSameTrajectory) { checkBagRoundTrip("ros1"); }
 TEST(ImportBagRoundTrip, Ros2BagGivesTheSameTrajectory) { checkBagRoundTrip("ros2"); }
+
+// ---------------------------------------------------------------- bad bag input
+
+namespace
+{
+std::string importError(const fs::path& dir, const std::string& spec, const std::string& input)
+{
+	std::ofstream(dir / "spec.yaml") << spec;
+	auvnav::import::ImportOptions opt;
+	opt.spec_path = (dir / "spec.yaml").string();
+	opt.inputs = {input};
+	opt.out_rawlog = (dir / "out.rawlog").string();
+	auvnav::import::ImportReport rep;
+	try
+	{
+		auvnav::import::runImport(opt, rep);
+	}
+	catch (const auvnav::import::ImportError& e)
+	{
+		return e.what();
+	}
+	return "";
+}
+
+fs::path smallBags(const fs::path& d)
+{
+	fs::create_directories(d);
+	{
+		Ros1BagWriter bag((d / "small.bag").string());
+		Ros2BagWriter db((d / "small.db3").string());
+		db.addTopic("/imu", "sensor_msgs/msg/Imu");
+		for (int i = 0; i < 2000; ++i)
+		{
+			sensor_msgs::Imu m;
+			m.header.stamp = auvnav::import::testing::toRosTime(1000000000000LL + i * 10000000LL);
+			m.linear_acceleration.z = -9.8;
+			bag.write("/imu", 1000000000000LL + i * 10000000LL, m);
+			db.write("/imu", 1000000000000LL + i * 10000000LL, auvnav::import::testing::toRos2Cdr(m));
+		}
+	}
+	return d;
+}
+}  // namespace
+
+TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
+{
+	const fs::path d = smallBags(fs::temp_directory_path() / "auvnav_bag_bad_topic");
+	for (const std::string kind : {"ros1", "ros2"})
+	{
+		const std::string bag = kind == "ros1" ? "small.bag" : "small.db3";
+		const std::string err = importError(
+			d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag + ", topic: /imu/data}, time: {field: header.stamp}}\n",
+			(d / bag).string());
+		EXPECT_THAT(err, ::testing::HasSubstr(bag)) << kind;
+		EXPECT_THAT(err, ::testing::HasSubstr("/imu/data")) << kind;
+		EXPECT_THAT(err, ::testing::HasSubstr("/imu (sensor_msgs")) << kind << ": " << err;
+		// The right topic imports.
+		EXPECT_EQ(importError(d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag +
+									 ", topic: /imu}, time: {field: header.stamp}}\n",
+							  (d / bag).string()),
+				  "")
+			<< kind;
+	}
+}
+
+TEST(ImportBagBadInput, TruncatedBagIsAClearError)
+{
+	const fs::path d = smallBags(fs::temp_directory_path() / "auvnav_bag_truncated");
+	for (const std::string bag : {"small.bag", "small.db3"})
+	{
+		const std::string cut = "cut_" + bag;
+		fs::copy_file(d / bag, d / cut, fs::copy_options::overwrite_existing);
+		fs::resize_file(d / cut, fs::file_size(d / bag) / 2);
+		const std::string kind = bag == "small.bag" ? "ros1" : "ros2";
+		const std::string err = importError(
+			d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + cut + ", topic: /imu}, time: {field: header.stamp}}\n",
+			(d / cut).string());
+		EXPECT_THAT(err, ::testing::HasSubstr(cut)) << err;
+		EXPECT_THAT(err, ::testing::HasSubstr("truncated"));
+		std::printf("%s: %s\n", cut.c_str(), err.c_str());
+	}
+}
