@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 namespace auvnav::import::msg
@@ -75,11 +76,11 @@ struct Builtin
 std::optional<FieldType> builtinType(std::string_view name, Dialect dialect)
 {
 	static const Builtin kCommon[] = {
-		{"bool", FieldType::Bool},		 {"char", FieldType::UInt8},	 {"int8", FieldType::Int8},
-		{"uint8", FieldType::UInt8},	 {"int16", FieldType::Int16},	 {"uint16", FieldType::UInt16},
-		{"int32", FieldType::Int32},	 {"uint32", FieldType::UInt32},	 {"int64", FieldType::Int64},
-		{"uint64", FieldType::UInt64},	 {"float32", FieldType::Float32}, {"float64", FieldType::Float64},
-		{"string", FieldType::String},	 {"time", FieldType::Time},		 {"duration", FieldType::Duration},
+	    {"bool", FieldType::Bool},     {"char", FieldType::UInt8},      {"int8", FieldType::Int8},
+	    {"uint8", FieldType::UInt8},   {"int16", FieldType::Int16},     {"uint16", FieldType::UInt16},
+	    {"int32", FieldType::Int32},   {"uint32", FieldType::UInt32},   {"int64", FieldType::Int64},
+	    {"uint64", FieldType::UInt64}, {"float32", FieldType::Float32}, {"float64", FieldType::Float64},
+	    {"string", FieldType::String}, {"time", FieldType::Time},       {"duration", FieldType::Duration},
 	};
 	for (const Builtin& b : kCommon)
 		if (name == b.name) return b.type;
@@ -99,8 +100,8 @@ std::optional<FieldType> builtinType(std::string_view name, Dialect dialect)
 struct Section
 {
 	std::string_view text;
-	int first_line = 1;	 // line number of `text`'s first line in the whole definition
-	std::string origin;	 // "definition of pkg/Main" or "bundled definition of pkg/T"
+	int first_line = 1;  // line number of `text`'s first line in the whole definition
+	std::string origin;  // "definition of pkg/Main" or "bundled definition of pkg/T"
 };
 
 /** Splits a full definition into the main type's section and the `MSG:` ones. */
@@ -113,11 +114,12 @@ std::map<std::string, Section> splitSections(const std::string& main_type, std::
 	int section_line = 1;
 	int line_no = 0;
 	std::size_t pos = 0;
-	bool expect_header = false;	 // after a separator: the next non-empty line is `MSG: ...`
+	bool expect_header = false;  // after a separator: the next non-empty line is `MSG: ...`
 	auto closeSection = [&](std::size_t end)
 	{
 		if (!current.empty() && !sections.count(current))
-			sections[current] = Section{text.substr(section_start, end - section_start), section_line, origin};
+			sections[current] =
+			    Section{text.substr(section_start, end - section_start), section_line, origin};
 	};
 	while (pos <= text.size())
 	{
@@ -132,15 +134,15 @@ std::map<std::string, Section> splitSections(const std::string& main_type, std::
 			{
 				if (t.substr(0, 4) == "IDL:")
 					throw DefinitionError(origin + ", line " + std::to_string(line_no) +
-										  ": IDL sections are not supported (only .msg syntax)");
+					                      ": IDL sections are not supported (only .msg syntax)");
 				if (t.substr(0, 4) != "MSG:")
 					throw DefinitionError(origin + ", line " + std::to_string(line_no) +
-										  ": expected 'MSG: pkg/Type' after the '=' line, found '" +
-										  std::string(t) + "'");
+					                      ": expected 'MSG: pkg/Type' after the '=' line, found '" +
+					                      std::string(t) + "'");
 				current = normalizeTypeName(trim(t.substr(4)));
 				if (current.empty())
 					throw DefinitionError(origin + ", line " + std::to_string(line_no) +
-										  ": 'MSG:' without a type name");
+					                      ": 'MSG:' without a type name");
 				section_start = std::min(next, text.size());
 				section_line = line_no + 1;
 				expect_header = false;
@@ -224,8 +226,8 @@ class SchemaBuilder
 {
    public:
 	SchemaBuilder(std::string_view type_name, std::string_view text, Dialect dialect,
-				  const DefinitionFallback& fallback)
-		: main_(normalizeTypeName(type_name)), dialect_(dialect), fallback_(fallback)
+	              const DefinitionFallback& fallback)
+	    : main_(normalizeTypeName(type_name)), dialect_(dialect), fallback_(fallback)
 	{
 		if (main_.empty()) throw DefinitionError("message definition without a type name");
 		sections_ = splitSections(main_, text);
@@ -250,7 +252,8 @@ class SchemaBuilder
 			return schema_->messages_[done->second].get();
 		}
 		if (depth > kMaxNesting)
-			throw DefinitionError("types nested more than " + std::to_string(kMaxNesting) + " deep at " + name);
+			throw DefinitionError("types nested more than " + std::to_string(kMaxNesting) + " deep at " +
+			                      name);
 		const Section section = findSection(name, used_by);
 
 		auto def = std::make_unique<MessageDef>();
@@ -259,7 +262,7 @@ class SchemaBuilder
 		MessageDef* raw = def.get();
 		index_[name] = raw->index;
 		schema_->messages_.push_back(std::move(def));
-		in_progress_.insert({name, true});
+		in_progress_.insert(name);
 		parseFields(section, *raw, depth);
 		in_progress_.erase(name);
 		return raw;
@@ -273,7 +276,7 @@ class SchemaBuilder
 			if (const char* text = fallback_(name))
 				return Section{std::string_view(text), 1, "bundled definition of " + name};
 		throw DefinitionError("no definition of type " + name +
-							  (used_by.empty() ? std::string() : " (used by " + used_by + ")"));
+		                      (used_by.empty() ? std::string() : " (used by " + used_by + ")"));
 	}
 
 	void parseFields(const Section& section, MessageDef& def, std::size_t depth)
@@ -290,7 +293,8 @@ class SchemaBuilder
 		}
 	}
 
-	void parseLine(std::string_view line, const Section& section, int line_no, MessageDef& def, std::size_t depth)
+	void parseLine(std::string_view line, const Section& section, int line_no, MessageDef& def,
+	               std::size_t depth)
 	{
 		const auto fail = [&](const std::string& why)
 		{ throw DefinitionError(section.origin + ", line " + std::to_string(line_no) + ": " + why); };
@@ -306,7 +310,7 @@ class SchemaBuilder
 		std::size_t name_len = 0;
 		while (name_len < rest.size() && isIdentChar(rest[name_len])) ++name_len;
 		const std::string_view after = trim(rest.substr(name_len));
-		if (!after.empty() && after.front() == '=') return;	// a constant, not a field
+		if (!after.empty() && after.front() == '=') return;  // a constant, not a field
 		if (name_len == 0) fail("expected a field name after '" + std::string(type_token) + "'");
 
 		const auto type = parseTypeToken(type_token);
@@ -321,7 +325,7 @@ class SchemaBuilder
 
 	template <class Fail>
 	void resolveType(const TypeToken& token, FieldDef& field, const MessageDef& owner, std::size_t depth,
-					 const Fail& fail)
+	                 const Fail& fail)
 	{
 		if (token.base == "wstring") fail("type wstring is not supported");
 		const std::string base = normalizeTypeName(token.base);
@@ -349,12 +353,12 @@ class SchemaBuilder
 	const DefinitionFallback& fallback_;
 	std::map<std::string, Section> sections_;
 	std::map<std::string, std::size_t> index_;
-	std::map<std::string, bool> in_progress_;
+	std::set<std::string> in_progress_;  // being parsed: meeting one again is a cycle
 	std::shared_ptr<Schema> schema_;
 };
 
-std::shared_ptr<const Schema> Schema::parse(std::string_view type_name, std::string_view text, Dialect dialect,
-											const DefinitionFallback& fallback)
+std::shared_ptr<const Schema> Schema::parse(std::string_view type_name, std::string_view text,
+                                            Dialect dialect, const DefinitionFallback& fallback)
 {
 	return SchemaBuilder(type_name, text, dialect, fallback).build();
 }
@@ -383,7 +387,7 @@ class WireReader
 {
    public:
 	WireReader(const uint8_t* data, std::size_t size, std::size_t origin, bool swap)
-		: data_(data), size_(size), pos_(origin), origin_(origin), swap_(swap)
+	    : data_(data), size_(size), pos_(origin), origin_(origin), swap_(swap)
 	{
 	}
 
@@ -439,9 +443,10 @@ class WireReader
 		}
 		constexpr int64_t kNs = 1000000000;
 		const bool signed_sec = kCdr || duration;
-		const int64_t s = signed_sec ? static_cast<int64_t>(static_cast<int32_t>(sec)) : static_cast<int64_t>(sec);
+		const int64_t s =
+		    signed_sec ? static_cast<int64_t>(static_cast<int32_t>(sec)) : static_cast<int64_t>(sec);
 		const int64_t ns = (!kCdr && duration) ? static_cast<int64_t>(static_cast<int32_t>(nsec))
-											   : static_cast<int64_t>(nsec);
+		                                       : static_cast<int64_t>(nsec);
 		out = s * kNs + ns;
 		return true;
 	}
@@ -462,7 +467,10 @@ class WireReader
 	bool swap_;
 };
 
-const char* typeLabel(const FieldDef& f) { return f.type_name.c_str(); }
+const char* typeLabel(const FieldDef& f)
+{
+	return f.type_name.c_str();
+}
 
 std::size_t primitiveSize(FieldType t)
 {
@@ -470,28 +478,37 @@ std::size_t primitiveSize(FieldType t)
 	{
 		case FieldType::Bool:
 		case FieldType::Int8:
-		case FieldType::UInt8: return 1;
+		case FieldType::UInt8:
+			return 1;
 		case FieldType::Int16:
-		case FieldType::UInt16: return 2;
+		case FieldType::UInt16:
+			return 2;
 		case FieldType::Int32:
 		case FieldType::UInt32:
 		case FieldType::Float32:
-		case FieldType::String: return 4;  // the length
+		case FieldType::String:
+			return 4;  // the length
 		case FieldType::Int64:
 		case FieldType::UInt64:
 		case FieldType::Float64:
 		case FieldType::Time:
-		case FieldType::Duration: return 8;
-		case FieldType::Message: return 0;
+		case FieldType::Duration:
+			return 8;
+		case FieldType::Message:
+			return 0;
 	}
 	return 0;
 }
 
-bool isByteType(FieldType t) { return t == FieldType::Int8 || t == FieldType::UInt8; }
+bool isByteType(FieldType t)
+{
+	return t == FieldType::Int8 || t == FieldType::UInt8;
+}
 
 std::size_t saturatingMul(std::size_t a, std::size_t b)
 {
-	if (a != 0 && b > std::numeric_limits<std::size_t>::max() / a) return std::numeric_limits<std::size_t>::max();
+	if (a != 0 && b > std::numeric_limits<std::size_t>::max() / a)
+		return std::numeric_limits<std::size_t>::max();
 	return a * b;
 }
 
@@ -506,8 +523,8 @@ class Walker
 {
    public:
 	Walker(Reader& in, const std::vector<std::size_t>& min_size, std::vector<Value>& values,
-		   std::vector<std::string>* names, std::vector<uint32_t>& lengths, bool cdr)
-		: in_(in), min_size_(min_size), values_(values), names_(names), lengths_(lengths), cdr_(cdr)
+	       std::vector<std::string>* names, std::vector<uint32_t>& lengths, bool cdr)
+	    : in_(in), min_size_(min_size), values_(values), names_(names), lengths_(lengths), cdr_(cdr)
 	{
 	}
 
@@ -531,7 +548,7 @@ class Walker
 		{
 			std::ostringstream msg;
 			msg << left << " bytes left after the last field (" << in_.size()
-				<< "-byte message; the definition does not match the data)";
+			    << "-byte message; the definition does not match the data)";
 			throw DecodeError(msg.str());
 		}
 	}
@@ -583,19 +600,20 @@ class Walker
 
 	void checkCount(const FieldDef& f, uint32_t count)
 	{
-		const std::size_t each = f.type == FieldType::Message ? min_size_[f.message->index] : primitiveSize(f.type);
+		const std::size_t each =
+		    f.type == FieldType::Message ? min_size_[f.message->index] : primitiveSize(f.type);
 		const bool too_many = each == 0 ? count > kMaxEmptyElements : count > in_.remaining() / each;
 		if (!too_many) return;
 		std::ostringstream msg;
 		if (each == 0)
 		{
 			msg << "field '" << path_ << "' (" << typeLabel(f) << "[]) has " << count
-				<< " elements of an empty type, more than " << kMaxEmptyElements << " (corrupt count?)";
+			    << " elements of an empty type, more than " << kMaxEmptyElements << " (corrupt count?)";
 			throw DecodeError(msg.str());
 		}
 		msg << "message too short: field '" << path_ << "' (" << typeLabel(f) << "[]) has " << count
-			<< " elements, which need at least " << saturatingMul(count, each) << " bytes at byte " << in_.offset()
-			<< ", the message ends at byte " << in_.size();
+		    << " elements, which need at least " << saturatingMul(count, each) << " bytes at byte "
+		    << in_.offset() << ", the message ends at byte " << in_.size();
 		throw DecodeError(msg.str());
 	}
 
@@ -603,20 +621,46 @@ class Walker
 	{
 		switch (f.type)
 		{
-			case FieldType::Bool: number(read<uint8_t>(f) != 0 ? 1.0 : 0.0); break;
-			case FieldType::Int8: number(read<int8_t>(f)); break;
-			case FieldType::UInt8: number(read<uint8_t>(f)); break;
-			case FieldType::Int16: number(read<int16_t>(f)); break;
-			case FieldType::UInt16: number(read<uint16_t>(f)); break;
-			case FieldType::Int32: number(read<int32_t>(f)); break;
-			case FieldType::UInt32: number(read<uint32_t>(f)); break;
-			case FieldType::Int64: number(static_cast<double>(read<int64_t>(f))); break;
-			case FieldType::UInt64: number(static_cast<double>(read<uint64_t>(f))); break;
-			case FieldType::Float32: number(read<float>(f)); break;
-			case FieldType::Float64: number(read<double>(f)); break;
-			case FieldType::String: text(f); break;
+			case FieldType::Bool:
+				number(read<uint8_t>(f) != 0 ? 1.0 : 0.0);
+				break;
+			case FieldType::Int8:
+				number(read<int8_t>(f));
+				break;
+			case FieldType::UInt8:
+				number(read<uint8_t>(f));
+				break;
+			case FieldType::Int16:
+				number(read<int16_t>(f));
+				break;
+			case FieldType::UInt16:
+				number(read<uint16_t>(f));
+				break;
+			case FieldType::Int32:
+				number(read<int32_t>(f));
+				break;
+			case FieldType::UInt32:
+				number(read<uint32_t>(f));
+				break;
+			case FieldType::Int64:
+				number(static_cast<double>(read<int64_t>(f)));
+				break;
+			case FieldType::UInt64:
+				number(static_cast<double>(read<uint64_t>(f)));
+				break;
+			case FieldType::Float32:
+				number(read<float>(f));
+				break;
+			case FieldType::Float64:
+				number(read<double>(f));
+				break;
+			case FieldType::String:
+				text(f);
+				break;
 			case FieldType::Time:
-			case FieldType::Duration: time(f); break;
+			case FieldType::Duration:
+				time(f);
+				break;
 			case FieldType::Message:
 				if (++depth_ > kMaxNesting) fail(f, "nesting", 0);
 				message(*f.message);
@@ -686,7 +730,7 @@ class Walker
 		if (!probe.get(n)) fail(f, "string length", 4);
 		std::ostringstream msg;
 		msg << "message too short: field '" << path_ << "' (" << typeLabel(f) << ") has " << n
-			<< " bytes of text at byte " << probe.offset() << ", the message ends at byte " << in_.size();
+		    << " bytes of text at byte " << probe.offset() << ", the message ends at byte " << in_.size();
 		throw DecodeError(msg.str());
 	}
 
@@ -694,8 +738,8 @@ class Walker
 	{
 		std::ostringstream msg;
 		msg << "message too short: field '" << path_ << "' (" << typeLabel(f) << ") needs " << needed
-			<< " bytes for its " << what << " at byte " << in_.offset() << ", the message ends at byte "
-			<< in_.size();
+		    << " bytes for its " << what << " at byte " << in_.offset() << ", the message ends at byte "
+		    << in_.size();
 		throw DecodeError(msg.str());
 	}
 
@@ -703,7 +747,7 @@ class Walker
 	{
 		std::ostringstream msg;
 		msg << "message too short: '" << path_ << "' needs " << needed << " bytes for its " << what
-			<< " at byte " << in_.offset() << ", the message ends at byte " << in_.size();
+		    << " at byte " << in_.offset() << ", the message ends at byte " << in_.size();
 		throw DecodeError(msg.str());
 	}
 
@@ -726,13 +770,19 @@ std::size_t minWireSize(const MessageDef& m, bool cdr, std::vector<std::optional
 	std::size_t total = 0;
 	for (const FieldDef& f : m.fields)
 	{
-		const std::size_t each = f.type == FieldType::Message ? minWireSize(*f.message, cdr, memo)
-															   : primitiveSize(f.type);
+		const std::size_t each =
+		    f.type == FieldType::Message ? minWireSize(*f.message, cdr, memo) : primitiveSize(f.type);
 		switch (f.array)
 		{
-			case ArrayKind::None: total = saturatingAdd(total, each); break;
-			case ArrayKind::Fixed: total = saturatingAdd(total, saturatingMul(each, f.fixed_size)); break;
-			case ArrayKind::Sequence: total = saturatingAdd(total, 4); break;
+			case ArrayKind::None:
+				total = saturatingAdd(total, each);
+				break;
+			case ArrayKind::Fixed:
+				total = saturatingAdd(total, saturatingMul(each, f.fixed_size));
+				break;
+			case ArrayKind::Sequence:
+				total = saturatingAdd(total, 4);
+				break;
 		}
 	}
 	if (cdr && m.fields.empty()) total = 1;
@@ -749,15 +799,16 @@ std::atomic<uint64_t> g_next_layout_id{uint64_t{1} << 40};
 // ---------------------------------------------------------------- decoder
 
 FlatDecoder::FlatDecoder(std::shared_ptr<const Schema> schema, WireFormat format)
-	: schema_(std::move(schema)), format_(format)
+    : schema_(std::move(schema)), format_(format)
 {
 	std::vector<std::optional<std::size_t>> memo(schema_->messages().size());
 	min_size_.resize(memo.size());
-	for (const auto& m : schema_->messages()) min_size_[m->index] = minWireSize(*m, format_ == WireFormat::Cdr, memo);
+	for (const auto& m : schema_->messages())
+		min_size_[m->index] = minWireSize(*m, format_ == WireFormat::Cdr, memo);
 }
 
 void FlatDecoder::run(const uint8_t* data, std::size_t size, std::vector<Value>& values,
-					  std::vector<std::string>* names)
+                      std::vector<std::string>* names)
 {
 	lengths_.clear();
 	if (format_ == WireFormat::Ros1)
@@ -770,13 +821,13 @@ void FlatDecoder::run(const uint8_t* data, std::size_t size, std::vector<Value>&
 	}
 	// Encapsulation: 0x00 0x00 = CDR big endian, 0x00 0x01 = CDR little endian,
 	// then two option bytes. Anything else (parameter lists, XCDR2) is refused.
-	if (size < 4) throw DecodeError("message too short for the CDR header (" + std::to_string(size) + " bytes)");
+	if (size < 4)
+		throw DecodeError("message too short for the CDR header (" + std::to_string(size) + " bytes)");
 	if (data[0] != 0 || data[1] > 1)
 	{
 		std::ostringstream msg;
 		msg << "unsupported CDR encapsulation 0x" << std::hex << std::setw(4) << std::setfill('0')
-			<< (int{data[0]} << 8 | data[1])
-			<< " (only plain CDR, 0x0000 and 0x0001)";
+		    << (int{data[0]} << 8 | data[1]) << " (only plain CDR, 0x0000 and 0x0001)";
 		throw DecodeError(msg.str());
 	}
 	const bool little = data[1] == 1;

@@ -52,7 +52,7 @@ enum class FieldType : uint8_t
 	Float32,
 	Float64,
 	String,
-	Time,  //!< ROS 1 `time`, ROS 2 builtin_interfaces/Time
+	Time,      //!< ROS 1 `time`, ROS 2 builtin_interfaces/Time
 	Duration,  //!< ROS 1 `duration`, ROS 2 builtin_interfaces/Duration
 	Message
 };
@@ -60,7 +60,7 @@ enum class FieldType : uint8_t
 enum class ArrayKind : uint8_t
 {
 	None,
-	Fixed,	//!< `T[N]`: N elements, no count on the wire
+	Fixed,    //!< `T[N]`: N elements, no count on the wire
 	Sequence  //!< `T[]`, `T[<=N]`: a uint32 count, then the elements
 };
 
@@ -70,7 +70,7 @@ struct FieldDef
 {
 	std::string name;
 	FieldType type = FieldType::Bool;
-	std::string type_name;	//!< builtin spelling, or the resolved `pkg/Type` of a Message
+	std::string type_name;                //!< builtin spelling, or the resolved `pkg/Type` of a Message
 	const MessageDef* message = nullptr;  //!< FieldType::Message
 	ArrayKind array = ArrayKind::None;
 	uint32_t fixed_size = 0;  //!< ArrayKind::Fixed
@@ -80,7 +80,7 @@ struct MessageDef
 {
 	std::string name;  //!< `pkg/Type`
 	std::vector<FieldDef> fields;
-	std::size_t index = 0;	//!< position in Schema::messages()
+	std::size_t index = 0;  //!< position in Schema::messages()
 };
 
 /** A definition that cannot be parsed or resolved; the message says which type,
@@ -108,7 +108,7 @@ class Schema
 	 *  unsupported builtin (wstring). Only types reachable from the main type
 	 *  are parsed: a broken unused section is ignored. */
 	static std::shared_ptr<const Schema> parse(std::string_view type_name, std::string_view text,
-											   Dialect dialect, const DefinitionFallback& fallback = {});
+	                                           Dialect dialect, const DefinitionFallback& fallback = {});
 
 	const MessageDef& root() const { return *messages_.front(); }
 	const std::vector<std::unique_ptr<MessageDef>>& messages() const { return messages_; }
@@ -117,7 +117,7 @@ class Schema
    private:
 	Schema() = default;
 	friend class SchemaBuilder;
-	std::vector<std::unique_ptr<MessageDef>> messages_;	 // root first
+	std::vector<std::unique_ptr<MessageDef>> messages_;  // root first
 	Dialect dialect_ = Dialect::Ros1;
 };
 
@@ -125,8 +125,8 @@ class Schema
 enum class WireFormat : uint8_t
 {
 	Ros1,  //!< little endian, packed; strings: uint32 length + bytes; time: uint32 sec + uint32 nsec
-	Cdr	   //!< 4-byte encapsulation header, then XCDR1 (aligned; strings NUL-terminated;
-		   //!< Time: int32 sec + uint32 nanosec); little or big endian
+	Cdr    //!< 4-byte encapsulation header, then XCDR1 (aligned; strings NUL-terminated;
+	       //!< Time: int32 sec + uint32 nanosec); little or big endian
 };
 
 /** A message that does not match its definition. `what()` names the field (as
@@ -137,10 +137,13 @@ class DecodeError : public std::runtime_error
 	using std::runtime_error::runtime_error;
 };
 
-/** Decodes serialized messages of one schema into Records (record.h flattening).
- *  Keeps the field names of the last layout: they are rebuilt, and the Record's
- *  layout_id changes, only when a sequence length differs from the previous
- *  message's. layout_ids are unique in the process. */
+/** Decodes serialized messages of one schema into Records (record.h flattening:
+ *  `a.b`, `a[i]`, `a[]` before the elements; Time values in integer ns; arrays
+ *  of 1-byte integers (byte, char, int8, uint8) longer than kMaxFlattenedArray
+ *  give `a[]` only). Keeps the field names of the last layout: they are
+ *  rebuilt, and the Record's layout_id changes, only when a sequence length
+ *  differs from the previous message's. layout_ids are unique in the process
+ *  (counted from 2^40, away from small per-source counters). */
 class FlatDecoder
 {
    public:
@@ -151,7 +154,8 @@ class FlatDecoder
 	 *  alone. `out.names` is left as it is when out.layout_id already is the
 	 *  current layout (the caller reuses the Record). Throws DecodeError when the
 	 *  bytes end inside a field, a count exceeds the remaining bytes, the
-	 *  encapsulation is not plain CDR, or (ROS 1) bytes are left over. */
+	 *  encapsulation is not plain CDR (XCDR1), or bytes are left over (ROS 1:
+	 *  any; CDR: more than the 7 that end padding may explain). */
 	void decode(const uint8_t* data, std::size_t size, Record& out);
 
 	const Schema& schema() const { return *schema_; }
@@ -160,16 +164,16 @@ class FlatDecoder
 	// One pass over the bytes; collects the names too when `names` is given
 	// (and then the field path for error messages).
 	void run(const uint8_t* data, std::size_t size, std::vector<Value>& values,
-			 std::vector<std::string>* names);
+	         std::vector<std::string>* names);
 	[[noreturn]] void explainFailure(const uint8_t* data, std::size_t size, const DecodeError& first);
 
 	std::shared_ptr<const Schema> schema_;
 	WireFormat format_;
-	std::vector<std::size_t> min_size_;	 // lower bound of each message's wire size, by index
-	std::vector<uint32_t> lengths_;	 // sequence lengths of the message being decoded
-	std::vector<uint32_t> layout_lengths_;	// ... of the current layout
-	std::vector<std::string> names_;  // current layout
-	uint64_t layout_id_ = 0;  // 0: none yet
+	std::vector<std::size_t> min_size_;     // lower bound of each message's wire size, by index
+	std::vector<uint32_t> lengths_;         // sequence lengths of the message being decoded
+	std::vector<uint32_t> layout_lengths_;  // ... of the current layout
+	std::vector<std::string> names_;        // current layout
+	uint64_t layout_id_ = 0;                // 0: none yet
 };
 
 }  // namespace auvnav::import::msg

@@ -27,7 +27,10 @@ namespace
 {
 namespace fs = std::filesystem;
 
-[[noreturn]] void fail(const std::string& path, const std::string& why) { throw ImportError(path + ": " + why); }
+[[noreturn]] void fail(const std::string& path, const std::string& why)
+{
+	throw ImportError(path + ": " + why);
+}
 
 // ---------------------------------------------------------------- structural check
 //
@@ -41,7 +44,7 @@ namespace fs = std::filesystem;
 // wanted topic points to. Compressed chunk contents are left to the
 // decompressors' checks.
 
-constexpr uint8_t kOpMessageDefinition = 0x01;	// bag 1.2, still skipped by readers
+constexpr uint8_t kOpMessageDefinition = 0x01;  // bag 1.2, still skipped by readers
 constexpr uint8_t kOpMessage = 0x02;
 constexpr uint8_t kOpBagHeader = 0x03;
 constexpr uint8_t kOpIndex = 0x04;
@@ -65,9 +68,10 @@ uint64_t littleEndian(const char* p, std::size_t n)
 class BagFile
 {
    public:
-	explicit BagFile(const std::string& path) : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC))
+	explicit BagFile(const std::string& path)
+	    : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC)), open_errno_(fd_ < 0 ? errno : 0)
 	{
-		struct stat st{};
+		struct stat st = {};
 		if (fd_ >= 0 && ::fstat(fd_, &st) == 0) size_ = static_cast<uint64_t>(st.st_size);
 	}
 	~BagFile()
@@ -78,6 +82,7 @@ class BagFile
 	BagFile& operator=(const BagFile&) = delete;
 
 	bool isOpen() const { return fd_ >= 0; }
+	int openErrno() const { return open_errno_; }
 	uint64_t size() const { return size_; }
 
 	bool read(uint64_t pos, std::size_t n, std::string& out) const
@@ -96,6 +101,7 @@ class BagFile
 
    private:
 	int fd_;
+	int open_errno_;
 	uint64_t size_ = 0;
 };
 
@@ -231,14 +237,15 @@ class BagChecker
 	[[noreturn]] void damaged(uint64_t at, const std::string& why) const
 	{
 		fail(path_, "damaged ROS 1 bag: " + why + " (record at byte " + std::to_string(at) + " of " +
-						std::to_string(file_.size()) + ")");
+		                std::to_string(file_.size()) + ")");
 	}
 
 	[[noreturn]] void truncated(uint64_t at, const std::string& what) const
 	{
 		std::ostringstream msg;
 		msg << "truncated ROS 1 bag: the file ends inside " << what << " at byte " << at << " ("
-			<< file_.size() << " bytes; recording interrupted or incomplete copy? `rosbag reindex` may recover it)";
+		    << file_.size()
+		    << " bytes; recording interrupted or incomplete copy? `rosbag reindex` may recover it)";
 		fail(path_, msg.str());
 	}
 
@@ -248,7 +255,8 @@ class BagChecker
 		// Most headers are short: one read for the length, the header and data_len.
 		constexpr std::size_t kGuess = 256;
 		if (pos > limit || limit - pos < 4) truncated(pos, what);
-		std::string_view bytes = in.view(pos, static_cast<std::size_t>(std::min<uint64_t>(kGuess, limit - pos)));
+		std::string_view bytes =
+		    in.view(pos, static_cast<std::size_t>(std::min<uint64_t>(kGuess, limit - pos)));
 		if (bytes.size() < 4) truncated(pos, what);
 		const uint64_t header_len = littleEndian(bytes.data(), 4);
 		if (header_len > kMaxHeaderBytes)
@@ -293,8 +301,8 @@ class BagChecker
 		{
 			std::ostringstream msg;
 			msg << "truncated ROS 1 bag: its index starts at byte " << index_pos_ << " but the file has only "
-				<< file_.size()
-				<< " bytes (recording interrupted or incomplete copy; `rosbag reindex` may recover it)";
+			    << file_.size()
+			    << " bytes (recording interrupted or incomplete copy; `rosbag reindex` may recover it)";
 			fail(path_, msg.str());
 		}
 		if (index_pos_ < r.end) damaged(pos, "index_pos points into the bag header");
@@ -323,8 +331,10 @@ class BagChecker
 			Chunk c;
 			c.pos = requireInteger(r, pos, "chunk_pos", 8);
 			c.connections = static_cast<uint32_t>(requireInteger(r, pos, "count", 4));
-			if (uint64_t{c.connections} * 8 != r.data_len) damaged(pos, "chunk-info counts do not match its size");
-			if (c.pos < kMagic.size() || c.pos >= index_pos_) damaged(pos, "chunk-info points outside the chunks");
+			if (uint64_t{c.connections} * 8 != r.data_len)
+				damaged(pos, "chunk-info counts do not match its size");
+			if (c.pos < kMagic.size() || c.pos >= index_pos_)
+				damaged(pos, "chunk-info points outside the chunks");
 			chunk_infos_.push_back(c);
 			pos = r.end;
 		}
@@ -332,7 +342,8 @@ class BagChecker
 
 	void checkConnectionData(ByteSource& in, const RecordInfo& r, uint64_t pos) const
 	{
-		if (r.data_len > (64u << 20)) damaged(pos, "connection data of " + std::to_string(r.data_len) + " bytes");
+		if (r.data_len > (64u << 20))
+			damaged(pos, "connection data of " + std::to_string(r.data_len) + " bytes");
 		const std::string_view data = in.view(r.data_pos, r.data_len);
 		if (data.size() != r.data_len) truncated(pos, "a connection record");
 		HeaderFields fields;
@@ -386,11 +397,13 @@ class BagChecker
 		constexpr uint64_t kBytesPerSmallRead = 4096;
 		if (wanted_offsets_.size() * kBytesPerSmallRead < usable)
 		{
-			for (const uint64_t offset : wanted_offsets_) checkMessageRecord(file_bytes_, chunk_data, usable, offset);
+			for (const uint64_t offset : wanted_offsets_)
+				checkMessageRecord(file_bytes_, chunk_data, usable, offset);
 			return;
 		}
 		std::string bytes;
-		if (!file_.read(chunk_data, static_cast<std::size_t>(usable), bytes)) truncated(chunk_data, "a chunk");
+		if (!file_.read(chunk_data, static_cast<std::size_t>(usable), bytes))
+			truncated(chunk_data, "a chunk");
 		MemoryBytes chunk(chunk_data, std::move(bytes));
 		for (const uint64_t offset : wanted_offsets_) checkMessageRecord(chunk, chunk_data, usable, offset);
 	}
@@ -433,7 +446,7 @@ void checkBagFile(const std::string& path, const std::string& topic)
 	std::error_code ec;
 	if (fs::is_directory(path, ec)) fail(path, "is a directory, not a ROS 1 bag file");
 	const BagFile file(path);
-	if (!file.isOpen()) fail(path, std::string("cannot open: ") + std::strerror(errno));
+	if (!file.isOpen()) fail(path, std::string("cannot open: ") + std::strerror(file.openErrno()));
 	std::string head;
 	file.read(0, std::min<uint64_t>(file.size(), 16), head);
 	if (head.compare(0, kMagic.size(), kMagic) == 0)
@@ -442,9 +455,10 @@ void checkBagFile(const std::string& path, const std::string& topic)
 		return;
 	}
 	if (head.compare(0, 9, "#ROSBAG V") == 0)
-		fail(path, "ROS bag format " + head.substr(8, 4) +
-					   " is not supported, only 2.0 (rewrite it with `rosbag filter in.bag out.bag True`)");
-	if (head.compare(0, 13, "SQLite format") == 0) fail(path, "not a ROS 1 bag: it is an SQLite database (a ROS 2 bag?)");
+		fail(path, "ROS bag format " + head.substr(9, 3) +
+		               " is not supported, only 2.0 (rewrite it with `rosbag filter in.bag out.bag True`)");
+	if (head.compare(0, 13, "SQLite format") == 0)
+		fail(path, "not a ROS 1 bag: it is an SQLite database (a ROS 2 bag?)");
 	fail(path, "not a ROS 1 bag (the file does not start with '#ROSBAG V2.0')");
 }
 
@@ -502,7 +516,7 @@ class Ros1Source final : public RecordSource
 {
    public:
 	Ros1Source(std::string path, std::string topic, std::unique_ptr<rosbag::Bag> bag)
-		: path_(std::move(path)), topic_(std::move(topic)), bag_(std::move(bag))
+	    : path_(std::move(path)), topic_(std::move(topic)), bag_(std::move(bag))
 	{
 		view_ = std::make_unique<rosbag::View>(*bag_, rosbag::TopicQuery(topic_));
 		for (const rosbag::ConnectionInfo* c : view_->getConnections())
@@ -577,7 +591,8 @@ class Ros1Source final : public RecordSource
 	}
 
 	/** One decoder per distinct definition (several connections may share one). */
-	msg::FlatDecoder& decoderFor(const std::string& type, const std::string& md5, const std::string& definition)
+	msg::FlatDecoder& decoderFor(const std::string& type, const std::string& md5,
+	                             const std::string& definition)
 	{
 		const std::string key = type + '\n' + md5 + '\n' + definition;
 		auto& slot = decoders_[key];
@@ -586,12 +601,13 @@ class Ros1Source final : public RecordSource
 			fail(path_, "topic " + topic_ + ": the bag stores no message definition for " + type);
 		try
 		{
-			slot = std::make_unique<msg::FlatDecoder>(msg::Schema::parse(type, definition, msg::Dialect::Ros1),
-													  msg::WireFormat::Ros1);
+			slot = std::make_unique<msg::FlatDecoder>(
+			    msg::Schema::parse(type, definition, msg::Dialect::Ros1), msg::WireFormat::Ros1);
 		}
 		catch (const msg::DefinitionError& e)
 		{
-			fail(path_, "topic " + topic_ + ": cannot use the message definition stored in the bag: " + e.what());
+			fail(path_,
+			     "topic " + topic_ + ": cannot use the message definition stored in the bag: " + e.what());
 		}
 		return *slot;
 	}
@@ -599,7 +615,7 @@ class Ros1Source final : public RecordSource
 	std::string path_;
 	std::string topic_;
 	std::string type_;
-	std::unique_ptr<rosbag::Bag> bag_;	// before view_: the view refers to it
+	std::unique_ptr<rosbag::Bag> bag_;  // before view_: the view refers to it
 	std::unique_ptr<rosbag::View> view_;
 	rosbag::View::iterator it_;
 	bool started_ = false;

@@ -24,7 +24,10 @@ namespace
 {
 namespace fs = std::filesystem;
 
-[[noreturn]] void fail(const std::string& path, const std::string& why) { throw ImportError(path + ": " + why); }
+[[noreturn]] void fail(const std::string& path, const std::string& why)
+{
+	throw ImportError(path + ": " + why);
+}
 
 // ---------------------------------------------------------------- bundled definitions
 
@@ -37,49 +40,49 @@ struct Bundled
 // ROS 2 (Humble .. Jazzy) forms: Header has no seq; Time is int32 sec +
 // uint32 nanosec (a builtin for the decoder).
 constexpr Bundled kBundled[] = {
-	{"std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n"},
-	{"builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"},
-	{"builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"},
-	{"geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"},
-	{"geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"},
-	{"geometry_msgs/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"},
-	{"geometry_msgs/Pose", "Point position\nQuaternion orientation\n"},
-	{"geometry_msgs/PoseWithCovariance", "Pose pose\nfloat64[36] covariance\n"},
-	{"geometry_msgs/PoseStamped", "std_msgs/Header header\nPose pose\n"},
-	{"geometry_msgs/PoseWithCovarianceStamped", "std_msgs/Header header\nPoseWithCovariance pose\n"},
-	{"geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n"},
-	{"geometry_msgs/TwistStamped", "std_msgs/Header header\nTwist twist\n"},
-	{"geometry_msgs/TwistWithCovariance", "Twist twist\nfloat64[36] covariance\n"},
-	{"geometry_msgs/TwistWithCovarianceStamped", "std_msgs/Header header\nTwistWithCovariance twist\n"},
-	{"geometry_msgs/Vector3Stamped", "std_msgs/Header header\nVector3 vector\n"},
-	{"geometry_msgs/PointStamped", "std_msgs/Header header\nPoint point\n"},
-	{"geometry_msgs/QuaternionStamped", "std_msgs/Header header\nQuaternion quaternion\n"},
-	{"sensor_msgs/Imu",
-	 "std_msgs/Header header\n"
-	 "geometry_msgs/Quaternion orientation\n"
-	 "float64[9] orientation_covariance\n"
-	 "geometry_msgs/Vector3 angular_velocity\n"
-	 "float64[9] angular_velocity_covariance\n"
-	 "geometry_msgs/Vector3 linear_acceleration\n"
-	 "float64[9] linear_acceleration_covariance\n"},
-	{"sensor_msgs/MagneticField",
-	 "std_msgs/Header header\ngeometry_msgs/Vector3 magnetic_field\nfloat64[9] magnetic_field_covariance\n"},
-	{"sensor_msgs/FluidPressure", "std_msgs/Header header\nfloat64 fluid_pressure\nfloat64 variance\n"},
-	{"sensor_msgs/Temperature", "std_msgs/Header header\nfloat64 temperature\nfloat64 variance\n"},
-	{"sensor_msgs/NavSatStatus", "int8 status\nuint16 service\n"},
-	{"sensor_msgs/NavSatFix",
-	 "std_msgs/Header header\n"
-	 "NavSatStatus status\n"
-	 "float64 latitude\n"
-	 "float64 longitude\n"
-	 "float64 altitude\n"
-	 "float64[9] position_covariance\n"
-	 "uint8 position_covariance_type\n"},
-	{"nav_msgs/Odometry",
-	 "std_msgs/Header header\n"
-	 "string child_frame_id\n"
-	 "geometry_msgs/PoseWithCovariance pose\n"
-	 "geometry_msgs/TwistWithCovariance twist\n"},
+    {"std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n"},
+    {"builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"},
+    {"builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"},
+    {"geometry_msgs/Vector3", "float64 x\nfloat64 y\nfloat64 z\n"},
+    {"geometry_msgs/Point", "float64 x\nfloat64 y\nfloat64 z\n"},
+    {"geometry_msgs/Quaternion", "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"},
+    {"geometry_msgs/Pose", "Point position\nQuaternion orientation\n"},
+    {"geometry_msgs/PoseWithCovariance", "Pose pose\nfloat64[36] covariance\n"},
+    {"geometry_msgs/PoseStamped", "std_msgs/Header header\nPose pose\n"},
+    {"geometry_msgs/PoseWithCovarianceStamped", "std_msgs/Header header\nPoseWithCovariance pose\n"},
+    {"geometry_msgs/Twist", "Vector3 linear\nVector3 angular\n"},
+    {"geometry_msgs/TwistStamped", "std_msgs/Header header\nTwist twist\n"},
+    {"geometry_msgs/TwistWithCovariance", "Twist twist\nfloat64[36] covariance\n"},
+    {"geometry_msgs/TwistWithCovarianceStamped", "std_msgs/Header header\nTwistWithCovariance twist\n"},
+    {"geometry_msgs/Vector3Stamped", "std_msgs/Header header\nVector3 vector\n"},
+    {"geometry_msgs/PointStamped", "std_msgs/Header header\nPoint point\n"},
+    {"geometry_msgs/QuaternionStamped", "std_msgs/Header header\nQuaternion quaternion\n"},
+    {"sensor_msgs/Imu",
+     "std_msgs/Header header\n"
+     "geometry_msgs/Quaternion orientation\n"
+     "float64[9] orientation_covariance\n"
+     "geometry_msgs/Vector3 angular_velocity\n"
+     "float64[9] angular_velocity_covariance\n"
+     "geometry_msgs/Vector3 linear_acceleration\n"
+     "float64[9] linear_acceleration_covariance\n"},
+    {"sensor_msgs/MagneticField",
+     "std_msgs/Header header\ngeometry_msgs/Vector3 magnetic_field\nfloat64[9] magnetic_field_covariance\n"},
+    {"sensor_msgs/FluidPressure", "std_msgs/Header header\nfloat64 fluid_pressure\nfloat64 variance\n"},
+    {"sensor_msgs/Temperature", "std_msgs/Header header\nfloat64 temperature\nfloat64 variance\n"},
+    {"sensor_msgs/NavSatStatus", "int8 status\nuint16 service\n"},
+    {"sensor_msgs/NavSatFix",
+     "std_msgs/Header header\n"
+     "NavSatStatus status\n"
+     "float64 latitude\n"
+     "float64 longitude\n"
+     "float64 altitude\n"
+     "float64[9] position_covariance\n"
+     "uint8 position_covariance_type\n"},
+    {"nav_msgs/Odometry",
+     "std_msgs/Header header\n"
+     "string child_frame_id\n"
+     "geometry_msgs/PoseWithCovariance pose\n"
+     "geometry_msgs/TwistWithCovariance twist\n"},
 };
 
 const char* bundledDefinition(const std::string& normalized_type)
@@ -93,7 +96,8 @@ std::string bundledTypeList()
 {
 	std::string s;
 	for (const Bundled& b : kBundled)
-		if (std::strncmp(b.type, "builtin_interfaces/", 19) != 0) s += (s.empty() ? "" : ", ") + std::string(b.type);
+		if (std::strncmp(b.type, "builtin_interfaces/", 19) != 0)
+			s += (s.empty() ? "" : ", ") + std::string(b.type);
 	return s;
 }
 
@@ -103,10 +107,14 @@ std::string sqliteReason(sqlite3* db, int rc)
 {
 	switch (rc & 0xff)
 	{
-		case SQLITE_NOTADB: return "not an SQLite database (so not a rosbag2 .db3 file)";
-		case SQLITE_CORRUPT: return "truncated or damaged database (SQLite: database disk image is malformed)";
-		case SQLITE_IOERR: return std::string("read error, truncated file? (SQLite: ") + sqlite3_errmsg(db) + ")";
-		default: return std::string("SQLite: ") + (db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
+		case SQLITE_NOTADB:
+			return "not an SQLite database (so not a rosbag2 .db3 file)";
+		case SQLITE_CORRUPT:
+			return "truncated or damaged database (SQLite: database disk image is malformed)";
+		case SQLITE_IOERR:
+			return std::string("read error, truncated file? (SQLite: ") + sqlite3_errmsg(db) + ")";
+		default:
+			return std::string("SQLite: ") + (db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
 	}
 }
 
@@ -147,7 +155,7 @@ class Statement
 {
    public:
 	Statement(const Database& db, const std::string& sql, std::string doing)
-		: db_(db), doing_(std::move(doing))
+	    : db_(db), doing_(std::move(doing))
 	{
 		const int rc = sqlite3_prepare_v2(db_.handle(), sql.c_str(), -1, &stmt_, nullptr);
 		if (rc != SQLITE_OK) db_.failed(rc, doing_);
@@ -158,7 +166,8 @@ class Statement
 
 	void bind(int i, const std::string& text)
 	{
-		const int rc = sqlite3_bind_text(stmt_, i, text.c_str(), static_cast<int>(text.size()), SQLITE_TRANSIENT);
+		const int rc =
+		    sqlite3_bind_text(stmt_, i, text.c_str(), static_cast<int>(text.size()), SQLITE_TRANSIENT);
 		if (rc != SQLITE_OK) db_.failed(rc, doing_);
 	}
 
@@ -175,8 +184,9 @@ class Statement
 	std::string text(int col) const
 	{
 		const auto* p = sqlite3_column_text(stmt_, col);
-		return p ? std::string(reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col)))
-				 : std::string();
+		return p ? std::string(reinterpret_cast<const char*>(p),
+		                       static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col)))
+		         : std::string();
 	}
 	const uint8_t* blob(int col, std::size_t& size) const
 	{
@@ -263,9 +273,12 @@ std::vector<std::string> bagFiles(const std::string& path)
 	if (files.empty())
 	{
 		if (compressed)
-			fail(path, "compressed rosbag2 files (.db3.zstd) are not supported; decompress them first (zstd -d)");
+			fail(path,
+			     "compressed rosbag2 files (.db3.zstd) are not supported; decompress them first (zstd -d)");
 		if (mcap)
-			fail(path, "MCAP rosbag2 storage is not supported, only SQLite (.db3); convert with `ros2 bag convert`");
+			fail(
+			    path,
+			    "MCAP rosbag2 storage is not supported, only SQLite (.db3); convert with `ros2 bag convert`");
 		fail(path, "no .db3 file in this folder (not a rosbag2 SQLite bag)");
 	}
 	std::sort(files.begin(), files.end(), naturalLess);
@@ -285,19 +298,21 @@ void checkDatabaseSize(const std::string& file)
 {
 	std::ifstream in(file, std::ios::binary);
 	unsigned char h[100] = {};
-	if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return;	 // SQLite reports what is wrong
+	if (!in.read(reinterpret_cast<char*>(h), sizeof h)) return;  // SQLite reports what is wrong
 	if (std::memcmp(h, "SQLite format 3", 16) != 0) return;
 	const uint32_t raw_page = bigEndian(h + 16, 2);
 	const uint64_t page_size = raw_page == 1 ? 65536 : raw_page;
 	const uint32_t pages = bigEndian(h + 28, 4);
 	// The page count is valid only when written by the same change as the counter.
 	if (pages == 0 || bigEndian(h + 24, 4) != bigEndian(h + 92, 4)) return;
+	// With a write-ahead log next to it, the file alone may lag its header.
 	std::error_code ec;
+	if (fs::exists(file + "-wal", ec)) return;
 	const uint64_t size = fs::file_size(file, ec);
 	if (ec || size >= pages * page_size) return;
 	std::ostringstream msg;
 	msg << "truncated or damaged database: its header records " << pages << " pages of " << page_size
-		<< " bytes (" << pages * page_size << " bytes) but the file has " << size << " bytes";
+	    << " bytes (" << pages * page_size << " bytes) but the file has " << size << " bytes";
 	fail(file, msg.str());
 }
 
@@ -309,14 +324,15 @@ BagPart openPart(const std::string& file)
 	std::set<std::string> tables;
 	{
 		// The first read of the file: "not a database" and damage show here.
-		Statement s(*part.db, "SELECT name FROM sqlite_master WHERE type = 'table'", "cannot read the database");
+		Statement s(*part.db, "SELECT name FROM sqlite_master WHERE type = 'table'",
+		            "cannot read the database");
 		while (s.step()) tables.insert(s.text(0));
 	}
 	if (!tables.count("topics") || !tables.count("messages"))
 		fail(file, "not a rosbag2 database (it has no 'topics' and 'messages' tables)");
 	part.has_definitions = tables.count("message_definitions") > 0;
 	Statement s(*part.db, "SELECT id, name, type, serialization_format FROM topics ORDER BY id",
-				"cannot read the topics table");
+	            "cannot read the topics table");
 	while (s.step()) part.topics.push_back(TopicRow{s.integer(0), s.text(1), s.text(2), s.text(3)});
 	return part;
 }
@@ -349,25 +365,40 @@ std::string describeTopics(const TopicList& topics)
 
 // ---------------------------------------------------------------- definitions
 
-/** The bag's `ros2msg` definition of `type`, or empty. */
-std::string storedDefinition(const BagPart& part, const std::string& type)
+struct StoredDefinition
 {
-	if (!part.has_definitions) return {};
+	std::string ros2msg;    //!< the definition in .msg syntax, or empty
+	bool idl_only = false;  //!< the bag has it in IDL (ros2idl), which is not supported
+};
+
+StoredDefinition storedDefinition(const BagPart& part, const std::string& type)
+{
+	StoredDefinition d;
+	if (!part.has_definitions) return d;
 	Statement s(*part.db,
-				"SELECT encoding, encoded_message_definition FROM message_definitions WHERE topic_type = ?",
-				"cannot read the message_definitions table");
+	            "SELECT encoding, encoded_message_definition FROM message_definitions WHERE topic_type = ?",
+	            "cannot read the message_definitions table");
 	s.bind(1, type);
 	while (s.step())
 	{
+		const std::string encoding = s.text(0);
 		const std::string text = s.text(1);
-		if (s.text(0) == "ros2msg" && !text.empty()) return text;
+		if (text.empty()) continue;
+		if (encoding == "ros2msg")
+		{
+			d.ros2msg = text;
+			return d;
+		}
+		d.idl_only = d.idl_only || encoding == "ros2idl";
 	}
-	return {};
+	return d;
 }
 
-std::shared_ptr<const msg::Schema> schemaFor(const BagPart& part, const std::string& topic, const std::string& type)
+std::shared_ptr<const msg::Schema> schemaFor(const BagPart& part, const std::string& topic,
+                                             const std::string& type)
 {
-	const std::string stored = storedDefinition(part, type);
+	const StoredDefinition definition = storedDefinition(part, type);
+	const std::string& stored = definition.ros2msg;
 	const std::string normalized = msg::normalizeTypeName(type);
 	const char* bundled = bundledDefinition(normalized);
 	const msg::DefinitionFallback fallback = bundledDefinition;
@@ -382,12 +413,18 @@ std::shared_ptr<const msg::Schema> schemaFor(const BagPart& part, const std::str
 		{
 			// A standard type is the same everywhere: the bundled form will do.
 			if (!bundled)
-				fail(part.db->path(), context + "cannot use the message definition stored in the bag: " + e.what());
+				fail(part.db->path(),
+				     context + "cannot use the message definition stored in the bag: " + e.what());
 		}
 	}
+	if (!bundled && definition.idl_only)
+		fail(part.db->path(),
+		     context + "the bag stores its definition in IDL (ros2idl), which is not supported, " +
+		         "and it is not one of the bundled standard types (" + bundledTypeList() + ")");
 	if (!bundled)
-		fail(part.db->path(), context + "the bag stores no definition of this type (recorded before ROS 2 Iron?) " +
-								  "and it is not one of the bundled standard types (" + bundledTypeList() + ")");
+		fail(part.db->path(),
+		     context + "the bag stores no definition of this type (recorded before ROS 2 Iron?) " +
+		         "and it is not one of the bundled standard types (" + bundledTypeList() + ")");
 	try
 	{
 		return msg::Schema::parse(type, bundled, msg::Dialect::Ros2, fallback);
@@ -404,7 +441,7 @@ class Ros2Source final : public RecordSource
 {
    public:
 	Ros2Source(std::string path, std::string topic, std::vector<BagPart> parts)
-		: path_(std::move(path)), topic_(std::move(topic)), parts_(std::move(parts))
+	    : path_(std::move(path)), topic_(std::move(topic)), parts_(std::move(parts))
 	{
 		for (std::size_t i = 0; i < parts_.size(); ++i) prepareDecoders(i);
 	}
@@ -441,7 +478,8 @@ class Ros2Source final : public RecordSource
 		}
 		catch (const msg::DecodeError& e)
 		{
-			throw ImportError(out.where + " (" + types_.at({current_, statement_->integer(0)}) + "): " + e.what());
+			throw ImportError(out.where + " (" + types_.at({current_, statement_->integer(0)}) +
+			                  "): " + e.what());
 		}
 		return true;
 	}
@@ -457,11 +495,11 @@ class Ros2Source final : public RecordSource
 			if (t.name != topic_) continue;
 			if (t.format != "cdr")
 				fail(parts_[i].db->path(), "topic " + topic_ + ": serialization format '" + t.format +
-											   "' is not supported (only cdr)");
+				                               "' is not supported (only cdr)");
 			if (type_.empty()) type_ = t.type;
 			const auto schema = schemaFor(parts_[i], topic_, t.type);
 			// Parts that store the same definition share a decoder (and its layout).
-			const std::string key = t.type + '\n' + storedDefinition(parts_[i], t.type);
+			const std::string key = t.type + '\n' + storedDefinition(parts_[i], t.type).ros2msg;
 			auto& decoder = shared_[key];
 			if (!decoder) decoder = std::make_unique<msg::FlatDecoder>(schema, msg::WireFormat::Cdr);
 			decoders_[{i, t.id}] = decoder.get();
@@ -476,10 +514,11 @@ class Ros2Source final : public RecordSource
 		for (const TopicRow& t : parts_[i].topics)
 			if (t.name == topic_) ids += (ids.empty() ? "" : ", ") + std::to_string(t.id);
 		if (ids.empty()) return nullptr;
-		return std::make_unique<Statement>(*parts_[i].db,
-										   "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids +
-											   ") ORDER BY timestamp, id",
-										   "cannot read the messages of topic " + topic_);
+		return std::make_unique<Statement>(
+		    *parts_[i].db,
+		    "SELECT topic_id, timestamp, data FROM messages WHERE topic_id IN (" + ids +
+		        ") ORDER BY timestamp, id",
+		    "cannot read the messages of topic " + topic_);
 	}
 
 	std::string path_;
@@ -490,7 +529,7 @@ class Ros2Source final : public RecordSource
 	std::map<std::pair<std::size_t, int64_t>, msg::FlatDecoder*> decoders_;
 	std::map<std::pair<std::size_t, int64_t>, std::string> types_;
 	std::size_t current_ = 0;
-	std::unique_ptr<Statement> statement_;	// after parts_: it refers to a part's database
+	std::unique_ptr<Statement> statement_;  // after parts_: it refers to a part's database
 	uint64_t index_ = 0;
 };
 
