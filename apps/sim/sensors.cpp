@@ -4,6 +4,7 @@
 #include <mrpt/system/datetime.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 namespace auvnav::sim
@@ -137,12 +138,70 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	rng_.randomize(streamSeed(seed, 2));
 	const int beams = n.integer("beam_count", 4);
 	if (beams < 3 || beams > 8) n.fail("beam_count", "expected 3..8 beams");
-	for (int i = 0; i < beams; ++i)
+	// Default: equally spaced, the first 45° off the sensor x axis (a 4-beam
+	// Janus head with its beams on the diagonals).
+	for (int i = 0; i < beams; ++i) beam_azimuths_rad_.push_back((45.0 + 360.0 * i / beams) * kDeg);
+	if (n.has("beam_azimuths_deg"))
 	{
-		const double az = (45.0 + 360.0 * i / beams) * kDeg;
+		const auto az_deg = n.numbers("beam_azimuths_deg");
+		if (az_deg.size() != beam_azimuths_rad_.size())
+			n.fail("beam_azimuths_deg", "expected " + std::to_string(beams) + " azimuths (beam_count)");
+		for (std::size_t i = 0; i < az_deg.size(); ++i) beam_azimuths_rad_[i] = az_deg[i] * kDeg;
+	}
+	for (double az : beam_azimuths_rad_)
 		beam_dirs_s_.emplace_back(std::sin(inclination_rad_) * std::cos(az),
 								  std::sin(inclination_rad_) * std::sin(az), std::cos(inclination_rad_));
+	Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
+	for (const auto& d : beam_dirs_s_) AtA += d * d.transpose();
+	if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(AtA, Eigen::EigenvaluesOnly).eigenvalues()[0] < 1e-3)
+		n.fail("beam_azimuths_deg", "the beams do not span 3-D (azimuths too close)");
+
+	const std::string frame = n.string("output_frame", "instrument");
+	if (!auvnav::obs::parseDvlFrame(frame, frame_))
+		n.fail("output_frame", "expected instrument, vehicle, earth_ned, earth_enu or beam, got '" + frame + "'");
+	const std::string sign = n.string("sign", "vehicle_over_bottom");
+	if (!auvnav::obs::parseDvlSign(sign, sign_))
+		n.fail("sign", "expected vehicle_over_bottom or bottom_over_instrument, got '" + sign + "'");
+	// The DVL compass's error has its own stream: neither the setting nor the
+	// output frame moves the beam noise of a given seed.
+	mrpt::random::CRandomGenerator compass_rng;
+	compass_rng.randomize(streamSeed(seed, 12));
+	heading_error_rad_ =
+		n.inRange("heading_error_sigma_deg", 0, 90, 0.0) * kDeg * compass_rng.drawGaussian1D_normalized();
+}
+
+void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
+							const Eigen::Matrix3d& C_ls_s) const
+{
+	using auvnav::obs::DvlFrame;
+	const double sgn = sign_ == auvnav::obs::DvlSign::BottomOverInstrument ? -1.0 : 1.0;
+	auto write = [&obs](const Eigen::Vector3d& v, const Eigen::Matrix3d& C) {
+		for (int i = 0; i < 3; ++i) obs.velocity_s_mps[i] = v[i];
+		for (int r = 0; r < 3; ++r)
+			for (int c = 0; c < 3; ++c) obs.velocity_cov[3 * r + c] = C(r, c);
+	};
+	// Rotation from the sensor frame into the reported one.
+	Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+	switch (frame_)
+	{
+		case DvlFrame::Instrument: write(sgn * v_ls_s, C_ls_s); return;  // as it always was, bit for bit
+		case DvlFrame::Vehicle: R = mount_.R_bs_nominal; break;
+		case DvlFrame::EarthNed:
+		case DvlFrame::EarthEnu:
+			// The DVL's own attitude sensors see the housing's true attitude;
+			// its compass adds a heading error about the down axis.
+			R = Eigen::AngleAxisd(heading_error_rad_, Eigen::Vector3d::UnitZ()).toRotationMatrix() * x.R_nb() *
+				mount_.R_bs_true;
+			if (frame_ == DvlFrame::EarthEnu)
+			{
+				Eigen::Matrix3d ned_to_enu;
+				ned_to_enu << 0, 1, 0, 1, 0, 0, 0, 0, -1;
+				R = ned_to_enu * R;
+			}
+			break;
+		case DvlFrame::Beam: return;
 	}
+	write(sgn * (R * v_ls_s), R * C_ls_s * R.transpose());
 }
 
 auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environment& env)
@@ -151,18 +210,24 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 	const PointKinematics s = pointOnVehicle(x, mount_.position_b);
 	const Eigen::Matrix3d R_ns = x.R_nb() * mount_.R_bs_true;
 	const Eigen::Vector3d v_s = R_ns.transpose() * s.v_n;
+	const bool beam_mode = frame_ == auvnav::obs::DvlFrame::Beam;
+	const double sgn = sign_ == auvnav::obs::DvlSign::BottomOverInstrument ? -1.0 : 1.0;
 
 	auto obs = auvnav::obs::CObservationDVL::Create();
 	obs->timestamp = t.stamp;
 	obs->sensorLabel = label_;
 	obs->sensorPose = mount_.nominalPose();
 	obs->beam_inclination_rad = inclination_rad_;
+	obs->frame = frame_;
+	obs->sign = sign_;
+	obs->beam_velocity_sigma_mps = beam_sigma_mps_;
 	Eigen::MatrixXd A(beam_dirs_s_.size(), 3);
 	Eigen::VectorXd u(beam_dirs_s_.size());
 	int valid = 0;
 	double altitude_sum = 0;
-	for (const auto& d_s : beam_dirs_s_)
+	for (std::size_t i = 0; i < beam_dirs_s_.size(); ++i)
 	{
+		const Eigen::Vector3d& d_s = beam_dirs_s_[i];
 		auvnav::obs::DvlBeam beam;
 		const double slant_max = max_range_m_ / std::cos(inclination_rad_);
 		const double range = env.rayToSeabed(s.p_n, R_ns * d_s, slant_max);
@@ -170,6 +235,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const bool dropped = rng_.drawUniform(0.0, 1.0) < beam_dropout_probability_;
 		beam.range_m = range > 0 ? range : 0;
 		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped;
+		beam.azimuth_rad = beam_azimuths_rad_[i];
 		const double radial = (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
 		if (beam.valid)
 		{
@@ -178,11 +244,17 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 			altitude_sum += vertical;
 			++valid;
 		}
+		if (beam_mode) beam.velocity_mps = beam.valid ? sgn * radial : std::nan("");
 		obs->beams.push_back(beam);
 	}
 	obs->bottom_lock = valid >= 3;
 	obs->altitude_m = valid > 0 ? altitude_sum / valid : std::nan("");
-	if (obs->bottom_lock)
+	if (beam_mode)
+	{
+		obs->velocity_s_mps.fill(std::nan(""));	 // no 3-D velocity in beam coordinates
+		obs->velocity_cov.fill(std::nan(""));
+	}
+	else if (obs->bottom_lock)
 	{
 		const auto Av = A.topRows(valid);
 		const Eigen::Matrix3d AtA = Av.transpose() * Av;
@@ -190,9 +262,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const Eigen::Vector3d v = ldlt.solve(Av.transpose() * u.head(valid));
 		const Eigen::Matrix3d cov =
 			beam_sigma_mps_ * beam_sigma_mps_ * ldlt.solve(Eigen::Matrix3d::Identity());
-		for (int i = 0; i < 3; ++i) obs->velocity_s_mps[i] = v[i];
-		for (int r = 0; r < 3; ++r)
-			for (int c = 0; c < 3; ++c) obs->velocity_cov[3 * r + c] = cov(r, c);
+		reportVelocity(*obs, x, v, cov);
 	}
 	return obs;
 }

@@ -64,6 +64,20 @@ class ImuSim
 	std::string label_;
 };
 
+/** A Janus DVL: per-beam radial velocities (noise, scale factor, the true
+ *  misalignment, random beam loss, bottom lock inside the altitude window),
+ *  reported as a real DVL is configured to (`output_frame`, `sign`):
+ *  - instrument: the least-squares 3-D velocity in the sensor frame (default);
+ *  - vehicle: that velocity rotated by the NOMINAL mounting (the DVL's own
+ *    alignment setting; the true misalignment stays in it);
+ *  - earth_ned / earth_enu: rotated by the DVL's own attitude sensors, i.e.
+ *    the TRUE attitude of the instrument, with a heading error constant per
+ *    run (`heading_error_sigma_deg`, default 0);
+ *  - beam: the radial velocities themselves (NaN for invalid beams), no 3-D
+ *    velocity (NaN);
+ *  - sign bottom_over_instrument (Teledyne RDI PD0) negates every velocity.
+ *  The radial draws are the same in every mode, so for one seed the modes
+ *  differ only in how the same ping is reported. */
 class DvlSim
 {
    public:
@@ -71,13 +85,24 @@ class DvlSim
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
 	auvnav::obs::CObservationDVL::Ptr sample(const Truth& truth, const Environment& env);
+	/** The DVL compass's heading error of this run [rad] (Earth frames only). */
+	double headingError_rad() const { return heading_error_rad_; }
 
    private:
+	/** Writes the least-squares sensor-frame velocity `v_ls_s` and its
+	 *  covariance `C_ls_s` in the configured frame and sign. */
+	void reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
+						const Eigen::Matrix3d& C_ls_s) const;
+
 	double period_s_, offset_s_;
 	Mounting mount_;
 	double inclination_rad_, beam_sigma_mps_, scale_factor_, min_altitude_m_, max_range_m_,
 		beam_dropout_probability_;
 	std::vector<Eigen::Vector3d> beam_dirs_s_;
+	std::vector<double> beam_azimuths_rad_;
+	auvnav::obs::DvlFrame frame_ = auvnav::obs::DvlFrame::Instrument;
+	auvnav::obs::DvlSign sign_ = auvnav::obs::DvlSign::VehicleOverBottom;
+	double heading_error_rad_ = 0;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
 };

@@ -11,6 +11,45 @@
 
 namespace auvnav::plugins
 {
+namespace
+{
+using obs::DvlFrame;
+
+/** NED ↔ ENU: swaps north and east and flips down to up (its own inverse). */
+Eigen::Matrix3d nedToEnu()
+{
+	Eigen::Matrix3d P;
+	P << 0, 1, 0, 1, 0, 0, 0, 0, -1;
+	return P;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v)
+{
+	Eigen::Matrix3d S;
+	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+	return S;
+}
+
+/** The sensor's covariance if it is a usable one (finite, symmetric,
+ *  positive semi-definite, not all zero, positive definite once `extra_var`
+ *  is added); else nothing. */
+bool usableCovariance(const std::array<double, 9>& cov_rowmajor, double extra_var, Eigen::Matrix3d& C)
+{
+	C = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cov_rowmajor.data());
+	if (!(C.allFinite() && C.cwiseAbs().maxCoeff() > 0 &&
+		  (C - C.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * C.cwiseAbs().maxCoeff()))
+		return false;
+	C = 0.5 * (C + C.transpose()).eval();
+	const double min_ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C, Eigen::EigenvaluesOnly).eigenvalues()[0];
+	return min_ev >= 0 && min_ev + extra_var > 0;
+}
+
+std::string frameLabel(DvlFrame f)
+{
+	return f == DvlFrame::Instrument ? "velocity" : "velocity_" + std::string(obs::dvlFrameName(f));
+}
+}  // namespace
+
 DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 	: label_(label),
 	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
@@ -18,19 +57,22 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 	  use_observation_pose_(cfg.boolean("use_observation_pose", false)),
 	  sigma_mps_(cfg.positive("sigma_mps", 0.02)),
 	  extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.005)),
+	  beam_sigma_mps_(cfg.positive("beam_sigma_mps", 0.01)),
+	  earth_heading_sigma_rad_(cfg.inRange("earth_heading_sigma_deg", 0, 90, 2.0) * kDeg),
+	  earth_tilt_sigma_rad_(cfg.inRange("earth_tilt_sigma_deg", 0, 90, 0.5) * kDeg),
 	  gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
 
-PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& /*ctx*/,
+PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& /*ctx*/,
 								  std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
-	const auto* dvl = dynamic_cast<const auvnav::obs::CObservationDVL*>(&obs);
+	const auto* dvl = dynamic_cast<const obs::CObservationDVL*>(&o);
 	if (!dvl)
 	{
-		why = std::string("expected auvnav::obs::CObservationDVL, got ") + obs.GetRuntimeClass()->className;
+		why = std::string("expected auvnav::obs::CObservationDVL, got ") + o.GetRuntimeClass()->className;
 		return PrepareStatus::Invalid;
 	}
 	if (!dvl->bottom_lock)
@@ -38,64 +80,167 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 		why = "no bottom lock";
 		return PrepareStatus::Skip;
 	}
-	const Eigen::Vector3d v(dvl->velocity_s_mps[0], dvl->velocity_s_mps[1], dvl->velocity_s_mps[2]);
-	if (!v.allFinite())
-	{
-		why = "non-finite velocity";
-		return PrepareStatus::Invalid;
-	}
 
-	Eigen::Vector3d r_s = position_b_;
-	Eigen::Matrix3d R_bs = R_bs_;
+	Mount mount{position_b_, R_bs_};
 	if (use_observation_pose_)
 	{
-		r_s = Eigen::Vector3d(dvl->sensorPose.x(), dvl->sensorPose.y(), dvl->sensorPose.z());
-		R_bs = dvl->sensorPose.getRotationMatrix().asEigen();
-		if (!r_s.allFinite() || !R_bs.allFinite())
+		mount.r_s = Eigen::Vector3d(dvl->sensorPose.x(), dvl->sensorPose.y(), dvl->sensorPose.z());
+		mount.R_bs = dvl->sensorPose.getRotationMatrix().asEigen();
+		if (!mount.r_s.allFinite() || !mount.R_bs.allFinite())
 		{
 			why = "non-finite sensorPose";
 			return PrepareStatus::Invalid;
 		}
 	}
 
-	// The sensor's covariance if it is a usable one (finite, symmetric,
-	// positive semi-definite, not all zero), else the configured σ.
-	Eigen::Matrix3d C = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(dvl->velocity_cov.data());
-	bool cov_ok = C.allFinite() && C.cwiseAbs().maxCoeff() > 0 &&
-				  (C - C.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * C.cwiseAbs().maxCoeff();
-	if (cov_ok)
+	double sign = 1;
+	switch (dvl->sign)
 	{
-		C = 0.5 * (C + C.transpose()).eval();
-		const double min_ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C, Eigen::EigenvaluesOnly).eigenvalues()[0];
-		cov_ok = min_ev >= 0 && min_ev + extra_sigma_mps_ * extra_sigma_mps_ > 0;
+		case obs::DvlSign::VehicleOverBottom: sign = 1; break;
+		case obs::DvlSign::BottomOverInstrument: sign = -1; break;
+		default: why = "unknown DVL sign code"; return PrepareStatus::Invalid;
 	}
+	switch (dvl->frame)
+	{
+		case DvlFrame::Instrument:
+		case DvlFrame::Vehicle:
+		case DvlFrame::EarthNed:
+		case DvlFrame::EarthEnu: return prepareVelocity(*dvl, mount, sign, out, why);
+		case DvlFrame::Beam: return prepareBeams(*dvl, mount, sign, out, why);
+	}
+	why = "unknown DVL frame code " + std::to_string(static_cast<unsigned>(dvl->frame));
+	return PrepareStatus::Invalid;
+}
+
+PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
+										std::vector<Measurement>& out, std::string& why) const
+{
+	const Eigen::Vector3d v(dvl.velocity_s_mps[0], dvl.velocity_s_mps[1], dvl.velocity_s_mps[2]);
+	if (!v.allFinite())
+	{
+		why = "non-finite velocity";
+		return PrepareStatus::Invalid;
+	}
+	const double extra_var = extra_sigma_mps_ * extra_sigma_mps_;
+	Eigen::Matrix3d C;
+	const bool cov_ok = usableCovariance(dvl.velocity_cov, extra_var, C);
 	if (!cov_ok) C = Eigen::Matrix3d::Identity() * (sigma_mps_ * sigma_mps_);
 
 	Measurement m;
 	m.z = v;
-	m.R = C + Eigen::Matrix3d::Identity() * (extra_sigma_mps_ * extra_sigma_mps_);
-	m.label = cov_ok ? "velocity" : "velocity_default_cov";
-	const Eigen::Vector3d rotvec = so3::Log(R_bs);
-	for (int i = 0; i < 3; ++i)
+	m.R = C + Eigen::Matrix3d::Identity() * extra_var;
+	if (dvl.frame == DvlFrame::EarthNed) m.R += earthAttitudeCovariance(v);
+	if (dvl.frame == DvlFrame::EarthEnu)
 	{
-		m.aux[i] = r_s[i];
-		m.aux[3 + i] = rotvec[i];
+		const Eigen::Matrix3d P = nedToEnu();
+		m.R += P * earthAttitudeCovariance(P * v) * P.transpose();
 	}
+	m.tag = static_cast<int>(dvl.frame);
+	m.label = frameLabel(dvl.frame) + (cov_ok ? "" : "_default_cov");
+	for (int i = 0; i < 3; ++i) m.aux[i] = mount.r_s[i];
+	if (dvl.frame == DvlFrame::Instrument)
+	{
+		const Eigen::Vector3d rotvec = so3::Log(mount.R_bs);
+		for (int i = 0; i < 3; ++i) m.aux[3 + i] = rotvec[i];
+	}
+	m.aux[6] = sign;
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;
+}
+
+PrepareStatus DvlModel::prepareBeams(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
+									 std::vector<Measurement>& out, std::string& why) const
+{
+	const double incl = dvl.beam_inclination_rad;
+	if (!(incl > 0 && incl < M_PI / 2))
+	{
+		why = "beam inclination " + std::to_string(incl) + " rad outside (0, pi/2)";
+		return PrepareStatus::Invalid;
+	}
+	const double obs_sigma = dvl.beam_velocity_sigma_mps;
+	const bool sigma_ok = std::isfinite(obs_sigma) && obs_sigma > 0;
+	const double sigma = sigma_ok ? obs_sigma : beam_sigma_mps_;
+	const double var = sigma * sigma + extra_sigma_mps_ * extra_sigma_mps_;
+	for (std::size_t i = 0; i < dvl.beams.size(); ++i)
+	{
+		const auto& b = dvl.beams[i];
+		if (!b.valid) continue;	 // no bottom return: nothing measured along this beam
+		if (!std::isfinite(b.velocity_mps) || !std::isfinite(b.azimuth_rad))
+		{
+			out.clear();
+			why = "non-finite velocity or azimuth of valid beam " + std::to_string(i);
+			return PrepareStatus::Invalid;
+		}
+		const Eigen::Vector3d u_s(std::sin(incl) * std::cos(b.azimuth_rad), std::sin(incl) * std::sin(b.azimuth_rad),
+								  std::cos(incl));
+		const Eigen::Vector3d u_b = mount.R_bs * u_s;
+		Measurement m;
+		m.z = Eigen::VectorXd::Constant(1, b.velocity_mps);
+		m.R = Eigen::MatrixXd::Constant(1, 1, var);
+		m.tag = static_cast<int>(DvlFrame::Beam);
+		m.label = sigma_ok ? "beam" : "beam_default_sigma";
+		for (int k = 0; k < 3; ++k)
+		{
+			m.aux[k] = mount.r_s[k];
+			m.aux[3 + k] = u_b[k];
+		}
+		m.aux[6] = sign;
+		m.aux[7] = static_cast<double>(i);
+		out.push_back(std::move(m));
+	}
+	// Three beams fix the 3-D velocity; fewer would let one bad beam pass unchecked.
+	if (out.size() < 3)
+	{
+		why = "beam mode: " + std::to_string(out.size()) + " valid beam(s), at least 3 needed";
+		out.clear();
+		return PrepareStatus::Skip;
+	}
+	return PrepareStatus::Ok;
+}
+
+Eigen::Matrix3d DvlModel::earthAttitudeCovariance(const Eigen::Vector3d& v_n) const
+{
+	// δv = δθ × v = −[v]× δθ, δθ = (roll/pitch-like tilt about N and E, heading about D).
+	const Eigen::Vector3d var(earth_tilt_sigma_rad_ * earth_tilt_sigma_rad_,
+							  earth_tilt_sigma_rad_ * earth_tilt_sigma_rad_,
+							  earth_heading_sigma_rad_ * earth_heading_sigma_rad_);
+	const Eigen::Matrix3d S = skew(v_n);
+	return S * var.asDiagonal() * S.transpose();
 }
 
 bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 						 Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
-	if (z_pred.size() != 3) return false;
 	const Eigen::Vector3d r_s(m.aux[0], m.aux[1], m.aux[2]);
-	const Eigen::Matrix3d R_bs = so3::Exp(Eigen::Vector3d(m.aux[3], m.aux[4], m.aux[5]));
 	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
 	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
 	const Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
-	z_pred = R_bs.transpose() * v_s_b;
-	return true;
+	const double sign = m.aux[6];
+	const Eigen::Vector3d a(m.aux[3], m.aux[4], m.aux[5]);
+	switch (static_cast<DvlFrame>(m.tag))
+	{
+		case DvlFrame::Instrument:
+			if (z_pred.size() != 3) return false;
+			z_pred = sign * (so3::Exp(a).transpose() * v_s_b);
+			return true;
+		case DvlFrame::Vehicle:
+			if (z_pred.size() != 3) return false;
+			z_pred = sign * v_s_b;
+			return true;
+		case DvlFrame::EarthNed:
+			if (z_pred.size() != 3) return false;
+			z_pred = sign * (x.R_nb * v_s_b);
+			return true;
+		case DvlFrame::EarthEnu:
+			if (z_pred.size() != 3) return false;
+			z_pred = sign * (nedToEnu() * (x.R_nb * v_s_b));
+			return true;
+		case DvlFrame::Beam:
+			if (z_pred.size() != 1) return false;
+			z_pred[0] = sign * a.dot(v_s_b);
+			return true;
+	}
+	return false;
 }
 
 }  // namespace auvnav::plugins

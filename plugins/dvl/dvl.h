@@ -2,30 +2,65 @@
 /** @file dvl.h
  *  DVL bottom-track velocity update (plugin "dvl").
  *
- *  Observation: auvnav::obs::CObservationDVL, the velocity of the sensor over
- *  the seabed in the sensor frame. With r_s the DVL position and R_bs its
- *  mounting rotation (sensor to body), r_imu the IMU lever arm:
+ *  Observation: auvnav::obs::CObservationDVL in any of its frames. With r_s
+ *  the DVL position and R_bs its mounting rotation (sensor to body), r_imu
+ *  the IMU lever arm, the velocity of the DVL point over the seabed in body
+ *  axes is
  *
- *      z = velocity_s_mps (3) [m/s]
- *      h = R_bsᵀ (R_nbᵀ v_n + ω × (r_s − r_imu))
+ *      v_s_b = R_nbᵀ v_n + ω × (r_s − r_imu)
  *      ω = omega_ib_b − b_w − R_nbᵀ omega_ie_n   (body rate relative to the Earth)
  *
- *  v_n is the IMU point's velocity, so the lever-arm term moves it to the DVL.
- *  Noise: the observation's velocity covariance (beam geometry × beam noise)
- *  plus extra_sigma_mps² I for what the covariance does not know (mounting
- *  misalignment, scale factor, sound speed); if the covariance is zero or
- *  unusable, sigma_mps² I replaces it.
+ *  (v_n is the IMU point's velocity; the lever-arm term moves it to the DVL)
+ *  and, per the observation's `frame`:
+ *
+ *      Instrument  z = velocity_s_mps (3)   h = R_bsᵀ v_s_b
+ *      Vehicle     z = velocity_s_mps (3)   h = v_s_b
+ *      EarthNed    z = velocity_s_mps (3)   h = R_nb v_s_b = v_n + R_nb (ω × (r_s − r_imu))
+ *      EarthEnu    z = velocity_s_mps (3)   h = [h_E, h_N, −h_D] of EarthNed
+ *      Beam        one scalar measurement per valid beam i:
+ *                  z = beams[i].velocity_mps   h = u_iᵀ R_bsᵀ v_s_b
+ *                  u_i = [sin i cos a_i, sin i sin a_i, cos i] (sensor frame)
+ *
+ *  Sign BottomOverInstrument (Teledyne RDI PD0) negates h; z stays what the
+ *  instrument reported. An Earth-frame velocity carries no heading
+ *  information except through the lever arm: the DVL rotated it with its own
+ *  compass, whose error is not the filter's.
+ *
+ *  Noise:
+ *  - 3-D frames: the observation's velocity covariance (beam geometry × beam
+ *    noise, in the frame of z) plus extra_sigma_mps² I for what the covariance
+ *    does not know (mounting misalignment, scale factor, sound speed); if the
+ *    covariance is zero or unusable, sigma_mps² I replaces it. Earth frames
+ *    add the DVL's own attitude error: a rotation error δθ moves the reported
+ *    velocity v by δθ × v, so R gains [v]× diag(σ_t², σ_t², σ_ψ²) [v]×ᵀ
+ *    (σ_ψ = earth_heading_sigma_deg: the cross-track error speed × σ_ψ;
+ *    σ_t = earth_tilt_sigma_deg), with v the reported velocity.
+ *  - Beam: per beam beam_velocity_sigma_mps² of the observation (or
+ *    beam_sigma_mps² if it has none) plus extra_sigma_mps²; the beams are
+ *    treated as independent (the common misalignment/scale part is in truth
+ *    correlated between beams). Invalid beams are not used; fewer than 3
+ *    valid beams skip the ping.
  *
  *  The mounting comes from the configuration (default: the FlatFish nominal
  *  mounting) or, with `use_observation_pose: true`, from each observation's
- *  sensorPose. It travels to h in Measurement::aux: [0..2] = r_s [m, body FRD],
- *  [3..5] = rotation vector of R_bs [rad].
+ *  sensorPose. It travels to h in Measurement::aux, with tag = the frame code
+ *  (auvnav::obs::DvlFrame):
+ *      [0..2] r_s [m, body FRD]
+ *      [3..5] Instrument: rotation vector of R_bs [rad]; Beam: R_bs u_i, the
+ *             beam's unit vector in body axes; other frames: 0 (unused)
+ *      [6]    +1 (VehicleOverBottom) or −1 (BottomOverInstrument)
+ *      [7]    Beam: index of the beam in the observation; else 0
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
 
 #include <Eigen/Core>
 #include <string>
+
+namespace auvnav::obs
+{
+class CObservationDVL;
+}
 
 namespace auvnav::plugins
 {
@@ -47,12 +82,29 @@ class DvlModel final : public SafeMeasurementModel
 				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
    private:
+	/** The DVL's mounting for one observation (config or its sensorPose). */
+	struct Mount
+	{
+		Eigen::Vector3d r_s;
+		Eigen::Matrix3d R_bs;
+	};
+	PrepareStatus prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
+								  std::vector<Measurement>& out, std::string& why) const;
+	PrepareStatus prepareBeams(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
+							   std::vector<Measurement>& out, std::string& why) const;
+	/** Covariance of the reported velocity from the DVL's own attitude error
+	 *  (Earth frames), for the reported velocity v_n in NED. */
+	Eigen::Matrix3d earthAttitudeCovariance(const Eigen::Vector3d& v_n) const;
+
 	std::string label_;
 	Eigen::Vector3d position_b_;
 	Eigen::Matrix3d R_bs_;
 	bool use_observation_pose_ = false;
 	double sigma_mps_ = 0.02;
 	double extra_sigma_mps_ = 0.005;
+	double beam_sigma_mps_ = 0.01;
+	double earth_heading_sigma_rad_ = 0;
+	double earth_tilt_sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
 };
 }  // namespace auvnav::plugins

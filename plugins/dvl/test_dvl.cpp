@@ -1,4 +1,5 @@
-// The "dvl" plugin: bottom-track velocity with lever arm and mounting rotation.
+// The "dvl" plugin: bottom-track velocity with lever arm and mounting rotation, in every
+// output frame (instrument, vehicle, Earth NED/ENU, beams) and both signs.
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/testing/model_checks.h>
@@ -14,6 +15,8 @@
 
 using namespace auvnav;
 using auvnav::obs::CObservationDVL;
+using auvnav::obs::DvlFrame;
+using auvnav::obs::DvlSign;
 using auvnav::plugins::DvlModel;
 namespace at = auvnav::testing;
 namespace pt = auvnav::plugins::test;
@@ -71,6 +74,78 @@ Measurement prepareOne(DvlModel& model, const mrpt::obs::CObservation& o, const 
 	std::string why;
 	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
 	return out.empty() ? Measurement{} : out[0];
+}
+
+std::vector<Measurement> prepareAll(DvlModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
+{
+	std::vector<Measurement> out;
+	std::string why;
+	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
+	return out;
+}
+
+constexpr DvlFrame kAllFrames[] = {DvlFrame::Instrument, DvlFrame::Vehicle, DvlFrame::EarthNed, DvlFrame::EarthEnu,
+								   DvlFrame::Beam};
+
+/** Unit vector of a beam in the sensor frame (CObservationDVL.h). */
+Eigen::Vector3d beamUnit(double incl, double az)
+{
+	return {std::sin(incl) * std::cos(az), std::sin(incl) * std::sin(az), std::cos(incl)};
+}
+
+/** What a DVL reporting in `frame` with `sign` sees for the true state `x`,
+ *  computed independently of the plugin from the DVL point's velocity in
+ *  the navigation frame: instrument R_nsᵀ v, vehicle R_nbᵀ v, earth v (NED)
+ *  or [E, N, −D], beams u_iᵀ R_nsᵀ v (azimuths 45° + 90° i, the first
+ *  `valid_beams` valid). */
+CObservationDVL::Ptr modeObs(DvlFrame frame, const NavState& x, const FilterContext& ctx,
+							 DvlSign sign = DvlSign::VehicleOverBottom, int valid_beams = 4)
+{
+	const Eigen::Vector3d w_eb_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
+	const Eigen::Vector3d v_dvl_n = x.v_n + x.R_nb * w_eb_b.cross(kDvlPos - ctx.imu_position_b);
+	const Eigen::Vector3d v_b = x.R_nb.transpose() * v_dvl_n;
+	const Eigen::Vector3d v_s = nominalRbs().transpose() * v_b;
+	const double sgn = sign == DvlSign::BottomOverInstrument ? -1 : 1;
+	Eigen::Vector3d v = v_s;
+	if (frame == DvlFrame::Vehicle) v = v_b;
+	if (frame == DvlFrame::EarthNed) v = v_dvl_n;
+	if (frame == DvlFrame::EarthEnu) v = Eigen::Vector3d(v_dvl_n.y(), v_dvl_n.x(), -v_dvl_n.z());
+	auto o = dvlObs(sgn * v);
+	o->frame = frame;
+	o->sign = sign;
+	for (int i = 0; i < 4; ++i)
+	{
+		auto& b = o->beams[i];
+		b.azimuth_rad = (45.0 + 90.0 * i) * kDeg;
+		b.valid = i < valid_beams;
+		b.velocity_mps = frame == DvlFrame::Beam && b.valid ? sgn * beamUnit(30 * kDeg, b.azimuth_rad).dot(v_s) : 0;
+	}
+	if (frame == DvlFrame::Beam)
+	{
+		o->velocity_s_mps.fill(std::nan(""));  // as the simulator: no 3-D velocity
+		o->velocity_cov.fill(std::nan(""));
+		o->beam_velocity_sigma_mps = 0.01;
+		for (auto& b : o->beams)
+			if (!b.valid) b.velocity_mps = std::nan("");
+	}
+	return o;
+}
+
+/** All measurements' z stacked, and all h(x) stacked. */
+void stackZH(const DvlModel& model, const std::vector<Measurement>& ms, const FilterContext& ctx, const NavState& x,
+			 Eigen::VectorXd& z, Eigen::VectorXd& h)
+{
+	Eigen::Index n = 0;
+	for (const auto& m : ms) n += m.z.size();
+	z.resize(n);
+	h.resize(n);
+	n = 0;
+	for (const auto& m : ms)
+	{
+		z.segment(n, m.z.size()) = m.z;
+		h.segment(n, m.z.size()) = at::Predict(model, m, ctx, x);
+		n += m.z.size();
+	}
 }
 }  // namespace
 
@@ -309,4 +384,376 @@ TEST(Dvl, GrossOutlierRejectedAndNanNeverChangesTheState)
 	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
 	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
 	EXPECT_TRUE(ukf.covariance() == P_before);
+}
+
+// ------------------------------------------------------------ output frames
+
+TEST(DvlFrames, HandComputedLevelEastboundCase)
+{
+	// Level, facing east, 1 m/s east and 0.2 m/s down, no rotation: the DVL
+	// point moves with the IMU point.
+	at::TestContext tc;
+	tc.ctx().omega_ie_n.setZero();
+	tc.ctx().imu_position_b = kImuPos;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	NavState x;
+	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);
+	x.v_n = Eigen::Vector3d(0, 1, 0.2);
+	const auto h = [&](DvlFrame f, DvlSign sign = DvlSign::VehicleOverBottom) {
+		auto o = modeObs(f, x, tc.ctx(), sign);
+		Eigen::VectorXd z, hx;
+		stackZH(model, prepareAll(model, *o, tc.ctx()), tc.ctx(), x, z, hx);
+		return hx;
+	};
+	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);
+	EXPECT_TRUE(h(DvlFrame::Instrument).isApprox(Eigen::Vector3d(c, s, 0.2), 1e-12)) << h(DvlFrame::Instrument);
+	EXPECT_TRUE(h(DvlFrame::Vehicle).isApprox(Eigen::Vector3d(1, 0, 0.2), 1e-12)) << h(DvlFrame::Vehicle);
+	EXPECT_TRUE(h(DvlFrame::EarthNed).isApprox(Eigen::Vector3d(0, 1, 0.2), 1e-12)) << h(DvlFrame::EarthNed);
+	// ENU: east first, then north, then UP (= −down).
+	EXPECT_TRUE(h(DvlFrame::EarthEnu).isApprox(Eigen::Vector3d(1, 0, -0.2), 1e-12)) << h(DvlFrame::EarthEnu);
+	EXPECT_TRUE(h(DvlFrame::EarthEnu, DvlSign::BottomOverInstrument).isApprox(Eigen::Vector3d(-1, 0, 0.2), 1e-12));
+	// Beams at 45° + 90° i, 30° from the sensor z axis: sensor velocity (c, s, 0.2).
+	const Eigen::VectorXd hb = h(DvlFrame::Beam);
+	ASSERT_EQ(hb.size(), 4);
+	for (int i = 0; i < 4; ++i)
+	{
+		const double a = (45.0 + 90.0 * i) * kDeg;
+		EXPECT_NEAR(hb[i], 0.5 * std::cos(a - 22.5 * kDeg) + std::cos(30 * kDeg) * 0.2, 1e-12) << "beam " << i;
+	}
+	EXPECT_NEAR(hb[0], 0.5 * std::cos(22.5 * kDeg) + 0.1 * std::sqrt(3.0), 1e-12);
+}
+
+TEST(DvlFrames, PredictionEqualsTheIndependentlyComputedReadingInEveryFrame)
+{
+	// Random states with a body rate: h(x_true) must reproduce what the DVL
+	// reports, in every frame and both signs (lever arm, Earth rate, gyro bias).
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	for (const char* cfg : {"{}", "use_observation_pose: true"})
+	{
+		DvlModel model(pt::configText(cfg), "DVL");
+		for (uint32_t seed = 1; seed <= 10; ++seed)
+		{
+			const NavState x = at::RandomNavState(seed);
+			tc.ctx().omega_ib_b = Eigen::Vector3d(0.05, -0.03, 0.2 * std::cos(seed));
+			for (DvlFrame f : kAllFrames)
+				for (DvlSign sign : {DvlSign::VehicleOverBottom, DvlSign::BottomOverInstrument})
+				{
+					Eigen::VectorXd z, h;
+					stackZH(model, prepareAll(model, *modeObs(f, x, tc.ctx(), sign), tc.ctx()), tc.ctx(), x, z, h);
+					ASSERT_EQ(z.size(), f == DvlFrame::Beam ? 4 : 3);
+					EXPECT_LT((z - h).cwiseAbs().maxCoeff(), 1e-12)
+						<< cfg << " seed " << seed << " frame " << obs::dvlFrameName(f) << " sign "
+						<< obs::dvlSignName(sign) << "\nz " << z.transpose() << "\nh " << h.transpose();
+				}
+		}
+	}
+}
+
+TEST(DvlFrames, WellFormedInEveryFrameSignAndBeamCount)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	for (uint32_t seed = 1; seed <= 10; ++seed)
+	{
+		const NavState x = at::RandomNavState(seed);
+		tc.ctx().omega_ib_b = Eigen::Vector3d(0.02, -0.01, 0.1 * std::sin(seed));
+		// Observations of another state, so that z ≠ h.
+		const NavState other = at::RandomNavState(seed + 50);
+		at::WellFormedOptions opt;
+		opt.seed = seed;
+		opt.accept_skip = false;
+		for (DvlFrame f : kAllFrames)
+			for (DvlSign sign : {DvlSign::VehicleOverBottom, DvlSign::BottomOverInstrument})
+				for (int beams : {3, 4})
+				{
+					if (f != DvlFrame::Beam && beams == 3) continue;
+					EXPECT_TRUE(at::IsWellFormed(model, *modeObs(f, other, tc.ctx(), sign, beams), tc.ctx(), x, opt))
+						<< obs::dvlFrameName(f) << " " << obs::dvlSignName(sign) << " beams " << beams << " seed "
+						<< seed;
+				}
+	}
+}
+
+TEST(DvlFrames, BottomOverInstrumentNegatesThePrediction)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, 0.02, -0.15);
+	DvlModel model(pt::defaultConfig(), "DVL");
+	const NavState x = at::RandomNavState(3);
+	for (DvlFrame f : kAllFrames)
+	{
+		// Same reported numbers, opposite convention: h flips, z does not.
+		auto vob = modeObs(f, x, tc.ctx());
+		auto pd0 = modeObs(f, x, tc.ctx());
+		pd0->sign = DvlSign::BottomOverInstrument;
+		Eigen::VectorXd z1, h1, z2, h2;
+		stackZH(model, prepareAll(model, *vob, tc.ctx()), tc.ctx(), x, z1, h1);
+		stackZH(model, prepareAll(model, *pd0, tc.ctx()), tc.ctx(), x, z2, h2);
+		EXPECT_TRUE(z1 == z2) << obs::dvlFrameName(f);
+		EXPECT_TRUE(h2 == -h1) << obs::dvlFrameName(f) << ": " << h1.transpose() << " vs " << h2.transpose();
+		EXPECT_GT(h1.norm(), 0.1);
+	}
+	// In a filter: a PD0 reading of −v moves the state exactly as a
+	// vehicle-over-bottom reading of v.
+	NavState truth;
+	truth.R_nb = at::rotationYpr(30 * kDeg, 2 * kDeg, -1 * kDeg);
+	truth.v_n = Eigen::Vector3d(1.0, 0.2, 0.1);
+	NavState x0 = truth;
+	x0.v_n = Eigen::Vector3d(0.6, 0.6, -0.1);
+	for (DvlFrame f : kAllFrames)
+	{
+		ManifoldUkf a(ProcessModel{}, UtParams{}), b(ProcessModel{}, UtParams{});
+		a.initialize(x0, at::TypicalCovariance());
+		b.initialize(x0, at::TypicalCovariance());
+		const auto ra = at::ApplyObservation(a, model, *modeObs(f, truth, tc.ctx()), tc.ctx());
+		const auto rb =
+			at::ApplyObservation(b, model, *modeObs(f, truth, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
+		ASSERT_EQ(ra.status, PrepareStatus::Ok) << ra.why;
+		ASSERT_EQ(rb.status, PrepareStatus::Ok) << rb.why;
+		for (const auto& u : ra.updates) EXPECT_EQ(u.status, UpdateStatus::Accepted) << obs::dvlFrameName(f);
+		EXPECT_TRUE(at::NavStateNear(a.state(), b.state(), 1e-12)) << obs::dvlFrameName(f);
+		EXPECT_LT((a.state().v_n - truth.v_n).norm(), 0.1 * (x0.v_n - truth.v_n).norm()) << obs::dvlFrameName(f);
+	}
+}
+
+TEST(DvlFrames, AuxLayoutAndLabels)
+{
+	at::TestContext tc;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	const NavState x;
+	const std::pair<DvlFrame, const char*> expected[] = {{DvlFrame::Instrument, "velocity"},
+														 {DvlFrame::Vehicle, "velocity_vehicle"},
+														 {DvlFrame::EarthNed, "velocity_earth_ned"},
+														 {DvlFrame::EarthEnu, "velocity_earth_enu"},
+														 {DvlFrame::Beam, "beam"}};
+	for (const auto& [f, label] : expected)
+	{
+		const auto ms = prepareAll(model, *modeObs(f, x, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
+		ASSERT_FALSE(ms.empty());
+		for (std::size_t k = 0; k < ms.size(); ++k)
+		{
+			const Measurement& m = ms[k];
+			EXPECT_EQ(m.tag, int(f));
+			EXPECT_EQ(m.label, label);
+			EXPECT_TRUE(Eigen::Vector3d(m.aux[0], m.aux[1], m.aux[2]) == kDvlPos);
+			EXPECT_EQ(m.aux[6], -1.0);
+			EXPECT_EQ(m.aux[7], f == DvlFrame::Beam ? double(k) : 0.0);
+		}
+		if (f == DvlFrame::Instrument)
+		{
+			const Eigen::Vector3d rotvec(ms[0].aux[3], ms[0].aux[4], ms[0].aux[5]);
+			EXPECT_TRUE(so3::Exp(rotvec).isApprox(nominalRbs(), 1e-14));
+		}
+	}
+}
+
+TEST(DvlBeams, OneScalarPerValidBeamWithTheBeamGeometry)
+{
+	at::TestContext tc;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	const NavState x;
+	for (int valid : {3, 4})
+	{
+		auto o = modeObs(DvlFrame::Beam, x, tc.ctx(), DvlSign::VehicleOverBottom, 4);
+		if (valid == 3) o->beams[1].valid = false;	// beam 1 lost: its NaN velocity must not matter
+		if (valid == 3) o->beams[1].velocity_mps = std::nan("");
+		const auto ms = prepareAll(model, *o, tc.ctx());
+		ASSERT_EQ(ms.size(), std::size_t(valid));
+		std::vector<int> used;
+		for (const auto& m : ms)
+		{
+			ASSERT_EQ(m.z.size(), 1);
+			ASSERT_EQ(m.R.rows(), 1);
+			const int i = int(m.aux[7]);
+			used.push_back(i);
+			EXPECT_EQ(m.z[0], o->beams[i].velocity_mps);
+			// aux[3..5]: the beam's unit vector in body axes, R_bs u_i.
+			const Eigen::Vector3d u_b(m.aux[3], m.aux[4], m.aux[5]);
+			EXPECT_TRUE(u_b.isApprox(nominalRbs() * beamUnit(30 * kDeg, o->beams[i].azimuth_rad), 1e-14)) << i;
+			EXPECT_NEAR(u_b.norm(), 1.0, 1e-14);
+			// The observation's beam sigma plus the extra sigma.
+			EXPECT_NEAR(m.R(0, 0), 0.01 * 0.01 + 0.005 * 0.005, 1e-18);
+		}
+		EXPECT_EQ(used, valid == 4 ? std::vector<int>({0, 1, 2, 3}) : std::vector<int>({0, 2, 3}));
+	}
+}
+
+TEST(DvlBeams, ThreeValidBeamsFixTheVelocityInAFilter)
+{
+	// Three beams span 3-D: their three scalar updates fix the velocity as
+	// one 3-D update does (UpdateReducesVelocityError).
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	NavState truth;
+	truth.R_nb = at::rotationYpr(-60 * kDeg, 3 * kDeg, 1 * kDeg);
+	truth.v_n = Eigen::Vector3d(0.3, -0.8, 0.05);
+	NavState x0 = truth;
+	x0.v_n = Eigen::Vector3d(0.5, -0.4, 0.0);
+	ManifoldUkf ukf(ProcessModel{}, UtParams{});
+	ukf.initialize(x0, at::TypicalCovariance());
+	const auto three_beams = modeObs(DvlFrame::Beam, truth, tc.ctx(), DvlSign::VehicleOverBottom, 3);
+	const auto res = at::ApplyObservation(ukf, model, *three_beams, tc.ctx());
+	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
+	ASSERT_EQ(res.updates.size(), 3u);
+	for (const auto& u : res.updates) EXPECT_EQ(u.status, UpdateStatus::Accepted) << u.why;
+	EXPECT_LT((ukf.state().v_n - truth.v_n).norm(), 0.1 * (x0.v_n - truth.v_n).norm());
+}
+
+TEST(DvlBeams, FewerThanThreeValidBeamsSkipWithAReason)
+{
+	at::TestContext tc;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	auto o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx(), DvlSign::VehicleOverBottom, 2);
+	std::vector<Measurement> out;
+	std::string why;
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Skip);
+	EXPECT_TRUE(out.empty());
+	EXPECT_NE(why.find("2 valid beam"), std::string::npos) << why;
+	EXPECT_NE(why.find("at least 3"), std::string::npos) << why;
+	// No bottom lock is still the first reason.
+	o->bottom_lock = false;
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Skip);
+	EXPECT_NE(why.find("bottom lock"), std::string::npos) << why;
+}
+
+TEST(DvlBeams, BeamSigmaFromTheObservationOrTheConfig)
+{
+	at::TestContext tc;
+	DvlModel model(pt::configText("beam_sigma_mps: 0.03\nextra_sigma_mps: 0"), "DVL");
+	auto o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
+	o->beam_velocity_sigma_mps = 0.02;
+	auto ms = prepareAll(model, *o, tc.ctx());
+	ASSERT_EQ(ms.size(), 4u);
+	EXPECT_DOUBLE_EQ(ms[0].R(0, 0), 0.02 * 0.02);
+	EXPECT_EQ(ms[0].label, "beam");
+	for (double unknown : {0.0, -1.0, std::nan("")})
+	{
+		o->beam_velocity_sigma_mps = unknown;
+		ms = prepareAll(model, *o, tc.ctx());
+		ASSERT_EQ(ms.size(), 4u);
+		EXPECT_DOUBLE_EQ(ms[0].R(0, 0), 0.03 * 0.03) << unknown;
+		EXPECT_EQ(ms[0].label, "beam_default_sigma");
+	}
+}
+
+TEST(DvlBeams, InvalidBeamData)
+{
+	at::TestContext tc;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	std::vector<Measurement> out;
+	std::string why;
+	auto o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
+	o->beams[2].velocity_mps = std::nan("");  // a VALID beam without a velocity
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_TRUE(out.empty());
+	EXPECT_NE(why.find("beam 2"), std::string::npos) << why;
+	o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
+	o->beams[0].azimuth_rad = HUGE_VAL;
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
+	for (double incl : {0.0, -0.1, M_PI / 2, std::nan("")})
+	{
+		o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
+		o->beam_inclination_rad = incl;
+		EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid) << incl;
+		EXPECT_NE(why.find("inclination"), std::string::npos) << why;
+	}
+	// The 3-D fields are not read in beam mode (NaN there is fine), but they
+	// are in every other frame.
+	o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Ok) << why;
+	o->frame = DvlFrame::Vehicle;
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
+	// Corrupt enum values are refused, not guessed.
+	o = modeObs(DvlFrame::Instrument, NavState{}, tc.ctx());
+	o->frame = static_cast<DvlFrame>(7);
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_NE(why.find("frame"), std::string::npos) << why;
+	o = modeObs(DvlFrame::Instrument, NavState{}, tc.ctx());
+	o->sign = static_cast<DvlSign>(3);
+	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_NE(why.find("sign"), std::string::npos) << why;
+}
+
+TEST(DvlEarth, CompassAndTiltErrorsEnterTheNoise)
+{
+	at::TestContext tc;
+	DvlModel model(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 3\nearth_tilt_sigma_deg: 1"), "DVL");
+	DvlModel no_att(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 0\nearth_tilt_sigma_deg: 0"), "DVL");
+	const Eigen::Matrix3d C = janusCovariance();
+	const double sh = 3 * kDeg, st = 1 * kDeg;
+	// 2 m/s north: the heading error is cross-track (east), the tilt error vertical.
+	auto ned = dvlObs(Eigen::Vector3d(2, 0, 0), C);
+	ned->frame = DvlFrame::EarthNed;
+	Measurement m = prepareOne(model, *ned, tc.ctx());
+	Eigen::Matrix3d extra = Eigen::Matrix3d::Zero();
+	extra(1, 1) = 4 * sh * sh;
+	extra(2, 2) = 4 * st * st;
+	EXPECT_TRUE(m.R.isApprox(C + extra, 1e-12)) << m.R - C;
+	EXPECT_TRUE(prepareOne(no_att, *ned, tc.ctx()).R.isApprox(C, 1e-15));
+	// The same motion reported as ENU [0, 2, 0]: cross-track is ENU x (east).
+	auto enu = dvlObs(Eigen::Vector3d(0, 2, 0), C);
+	enu->frame = DvlFrame::EarthEnu;
+	m = prepareOne(model, *enu, tc.ctx());
+	Eigen::Matrix3d extra_enu = Eigen::Matrix3d::Zero();
+	extra_enu(0, 0) = 4 * sh * sh;
+	extra_enu(2, 2) = 4 * st * st;
+	EXPECT_TRUE(m.R.isApprox(C + extra_enu, 1e-12)) << m.R - C;
+	// Diagonal motion: the heading term is rank one across the velocity
+	// (north-east 1, 1: cross-track direction (−1, 1)/√2, speed √2).
+	auto diag = dvlObs(Eigen::Vector3d(1, 1, 0), C);
+	diag->frame = DvlFrame::EarthNed;
+	DvlModel heading_only(pt::configText("extra_sigma_mps: 0\nearth_tilt_sigma_deg: 0"), "DVL");  // default 2°
+	m = prepareOne(heading_only, *diag, tc.ctx());
+	const Eigen::Vector3d w(-1, 1, 0);
+	EXPECT_TRUE((m.R - C).isApprox(std::pow(2 * kDeg, 2) * w * w.transpose(), 1e-12)) << m.R - C;
+	// Other frames get no attitude term.
+	auto inst = dvlObs(Eigen::Vector3d(2, 0, 0), C);
+	EXPECT_TRUE(prepareOne(model, *inst, tc.ctx()).R.isApprox(C, 1e-15));
+}
+
+TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
+{
+	// An Earth-frame velocity is v_n plus the rotated lever-arm velocity: at
+	// the same v_n a different heading changes h only by R_nb (ω × l), while
+	// an instrument-frame h turns with the heading.
+	at::TestContext tc;
+	tc.ctx().omega_ie_n.setZero();	// keep ω itself independent of R_nb
+	tc.ctx().imu_position_b = kImuPos;
+	DvlModel model(pt::defaultConfig(), "DVL");
+	const Eigen::Vector3d l = kDvlPos - kImuPos;
+	for (uint32_t seed = 1; seed <= 10; ++seed)
+	{
+		NavState a = at::RandomNavState(seed);
+		a.b_w.setZero();
+		NavState b = a;
+		b.R_nb = at::rotationYpr(30 * kDeg, 0, 0) * a.R_nb;	 // 30° more heading, same v_n
+		for (const Eigen::Vector3d& w : {Eigen::Vector3d::Zero().eval(), Eigen::Vector3d(0.05, -0.02, 0.3)})
+		{
+			tc.ctx().omega_ib_b = w;
+			const Eigen::Vector3d lever_change = (b.R_nb - a.R_nb) * w.cross(l);
+			for (DvlFrame f : {DvlFrame::EarthNed, DvlFrame::EarthEnu})
+			{
+				const Measurement m = prepareOne(model, *modeObs(f, a, tc.ctx()), tc.ctx());
+				const Eigen::VectorXd dh = at::Predict(model, m, tc.ctx(), b) - at::Predict(model, m, tc.ctx(), a);
+				EXPECT_NEAR(dh.norm(), lever_change.norm(), 1e-12) << obs::dvlFrameName(f) << " seed " << seed;
+			}
+			const Measurement mi = prepareOne(model, *modeObs(DvlFrame::Instrument, a, tc.ctx()), tc.ctx());
+			const Eigen::VectorXd dhi = at::Predict(model, mi, tc.ctx(), b) - at::Predict(model, mi, tc.ctx(), a);
+			// |Δh| = |Δ(R_nbᵀ v_n)| = 2 sin 15° |v_n| horizontally, give or take the lever arm.
+			EXPECT_GT(dhi.norm(), 0.3 * a.v_n.head<2>().norm() - lever_change.norm()) << "seed " << seed;
+		}
+	}
+}
+
+TEST(DvlEarth, RejectsBadAttitudeSigmas)
+{
+	EXPECT_THROW(DvlModel(pt::configText("earth_heading_sigma_deg: -1"), "DVL"), config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("earth_heading_sigma_deg: 91"), "DVL"), config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("earth_tilt_sigma_deg: x"), "DVL"), config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("beam_sigma_mps: 0"), "DVL"), config::ConfigError);
+	EXPECT_TRUE(pt::ModuleRefuses("earth_heading_sigma_deg: -5", "earth_heading_sigma_deg"));
 }

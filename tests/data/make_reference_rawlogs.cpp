@@ -49,7 +49,14 @@ CObservationDVL referenceDvl()
 	d.bottom_lock = true;
 	d.altitude_m = 12.75;
 	d.beam_inclination_rad = 0.5235987755982988;
-	d.beams = {{14.5, true}, {14.25, true}, {15.125, true}, {0.0, false}};
+	d.beams = {{14.5, true, 0.625, 0.7853981633974483},
+			   {14.25, true, -0.5, 2.356194490192345},
+			   {15.125, true, 0.125, -2.356194490192345},
+			   {0.0, false, 0.0, -0.7853981633974483}};
+	// Version 1: coordinates and sign as reported (a Teledyne RDI in earth mode).
+	d.frame = DvlFrame::EarthEnu;
+	d.sign = DvlSign::BottomOverInstrument;
+	d.beam_velocity_sigma_mps = 0.0075;
 	return d;
 }
 

@@ -951,7 +951,7 @@ TEST(Ros1Bag, MessageShorterThanItsDefinition)
 	EXPECT_NE(e.find("message too short"), std::string::npos) << e;
 }
 
-TEST(Ros1Bag, ManySmallMessagesDecodeQuickly)
+TEST(Ros1Bag, ManySmallMessagesAllDecode)
 {
 	constexpr int kCount = 100000;
 	const std::string path = scratch("many.bag");
@@ -1322,7 +1322,7 @@ TEST(Ros2Bag, CorruptCdrNeverCrashes)
 	}
 }
 
-TEST(Ros2Bag, ManySmallMessagesDecodeQuickly)
+TEST(Ros2Bag, ManySmallMessagesAllDecode)
 {
 	constexpr int kCount = 100000;
 	const std::string path = scratch("many.db3");

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -107,6 +108,84 @@ CObservationDVL makeDvl()
 	return d;
 }
 
+// A version-1 DVL in the least default configuration: every new field set.
+CObservationDVL makeDvlV1()
+{
+	CObservationDVL d = makeDvl();
+	d.frame = DvlFrame::EarthEnu;
+	d.sign = DvlSign::BottomOverInstrument;
+	d.beam_velocity_sigma_mps = 0.0125;
+	d.beams = {{14.5, true, -0.625, 0.7853981633974483},
+	           {14.25, true, 0.5, 2.356194490192345},
+	           {15.125, true, 0.25, -2.356194490192345},
+	           {0.0, false, std::numeric_limits<double>::quiet_NaN(), -0.7853981633974483}};
+	return d;
+}
+
+// Bytes of a DVL at serialization version 0 exactly as version 0 wrote them
+// (header, fields, end flag; bools as one byte each), independent of the
+// current writer.
+Bytes dvlVersion0Bytes(const CObservationDVL& d, uint8_t bottom_lock_byte = 1)
+{
+	mrpt::io::CMemoryStream buf;
+	auto out = mrpt::serialization::archiveFrom(buf);
+	const std::string name = "auvnav::obs::CObservationDVL";
+	out << static_cast<uint8_t>(0x80 | name.size());
+	out.WriteBuffer(name.data(), name.size());
+	out << static_cast<uint8_t>(0);	 // version
+	out << d.timestamp << d.sensorLabel << d.sensorPose;
+	for (double v : d.velocity_s_mps) out << v;
+	for (double c : d.velocity_cov) out << c;
+	out << bottom_lock_byte << d.altitude_m << d.beam_inclination_rad;
+	out << static_cast<uint32_t>(d.beams.size());
+	for (const auto& b : d.beams) out << b.range_m << static_cast<uint8_t>(b.valid ? 1 : 0);
+	out << static_cast<uint8_t>(0x88);
+	const auto* p = static_cast<const uint8_t*>(buf.getRawBufferData());
+	return Bytes(p, p + buf.getTotalBytesCount());
+}
+
+// Byte offsets of the version-1 DVL fields, counted from the end of the
+// object (the beams come last, then MRPT's end flag).
+struct DvlV1Layout
+{
+	static constexpr std::size_t kBeamBytes = 3 * sizeof(double) + 1;  // range, valid, velocity, azimuth
+	std::size_t beams_at, count_at, sigma_at, sign_at, frame_at, inclination_at, altitude_at, lock_at;
+	DvlV1Layout(const Bytes& bytes, std::size_t beam_count)
+	{
+		beams_at = bytes.size() - 1 - beam_count * kBeamBytes;
+		count_at = beams_at - 4;
+		sigma_at = count_at - 8;
+		sign_at = sigma_at - 1;
+		frame_at = sign_at - 1;
+		inclination_at = frame_at - 8;
+		altitude_at = inclination_at - 8;
+		lock_at = altitude_at - 1;
+	}
+	std::size_t validAt(std::size_t beam) const { return beams_at + beam * kBeamBytes + 8; }
+};
+
+// Overwrites one byte after checking it holds `expected` (see patchU32).
+void patchU8(Bytes& bytes, std::size_t offset, uint8_t expected, uint8_t value)
+{
+	ASSERT_LT(offset, bytes.size());
+	ASSERT_EQ(unsigned(expected), unsigned(bytes[offset])) << "unexpected serialized layout at byte " << offset;
+	bytes[offset] = value;
+}
+
+// The exception message of deserializing `bytes`, or "" if it did not throw.
+std::string deserializeError(const Bytes& bytes)
+{
+	try
+	{
+		deserialize(bytes);
+	}
+	catch (const std::exception& e)
+	{
+		return e.what();
+	}
+	return "";
+}
+
 CObservationADCP makeAdcp()
 {
 	CObservationADCP a;
@@ -178,6 +257,140 @@ TEST(ObservationSerialization, DvlWithoutLockKeepsNanAltitudeAndNoBeams)
 	EXPECT_FALSE(back->bottom_lock);
 	EXPECT_TRUE(std::isnan(back->altitude_m));
 	EXPECT_TRUE(back->beams.empty());
+}
+
+TEST(ObservationSerialization, DvlVersion1RoundTripKeepsTheNewFields)
+{
+	const auto d = makeDvlV1();
+	const Bytes bytes = serialize(d);
+	ASSERT_EQ(1, bytes[versionByteOffset(d)]) << "the writer must write version 1";
+	const auto back = roundTrip(d);
+	ASSERT_TRUE(back);
+	expectSameBase(d, *back);
+	expectSamePose(d.sensorPose, back->sensorPose);
+	EXPECT_EQ(d.velocity_s_mps, back->velocity_s_mps);
+	EXPECT_EQ(d.velocity_cov, back->velocity_cov);
+	EXPECT_TRUE(back->bottom_lock);
+	EXPECT_EQ(12.75, back->altitude_m);
+	EXPECT_EQ(d.beam_inclination_rad, back->beam_inclination_rad);
+	EXPECT_EQ(DvlFrame::EarthEnu, back->frame);
+	EXPECT_EQ(DvlSign::BottomOverInstrument, back->sign);
+	EXPECT_EQ(0.0125, back->beam_velocity_sigma_mps);
+	ASSERT_EQ(4u, back->beams.size());
+	for (std::size_t i = 0; i < d.beams.size(); ++i)
+	{
+		EXPECT_EQ(d.beams[i].range_m, back->beams[i].range_m) << "beam " << i;
+		EXPECT_EQ(d.beams[i].valid, back->beams[i].valid) << "beam " << i;
+		EXPECT_EQ(d.beams[i].azimuth_rad, back->beams[i].azimuth_rad) << "beam " << i;
+		if (d.beams[i].valid)
+		{
+			EXPECT_EQ(d.beams[i].velocity_mps, back->beams[i].velocity_mps) << "beam " << i;
+		}
+	}
+	EXPECT_TRUE(std::isnan(back->beams[3].velocity_mps));  // an invalid beam's NaN survives
+}
+
+TEST(ObservationSerialization, DvlEveryFrameAndSignRoundTrips)
+{
+	for (uint8_t f = 0; f <= uint8_t(DvlFrame::Beam); ++f)
+		for (uint8_t g = 0; g <= uint8_t(DvlSign::BottomOverInstrument); ++g)
+		{
+			auto d = makeDvlV1();
+			d.frame = DvlFrame(f);
+			d.sign = DvlSign(g);
+			const auto back = roundTrip(d);
+			ASSERT_TRUE(back);
+			EXPECT_EQ(d.frame, back->frame) << dvlFrameName(d.frame);
+			EXPECT_EQ(d.sign, back->sign) << dvlSignName(d.sign);
+		}
+}
+
+TEST(ObservationSerialization, DvlVersion0ReadsAsInstrumentFrameVehicleOverBottom)
+{
+	const auto d = makeDvl();
+	const Bytes v0 = dvlVersion0Bytes(d);
+	ASSERT_EQ(0, v0[versionByteOffset(d)]);
+	const auto back = std::dynamic_pointer_cast<CObservationDVL>(deserialize(v0));
+	ASSERT_TRUE(back);
+	expectSameBase(d, *back);
+	expectSamePose(d.sensorPose, back->sensorPose);
+	EXPECT_EQ(d.velocity_s_mps, back->velocity_s_mps);
+	EXPECT_EQ(d.velocity_cov, back->velocity_cov);
+	EXPECT_TRUE(back->bottom_lock);
+	EXPECT_EQ(DvlFrame::Instrument, back->frame);
+	EXPECT_EQ(DvlSign::VehicleOverBottom, back->sign);
+	EXPECT_EQ(0.0, back->beam_velocity_sigma_mps);
+	ASSERT_EQ(4u, back->beams.size());
+	EXPECT_FALSE(back->beams[3].valid);
+	for (const auto& b : back->beams)
+	{
+		EXPECT_EQ(0.0, b.velocity_mps);
+		EXPECT_EQ(0.0, b.azimuth_rad);
+	}
+	// Read into an existing object: the version-1 fields are reset, not kept.
+	CObservationDVL existing = makeDvlV1();
+	mrpt::io::CMemoryStream buf;
+	buf.Write(v0.data(), v0.size());
+	buf.Seek(0);
+	mrpt::serialization::archiveFrom(buf).ReadObject(&existing);
+	EXPECT_EQ(DvlFrame::Instrument, existing.frame);
+	EXPECT_EQ(DvlSign::VehicleOverBottom, existing.sign);
+	EXPECT_EQ(0.0, existing.beam_velocity_sigma_mps);
+	EXPECT_EQ(0.0, existing.beams[0].azimuth_rad);
+	EXPECT_EQ(0.0, existing.beams[0].velocity_mps);
+}
+
+TEST(ObservationSerialization, DvlFrameAndSignNamesParseBack)
+{
+	for (uint8_t f = 0; f <= uint8_t(DvlFrame::Beam); ++f)
+	{
+		DvlFrame parsed = DvlFrame::Instrument;
+		EXPECT_TRUE(parseDvlFrame(dvlFrameName(DvlFrame(f)), parsed)) << unsigned(f);
+		EXPECT_EQ(DvlFrame(f), parsed);
+	}
+	for (uint8_t g = 0; g <= uint8_t(DvlSign::BottomOverInstrument); ++g)
+	{
+		DvlSign parsed = DvlSign::VehicleOverBottom;
+		EXPECT_TRUE(parseDvlSign(dvlSignName(DvlSign(g)), parsed)) << unsigned(g);
+		EXPECT_EQ(DvlSign(g), parsed);
+	}
+	EXPECT_STREQ("earth_enu", dvlFrameName(DvlFrame::EarthEnu));
+	EXPECT_STREQ("bottom_over_instrument", dvlSignName(DvlSign::BottomOverInstrument));
+	DvlFrame f = DvlFrame::Vehicle;
+	EXPECT_FALSE(parseDvlFrame("Earth_ENU", f));
+	EXPECT_FALSE(parseDvlFrame("", f));
+	EXPECT_EQ(DvlFrame::Vehicle, f) << "left untouched when unknown";
+	DvlSign g = DvlSign::BottomOverInstrument;
+	EXPECT_FALSE(parseDvlSign("pd0", g));
+	EXPECT_EQ(DvlSign::BottomOverInstrument, g);
+}
+
+TEST(ObservationText, DvlDescriptionAndExportNameFrameAndSign)
+{
+	const auto d = makeDvlV1();
+	std::ostringstream o;
+	d.getDescriptionAsText(o);
+	const std::string text = o.str();
+	EXPECT_NE(std::string::npos, text.find("Frame: earth_enu")) << text;
+	EXPECT_NE(std::string::npos, text.find("sign: bottom_over_instrument")) << text;
+	EXPECT_NE(std::string::npos, text.find("RDI PD0")) << text;
+	EXPECT_NE(std::string::npos, d.exportTxtHeader().find("[FRAME")) << d.exportTxtHeader();
+	EXPECT_NE(std::string::npos, d.exportTxtHeader().find("[SIGN")) << d.exportTxtHeader();
+	// 3 velocity + lock + altitude + frame + sign + beam count + 2 per beam.
+	std::istringstream row(d.exportTxtDataRow());
+	std::vector<std::string> cols;
+	for (std::string c; row >> c;) cols.push_back(c);
+	ASSERT_EQ(8u + 2 * d.beams.size(), cols.size()) << d.exportTxtDataRow();
+	EXPECT_EQ("3", cols[5]);  // earth_enu
+	EXPECT_EQ("1", cols[6]);  // bottom_over_instrument
+	EXPECT_EQ("4", cols[7]);
+	// Beam mode shows the beam velocities in the description.
+	auto b = d;
+	b.frame = DvlFrame::Beam;
+	std::ostringstream ob;
+	b.getDescriptionAsText(ob);
+	EXPECT_NE(std::string::npos, ob.str().find("velocity [m/s]")) << ob.str();
+	EXPECT_NE(std::string::npos, ob.str().find("-0.625")) << ob.str();
 }
 
 TEST(ObservationSerialization, AdcpRoundTripKeepsEveryField)
@@ -274,9 +487,75 @@ TEST(ObservationCorruption, AbsurdDvlBeamCountThrowsInsteadOfAllocating)
 {
 	const auto d = makeDvl();
 	Bytes bytes = serialize(d);
-	constexpr std::size_t kBeamBytes = sizeof(double) + 1;  // range + bool
-	const std::size_t count_at = bytes.size() - kEndFlagSize - d.beams.size() * kBeamBytes - 4;
-	patchU32(bytes, count_at, 4, 0xFFFFFFFFu);
+	patchU32(bytes, DvlV1Layout(bytes, d.beams.size()).count_at, 4, 0xFFFFFFFFu);
+	EXPECT_THROW(deserialize(bytes), std::exception);
+	// The same in a version-0 record.
+	Bytes v0 = dvlVersion0Bytes(d);
+	constexpr std::size_t kV0BeamBytes = sizeof(double) + 1;  // range + valid
+	patchU32(v0, v0.size() - kEndFlagSize - d.beams.size() * kV0BeamBytes - 4, 4, 0xFFFFFFFFu);
+	EXPECT_THROW(deserialize(v0), std::exception);
+}
+
+TEST(ObservationCorruption, DvlFrameOrSignCodeOutOfRangeIsCorruptData)
+{
+	const auto d = makeDvlV1();
+	const Bytes good = serialize(d);
+	const DvlV1Layout at(good, d.beams.size());
+	Bytes bad_frame = good;
+	patchU8(bad_frame, at.frame_at, uint8_t(DvlFrame::EarthEnu), 5);
+	std::string msg = deserializeError(bad_frame);
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find("frame")) << msg;
+	Bytes bad_sign = good;
+	patchU8(bad_sign, at.sign_at, uint8_t(DvlSign::BottomOverInstrument), 2);
+	msg = deserializeError(bad_sign);
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find("sign")) << msg;
+	Bytes huge = good;
+	patchU8(huge, at.frame_at, uint8_t(DvlFrame::EarthEnu), 0xFF);
+	EXPECT_NE(std::string::npos, deserializeError(huge).find("corrupt data"));
+	EXPECT_EQ("", deserializeError(good));	// the offsets above are the right ones
+}
+
+TEST(ObservationCorruption, DvlFlagsOtherThanZeroOrOneAreCorruptData)
+{
+	// MRPT would copy any byte into a bool; we refuse all but 0 and 1.
+	const auto d = makeDvlV1();
+	const Bytes good = serialize(d);
+	const DvlV1Layout at(good, d.beams.size());
+	Bytes bad_lock = good;
+	patchU8(bad_lock, at.lock_at, 1, 2);
+	std::string msg = deserializeError(bad_lock);
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find("bottom_lock")) << msg;
+	Bytes bad_valid = good;
+	patchU8(bad_valid, at.validAt(3), 0, 0x7F);
+	msg = deserializeError(bad_valid);
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find("beam valid")) << msg;
+	// Version 0 records get the same check.
+	msg = deserializeError(dvlVersion0Bytes(makeDvl(), 3));
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find("bottom_lock")) << msg;
+}
+
+TEST(ObservationCorruption, DvlWithAnInvalidEnumIsNotWritten)
+{
+	auto d = makeDvlV1();
+	d.frame = static_cast<DvlFrame>(9);
+	EXPECT_THROW(serialize(d), std::exception);
+	d = makeDvlV1();
+	d.sign = static_cast<DvlSign>(2);
+	EXPECT_THROW(serialize(d), std::exception);
+}
+
+TEST(ObservationCorruption, FutureDvlVersionThrows)
+{
+	const auto d = makeDvl();
+	Bytes bytes = serialize(d);
+	const std::size_t at = versionByteOffset(d);
+	ASSERT_EQ(1, bytes[at]);
+	bytes[at] = 2;
 	EXPECT_THROW(deserialize(bytes), std::exception);
 }
 

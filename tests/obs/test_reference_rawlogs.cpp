@@ -18,6 +18,7 @@ using namespace auvnav::obs;
 namespace
 {
 const std::string kObsV0 = std::string(AUVNAV_TEST_DATA_DIR) + "/obs_v0.rawlog";
+const std::string kObsV1 = std::string(AUVNAV_TEST_DATA_DIR) + "/obs_v1.rawlog";
 
 constexpr int64_t kT0Ticks = 133444736001234567;  // 2023-11-14T22:13:20.1234567Z
 constexpr int64_t kQuarterSecond_100ns = 2500000;
@@ -71,6 +72,35 @@ void expectReferenceDvlV0(const CObservationDVL& d)
 	{
 		EXPECT_EQ(range_m[i], d.beams[i].range_m) << "beam " << i;
 		EXPECT_EQ(valid[i], d.beams[i].valid) << "beam " << i;
+	}
+}
+
+// Version 1 of the DVL: the version-0 values plus frame, sign, beam velocities
+// and azimuths (tests/data/README.md, obs_v1.rawlog).
+void expectReferenceDvlV1(const CObservationDVL& d)
+{
+	EXPECT_EQ("DVL", d.sensorLabel);
+	EXPECT_EQ(kT0Ticks, ticks(d.timestamp));
+	expectPose(d.sensorPose, 0.75, -0.05, 0.32, 0.7853981633974483, 0.0, 0.0);
+	EXPECT_EQ((std::array<double, 3>{1.25, -0.375, 0.0625}), d.velocity_s_mps);
+	EXPECT_EQ((std::array<double, 9>{1e-4, 1e-5, -2e-6, 1e-5, 2e-4, 3e-6, -2e-6, 3e-6, 4e-4}), d.velocity_cov);
+	EXPECT_TRUE(d.bottom_lock);
+	EXPECT_EQ(12.75, d.altitude_m);
+	EXPECT_EQ(0.5235987755982988, d.beam_inclination_rad);
+	EXPECT_EQ(DvlFrame::EarthEnu, d.frame);
+	EXPECT_EQ(DvlSign::BottomOverInstrument, d.sign);
+	EXPECT_EQ(0.0075, d.beam_velocity_sigma_mps);
+	ASSERT_EQ(4u, d.beams.size());
+	const double range[4] = {14.5, 14.25, 15.125, 0.0};
+	const bool valid[4] = {true, true, true, false};
+	const double velocity[4] = {0.625, -0.5, 0.125, 0.0};
+	const double azimuth[4] = {0.7853981633974483, 2.356194490192345, -2.356194490192345, -0.7853981633974483};
+	for (std::size_t i = 0; i < 4; ++i)
+	{
+		EXPECT_EQ(range[i], d.beams[i].range_m) << i;
+		EXPECT_EQ(valid[i], d.beams[i].valid) << i;
+		EXPECT_EQ(velocity[i], d.beams[i].velocity_mps) << i;
+		EXPECT_EQ(azimuth[i], d.beams[i].azimuth_rad) << i;
 	}
 }
 
@@ -136,4 +166,23 @@ TEST(ReferenceRawlog, ObsV0HoldsTheDocumentedValues)
 	EXPECT_FALSE(reader.next()) << "obs_v0.rawlog holds exactly four objects";
 	EXPECT_EQ(4u, reader.objectsRead());
 	EXPECT_EQ(0u, reader.actionsSkipped());
+}
+
+TEST(ReferenceRawlog, ObsV1HoldsTheDocumentedValues)
+{
+	auvnav::io::RawlogReader reader(kObsV1);
+	const auto dvl = nextAs<CObservationDVL>(reader);
+	ASSERT_TRUE(dvl);
+	expectReferenceDvlV1(*dvl);
+	// The other classes are still at version 0 in this file.
+	const auto adcp = nextAs<CObservationADCP>(reader);
+	ASSERT_TRUE(adcp);
+	expectReferenceAdcpV0(*adcp);
+	const auto pressure = nextAs<CObservationPressure>(reader);
+	ASSERT_TRUE(pressure);
+	expectReferencePressureV0(*pressure);
+	const auto thrusters = nextAs<CObservationThrusters>(reader);
+	ASSERT_TRUE(thrusters);
+	expectReferenceThrustersV0(*thrusters);
+	EXPECT_FALSE(reader.next()) << "obs_v1.rawlog holds exactly four objects";
 }

@@ -304,27 +304,6 @@ class ImuConverter final : public Converter
 
 // ---------------------------------------------------------------- DVL
 
-bool dvlFrameFromName(const std::string& n, auvnav::obs::DvlFrame& f)
-{
-	using auvnav::obs::DvlFrame;
-	if (n == "instrument") f = DvlFrame::Instrument;
-	else if (n == "vehicle") f = DvlFrame::Vehicle;
-	else if (n == "earth_ned") f = DvlFrame::EarthNed;
-	else if (n == "earth_enu") f = DvlFrame::EarthEnu;
-	else if (n == "beam") f = DvlFrame::Beam;
-	else return false;
-	return true;
-}
-
-bool dvlSignFromName(const std::string& n, auvnav::obs::DvlSign& s)
-{
-	using auvnav::obs::DvlSign;
-	if (n == "vehicle_over_bottom") s = DvlSign::VehicleOverBottom;
-	else if (n == "bottom_over_instrument") s = DvlSign::BottomOverInstrument;
-	else return false;
-	return true;
-}
-
 class DvlConverter final : public Converter
 {
    public:
@@ -340,11 +319,11 @@ class DvlConverter final : public Converter
 			s.fail("sign", "required: vehicle_over_bottom, or bottom_over_instrument (Teledyne RDI PD0)");
 		checkText(s, frame_, "frame", [](const std::string& n) {
 			auvnav::obs::DvlFrame f;
-			return dvlFrameFromName(n, f);
+			return auvnav::obs::parseDvlFrame(n, f);
 		});
 		checkText(s, sign_, "sign", [](const std::string& n) {
 			auvnav::obs::DvlSign x;
-			return dvlSignFromName(n, x);
+			return auvnav::obs::parseDvlSign(n, x);
 		});
 		velocity_ = parseVector(q, "velocity", UnitKind::Velocity, 3);
 		cov_ = parseVector(q, "velocity_covariance", UnitKind::VelocitySquared, 9);
@@ -381,13 +360,13 @@ class DvlConverter final : public Converter
 		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
 		std::string name;
 		if (!readText(frame_, r, cols_, name, why)) return nullptr;
-		if (!dvlFrameFromName(name, o->frame))
+		if (!auvnav::obs::parseDvlFrame(name, o->frame))
 		{
 			why = "frame '" + name + "' unknown";
 			return nullptr;
 		}
 		if (!readText(sign_, r, cols_, name, why)) return nullptr;
-		if (!dvlSignFromName(name, o->sign))
+		if (!auvnav::obs::parseDvlSign(name, o->sign))
 		{
 			why = "sign '" + name + "' unknown";
 			return nullptr;
@@ -409,7 +388,8 @@ class DvlConverter final : public Converter
 			velocity_ok = res == Read::Ok && v.allFinite();
 			const bool rotate = o->frame == DvlFrame::Instrument || o->frame == DvlFrame::Vehicle;
 			const Eigen::Vector3d v_out = velocity_ok ? Eigen::Vector3d(rotate ? axes_ * v : v) : v;
-			for (int k = 0; k < 3; ++k) o->velocity_s_mps[static_cast<std::size_t>(k)] = velocity_ok ? v_out[k] : 0;
+			// An invalid velocity is kept as read (NaN for a missing one), not made up.
+			for (int k = 0; k < 3; ++k) o->velocity_s_mps[static_cast<std::size_t>(k)] = velocity_ok ? v_out[k] : v[k];
 		}
 		if (o->frame == DvlFrame::Beam)
 		{

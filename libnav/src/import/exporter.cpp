@@ -39,25 +39,6 @@ std::string fileSafe(const std::string& label)
 	return s.empty() ? "unnamed" : s;
 }
 
-const char* frameName(auvnav::obs::DvlFrame f)
-{
-	using auvnav::obs::DvlFrame;
-	switch (f)
-	{
-		case DvlFrame::Instrument: return "instrument";
-		case DvlFrame::Vehicle: return "vehicle";
-		case DvlFrame::EarthNed: return "earth_ned";
-		case DvlFrame::EarthEnu: return "earth_enu";
-		case DvlFrame::Beam: return "beam";
-	}
-	return "instrument";
-}
-
-const char* signName(auvnav::obs::DvlSign s)
-{
-	return s == auvnav::obs::DvlSign::BottomOverInstrument ? "bottom_over_instrument" : "vehicle_over_bottom";
-}
-
 std::string classOf(const mrpt::obs::CObservation& o)
 {
 	if (dynamic_cast<const mrpt::obs::CObservationIMU*>(&o)) return "imu";
@@ -156,7 +137,7 @@ std::string gpsRow(const mrpt::obs::CObservationGPS& o)
 
 std::string dvlRow(const auvnav::obs::CObservationDVL& o, std::size_t n)
 {
-	std::string row = std::string(frameName(o.frame)) + "," + signName(o.sign) + "," + (o.bottom_lock ? "1" : "0");
+	std::string row = std::string(auvnav::obs::dvlFrameName(o.frame)) + "," + auvnav::obs::dvlSignName(o.sign) + "," + (o.bottom_lock ? "1" : "0");
 	for (double v : o.velocity_s_mps) row += "," + exact(v);
 	for (double c : o.velocity_cov) row += "," + exact(c);
 	row += "," + exact(o.altitude_m) + "," + exact(o.beam_inclination_rad) + "," + exact(o.beam_velocity_sigma_mps) +
