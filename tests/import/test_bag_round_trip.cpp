@@ -393,11 +393,12 @@ std::string slurp(const fs::path& p)
 	return s.str();
 }
 
-/** Simulates the short mission once, runs the navigator on it; shared by both bag kinds. */
-const fs::path& simulated()
+/** Simulates the short mission and runs the navigator on it, in a folder of
+ *  its own per bag kind (CTest runs the two tests as parallel processes). */
+fs::path simulated(const std::string& kind)
 {
-	static const fs::path dir = [] {
-		const fs::path d = fs::temp_directory_path() / "auvnav_bag_round_trip";
+	{
+		const fs::path d = fs::temp_directory_path() / ("auvnav_bag_round_trip_" + kind);
 		fs::remove_all(d);
 		fs::create_directories(d);
 		EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " +
@@ -409,13 +410,12 @@ const fs::path& simulated()
 					  d / "run_original.log"),
 				  0);
 		return d;
-	}();
-	return dir;
+	}
 }
 
 void checkBagRoundTrip(const std::string& kind)
 {
-	const fs::path& d = simulated();
+	const fs::path d = simulated(kind);
 	const std::string bag_name = kind == "ros1" ? "mission.bag" : "mission.db3";
 	{
 		std::unique_ptr<BagSink> sink;

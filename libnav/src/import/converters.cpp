@@ -289,6 +289,13 @@ class ImuConverter final : public Converter
 			return false;
 		}
 		if (!finiteOrWhy(v, name, why)) return false;
+		// A field already in gauss is kept as read (no T round trip moving the last bit).
+		if (scale == kGaussPerTesla && (spec[0].unit.name == "G" || spec[0].unit.name == "Gauss"))
+		{
+			for (int k = 0; k < 3; ++k)
+				readScalar(spec[static_cast<std::size_t>(k)], r, cols_, v[k], why, 0, &v[k]);
+			scale = 1;
+		}
 		const Eigen::Vector3d v_s = axes_ * v * scale;
 		for (int k = 0; k < 3; ++k) o.set(idx[static_cast<std::size_t>(k)], v_s[k]);
 		return true;

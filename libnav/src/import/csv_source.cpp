@@ -13,6 +13,8 @@ uint64_t newLayoutId()
 	return next++;
 }
 
+constexpr std::size_t kMaxLineBytes = 16u << 20;
+
 bool isBlankOrComment(const std::string& line)
 {
 	for (char c : line)
@@ -63,6 +65,9 @@ bool CsvSource::readLine(std::string& line)
 {
 	if (!std::getline(in_, line)) return false;
 	++line_no_;
+	if (line.size() > kMaxLineBytes)
+		throw ImportError(path_ + ":" + std::to_string(line_no_) + ": line longer than " +
+						  std::to_string(kMaxLineBytes / (1 << 20)) + " MiB (not a CSV file?)");
 	if (!line.empty() && line.back() == '\r') line.pop_back();
 	return true;
 }
@@ -140,7 +145,8 @@ bool CsvSource::next(Record& out)
 		{
 			Value& v = out.values[i];
 			std::string& c = cells_[i];
-			const bool blank = !quoted_[i] && c.find_first_not_of(" \t") == std::string::npos;
+			// An empty cell, quoted or not, is no value.
+			const bool blank = c.find_first_not_of(" \t") == std::string::npos;
 			if (blank)
 			{
 				v.kind = Value::Kind::Missing;

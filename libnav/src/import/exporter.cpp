@@ -310,6 +310,11 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 		while (auto o = in.next())
 		{
 			const std::string cls = classOf(*o);
+			if (o->timestamp == INVALID_TIMESTAMP)
+			{
+				report.skipped_by_reason["observation without a valid timestamp (" + o->sensorLabel + ")"]++;
+				continue;
+			}
 			if (cls.empty())
 			{
 				report.skipped_by_reason[std::string("class ") + o->GetRuntimeClass()->className + " not exported"]++;
@@ -361,7 +366,7 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 	while (auto o = in.next())
 	{
 		auto it = labels.find(o->sensorLabel);
-		if (it == labels.end() || classOf(*o) != it->second.cls) continue;
+		if (it == labels.end() || classOf(*o) != it->second.cls || o->timestamp == INVALID_TIMESTAMP) continue;
 		LabelOut& l = it->second;
 		std::string row = formatSeconds7(fromMrptTime(o->timestamp)) + ",";
 		if (const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get()))

@@ -132,7 +132,8 @@ Read readNumber(const Value& v, double& out, std::string& why)
 			char* e = nullptr;
 			out = std::strtod(b, &e);
 			while (e && (*e == ' ' || *e == '\t')) ++e;
-			if (e == b || !e || *e != '\0')
+			// The whole cell must be the number (an embedded NUL ends c_str early).
+			if (e == b || !e || e != b + v.text.size())
 			{
 				if (v.text == "true" || v.text == "True" || v.text == "TRUE")
 				{

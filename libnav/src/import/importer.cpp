@@ -25,6 +25,8 @@ using detail::Converter;
 
 constexpr TimeNs kNoTime = std::numeric_limits<TimeNs>::min();
 constexpr std::size_t kMaxNotes = 5;
+constexpr std::size_t kMaxPending = 2000000;	// ~1.5 GB at worst; 5.5 h of a 100 Hz IMU
+constexpr std::size_t kMaxReasons = 20;	// distinct rejection reasons kept per sensor
 
 bool isDirectory(const std::string& p)
 {
@@ -120,7 +122,8 @@ struct SensorRun
 	std::size_t report_index = 0;
 
 	bool done = false;
-	TimeNs frontier = kNoTime;	// newest stamp read
+	TimeNs frontier = kNoTime;	// stamp of the last record placed (where this sensor's reading stands)
+	TimeNs newest = kNoTime;	// newest stamp placed
 	TimeNs previous = kNoTime;	// stamp of the previous accepted record
 	std::vector<std::pair<TimeNs, TimeNs>> steps;	// (start, step) of positive steps
 	Record record;
@@ -168,7 +171,7 @@ Spec parseSpec(const config::Node& root)
 		root.fail("format_version", "this auvnav-import reads format_version 1");
 	Spec spec;
 	spec.reorder_window_s = root.inRange("reorder_window_s", 0, 600, 1.0);
-	spec.clock_jump_s = root.positive("clock_jump_s", 10.0);
+	spec.clock_jump_s = root.inRange("clock_jump_s", 1e-6, 1e9, 10.0);	// 1e9 s: ~30 years, in int64 ns
 	spec.gap_factor = root.inRange("gap_factor", 1.5, 1e6, 5.0);
 	for (const auto& s : root.sequence("sensors"))
 	{
@@ -264,7 +267,11 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 			why = "no record time";
 			return false;
 		}
-		out = r.record_time_ns + run.time.offset_ns;
+		if (__builtin_add_overflow(r.record_time_ns, run.time.offset_ns, &out))
+		{
+			why = "record time plus offset_s is out of range";
+			return false;
+		}
 		return true;
 	}
 	const int i = cols.index(r, run.time.field);
@@ -306,7 +313,11 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 		}
 		case Value::Kind::Missing: why = "time field '" + run.time.field + "' is empty"; return false;
 	}
-	out += run.time.offset_ns;
+	if (__builtin_add_overflow(out, run.time.offset_ns, &out))
+	{
+		why = "time field '" + run.time.field + "' plus offset_s is out of range";
+		return false;
+	}
 	return true;
 }
 
@@ -404,6 +415,14 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 	{
 		throw ImportError(e.what());
 	}
+	// Writing the rawlog over one of the inputs would destroy the data being read.
+	{
+		std::error_code ec;
+		const auto out_abs = std::filesystem::weakly_canonical(opt.out_rawlog, ec);
+		for (const auto& run : spec.sensors)
+			if (!run.path.empty() && std::filesystem::weakly_canonical(run.path, ec) == out_abs)
+				throw ImportError(opt.out_rawlog + ": the output is one of the inputs (" + run.label + " reads it)");
+	}
 	report.reorder_window_s = spec.reorder_window_s;
 	const TimeNs window_ns = static_cast<TimeNs>(spec.reorder_window_s * 1e9);
 	const TimeNs jump_ns = static_cast<TimeNs>(spec.clock_jump_s * 1e9);
@@ -415,7 +434,9 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 	std::vector<detail::Columns> time_cols(spec.sensors.size());
 
 	auto writeUpTo = [&](TimeNs limit) {
-		while (!heap.empty() && heap.top().t <= limit)
+		// Strictly older than the limit: a record with the limit's stamp may still
+		// come from a sensor listed earlier in the spec.
+		while (!heap.empty() && (heap.top().t < limit || limit == std::numeric_limits<TimeNs>::max()))
 		{
 			const Pending& p = heap.top();
 			writer.write(*p.obs);
@@ -430,8 +451,12 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			throw ImportError(where + ": " + reason + (always_fatal || opt.lenient ? "" : " (--lenient counts such records and goes on)"));
 		SensorReport& rep = report.sensors[run.report_index];
 		rep.rejected++;
-		rep.rejected_by_reason[reason]++;
-		rep.first_rejected_where.emplace(reason, where);
+		// Reasons quote the bad value: bound how many distinct ones are kept.
+		const std::string key = rep.rejected_by_reason.count(reason) || rep.rejected_by_reason.size() < kMaxReasons
+									? reason
+									: std::string("other reasons");
+		rep.rejected_by_reason[key]++;
+		rep.first_rejected_where.emplace(key, where);
 	};
 
 	std::size_t rows_total = 0;
@@ -472,26 +497,24 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 					detail::finishObservation(*obs);
 					if (run.previous != kNoTime)
 					{
+						// Steps in long double: two valid stamps can be 1.8e19 ns apart.
+						const long double step = static_cast<long double>(t) - static_cast<long double>(run.previous);
 						if (t == run.previous) rep.repeated_stamps++;
 						if (t < run.previous) rep.backward_stamps++;
-						if (t > run.previous) run.steps.emplace_back(run.previous, t - run.previous);
-						if (t - run.previous > jump_ns)
+						if (t > run.previous && step < 9e18L) run.steps.emplace_back(run.previous, t - run.previous);
+						if (step > static_cast<long double>(jump_ns) || -step > static_cast<long double>(jump_ns))
 						{
 							rep.clock_jumps++;
 							if (rep.clock_jump_notes.size() < kMaxNotes)
-								rep.clock_jump_notes.push_back("at " + secondsText(run.previous) + " s: +" +
-															   secondsText(t - run.previous) + " s");
+							{
+								char buf[64];
+								std::snprintf(buf, sizeof buf, "%+.3Lf", step * 1e-9L);
+								rep.clock_jump_notes.push_back("at " + secondsText(run.previous) + " s: " + buf + " s");
+							}
 						}
 					}
 					if (written_upto != kNoTime && t < written_upto)
 					{
-						if (run.previous - t > jump_ns)
-						{
-							rep.clock_jumps++;
-							if (rep.clock_jump_notes.size() < kMaxNotes)
-								rep.clock_jump_notes.push_back("at " + secondsText(run.previous) + " s: " +
-															   secondsText(t - run.previous) + " s");
-						}
 						// Not fatal in strict mode either: a stamp that went back
 						// is the log's fact, reported, not a conversion error.
 						SensorReport& rp = report.sensors[run.report_index];
@@ -502,7 +525,7 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 					}
 					else
 					{
-						if (run.frontier != kNoTime && t < run.frontier) rep.reordered++;
+						if (run.newest != kNoTime && t < run.newest) rep.reordered++;
 						heap.push({t, seq++, pick, std::move(obs)});
 						if (!rep.has_span)
 						{
@@ -511,8 +534,16 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 						}
 						rep.first_ns = std::min(rep.first_ns, t);
 						rep.last_ns = std::max(rep.last_ns, t);
-						run.frontier = std::max(run.frontier == kNoTime ? t : run.frontier, t);
+						run.newest = std::max(run.newest == kNoTime ? t : run.newest, t);
 					}
+					// The read position follows the last stamp, but not across a jump:
+					// one stamp a year ahead must not hold its sensor back until every
+					// other sensor is read (its later rows would all be "behind"). A
+					// real clock jump moves it with the next, ordinary, step.
+					const bool ordinary_step = run.previous == kNoTime ||
+											   std::abs(static_cast<long double>(t) - run.previous) <=
+												   static_cast<long double>(jump_ns);
+					if (ordinary_step && (written_upto == kNoTime || t >= written_upto)) run.frontier = t;
 					run.previous = t;
 				}
 			}
@@ -524,10 +555,24 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 				if (!s.done)
 				{
 					all_done = false;
-					watermark = std::min(watermark, s.frontier == kNoTime ? kNoTime : s.frontier - window_ns);
+					watermark = std::min(watermark, s.frontier == kNoTime ? kNoTime
+																		 : (s.frontier < kNoTime + window_ns + 1 ? kNoTime + 1
+																												  : s.frontier - window_ns));
 				}
 			if (all_done) break;
 			if (watermark != kNoTime) writeUpTo(watermark);
+			// A sensor whose clock jumped far ahead must not make the buffer hold
+			// every other record: past kMaxPending the oldest are written anyway.
+			while (heap.size() > kMaxPending)
+			{
+				const Pending& p = heap.top();
+				writer.write(*p.obs);
+				written_upto = p.t;
+				report.sensors[spec.sensors[p.sensor].report_index].written++;
+				report.written++;
+				++report.buffer_overflows;
+				heap.pop();
+			}
 		}
 		writeUpTo(std::numeric_limits<TimeNs>::max());
 	}

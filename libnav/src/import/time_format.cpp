@@ -144,13 +144,18 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 	{
 		++i;
 		int64_t scale = 100000000;
-		bool any = false;
-		for (; i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])); ++i, any = true)
+		bool any = false, round_up = false;
+		int digits = 0;
+		for (; i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])); ++i, any = true, ++digits)
 		{
-			frac_ns += (s[i] - '0') * scale;
+			if (digits < 9)
+				frac_ns += (s[i] - '0') * scale;
+			else if (digits == 9)
+				round_up = s[i] >= '5';	 // nearest nanosecond, as the decimal formats
 			scale /= 10;
 		}
 		if (!any) return std::nullopt;
+		frac_ns += round_up;
 	}
 	int64_t offset_s = 0;
 	if (i < s.size())
@@ -162,8 +167,18 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 			const int sign = s[i++] == '-' ? -1 : 1;
 			int oh, om = 0;
 			if (!readInt(s, i, 2, oh)) return std::nullopt;
-			if (i < s.size() && s[i] == ':') ++i;
-			if (i < s.size() && !readInt(s, i, 2, om)) return std::nullopt;
+			if (i < s.size() && s[i] == ':')
+			{
+				++i;
+				if (!readInt(s, i, 2, om)) return std::nullopt;
+			}
+			else if (i < s.size() && !readInt(s, i, 2, om))
+				return std::nullopt;
+			if (oh > 23 || om > 59)
+			{
+				why = "ISO 8601 zone offset out of range";
+				return std::nullopt;
+			}
 			offset_s = sign * (oh * 3600 + om * 60);
 		}
 		if (i != s.size()) return std::nullopt;
@@ -176,7 +191,21 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 	tm.tm_min = m;
 	tm.tm_sec = sec;
 	const int64_t days_s = static_cast<int64_t>(timegm(&tm));	// UTC, no time zone database involved
-	return (days_s - offset_s) * 1000000000LL + frac_ns;
+	// timegm() normalises impossible dates (2016-02-31 -> 03-02): refuse them.
+	std::tm back{};
+	const time_t tt = static_cast<time_t>(days_s);
+	if (!gmtime_r(&tt, &back) || back.tm_mday != D || back.tm_mon != M - 1 || back.tm_year != Y - 1900)
+	{
+		why = "ISO 8601 date does not exist";
+		return std::nullopt;
+	}
+	int64_t ns = 0;
+	if (__builtin_mul_overflow(days_s - offset_s, int64_t{1000000000}, &ns) || __builtin_add_overflow(ns, frac_ns, &ns))
+	{
+		why = "out of range";
+		return std::nullopt;
+	}
+	return ns;
 }
 }  // namespace
 

@@ -72,6 +72,7 @@ struct ImportReport
 	std::string out_rawlog;
 	std::vector<SensorReport> sensors;
 	std::size_t written = 0;
+	std::size_t buffer_overflows = 0;  //!< records written early because the reorder buffer was full
 	double reorder_window_s = 0;
 	bool completed = false;
 	std::string error;	//!< why the import stopped, if it did
