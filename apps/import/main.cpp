@@ -99,8 +99,9 @@ int main(int argc, char** argv)
 	{
 		report.error = e.what();
 		std::cerr << "auvnav-import: error: " << e.what() << "\n";
-		// A rawlog cut short by an error must not pass for the whole log.
-		std::remove(opt.out_rawlog.c_str());
+		// A rawlog cut short by an error must not pass for the whole log; a
+		// file the import never opened (an input, an earlier rawlog) is kept.
+		if (report.output_created) std::remove(opt.out_rawlog.c_str());
 		rc = kExitBadInput;
 	}
 	if (!report.sensors.empty())

@@ -845,3 +845,115 @@ TEST(ImportAdversarialExport, MagnetometerRoundTripIsBitExact)
 	for (auto i : {mrpt::obs::IMU_MAG_X, mrpt::obs::IMU_MAG_Y, mrpt::obs::IMU_MAG_Z})
 		EXPECT_TRUE(same(b->get(i), o->get(i))) << i;
 }
+
+// ================================================================ second round
+// Added after the first fixes landed in the working tree (still open there).
+
+TEST(ImportAdversarialOrder, DISABLED_FarFutureFirstStampDoesNotDiscardTheRestOfItsSensor)
+{
+	// The jump guard needs a previous stamp: when the *first* row of A is a year
+	// ahead, A's frontier is a year ahead, A is read only after B, and 99 of its
+	// 100 rows are "behind the reorder window" (exit code 0).
+	const auto dir = scratch("outlier_first");
+	std::string a = "t,p\n", b = "t,p\n";
+	for (int i = 0; i < 100; ++i)
+	{
+		const double t = 1000 + i + (i == 0 ? 86400.0 * 365 : 0.0);
+		a += std::to_string(t) + "," + std::to_string(i) + "\n";
+		b += std::to_string(1000.5 + i) + "," + std::to_string(i) + "\n";
+	}
+	write(dir / "a.csv", a);
+	write(dir / "b.csv", b);
+	ImportReport rep;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep), "");
+	EXPECT_GE(rep.sensors[0].written, 99u);
+	EXPECT_LE(rep.sensors[0].rejected, 1u);
+	EXPECT_EQ(rep.sensors[1].written, 100u);
+}
+
+TEST(ImportAdversarialOrder, DISABLED_IsolatedFarFutureStampIsRejectedNotWrittenAYearLater)
+{
+	// One row a year ahead between ordinary neighbours is a bad stamp, not data a
+	// year later: written, it ends the rawlog with a one-year step (auvnav-run
+	// predicts across it) and the report's span says 3.2e7 s. It should be
+	// rejected and counted (its neighbours say where the sensor's clock is).
+	const auto dir = scratch("outlier_isolated");
+	std::string a = "t,p\n";
+	for (int i = 0; i < 100; ++i)
+		a += std::to_string(1000 + i + (i == 10 ? 86400.0 * 365 : 0.0)) + "," + std::to_string(i) + "\n";
+	write(dir / "a.csv", a);
+	write(dir / "b.csv", "t,p\n1000.5,1\n1099.5,2\n");
+	ImportReport rep;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep), "");
+	EXPECT_EQ(rep.sensors[0].written, 99u);
+	EXPECT_EQ(rep.sensors[0].rejected, 1u);
+	const auto obs = readAll((dir / "out.rawlog").string());
+	ASSERT_FALSE(obs.empty());
+	EXPECT_LT(fromMrptTime(obs.back()->timestamp), 2000000000000LL);
+}
+
+TEST(ImportAdversarialTime, DISABLED_ToMrptTimeAtTheInt64LimitDoesNotOverflow)
+{
+	// toMrptTime rounds with floorDiv(t + 50, 100): t + 50 overflows for the
+	// largest stamps parseTime accepts ("9223372036854775807" in ns).
+	constexpr TimeNs kMax = std::numeric_limits<TimeNs>::max();
+	EXPECT_EQ(fromMrptTime(toMrptTime(kMax)), 9223372036854775800LL);
+	EXPECT_EQ(fromMrptTime(toMrptTime(kMax - 60)), 9223372036854775700LL);
+	const auto dir = scratch("int64_max");
+	write(dir / "p.csv", "t,p\n9223372036854775807,1\n");
+	ImportReport rep;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("P", "p.csv", "ns"), rep, true), "");
+	if (rep.sensors[0].written == 1)
+	{
+		const auto obs = readAll((dir / "out.rawlog").string());
+		ASSERT_EQ(obs.size(), 1u);
+		EXPECT_EQ(fromMrptTime(obs[0]->timestamp), 9223372036854775800LL);
+	}
+	else
+		EXPECT_EQ(rep.sensors[0].rejected, 1u);
+}
+
+TEST(ImportAdversarialExport, DISABLED_TimestampBeyondTheNanosecondRangeIsNotWrittenAsGarbage)
+{
+	// Not only INVALID_TIMESTAMP: any MRPT time after 2262 makes
+	// (ticks - epoch) * 100 in fromMrptTime overflow int64.
+	const auto dir = scratch("export_far_time");
+	auto o = auvnav::obs::CObservationPressure::Create();
+	o->sensorLabel = "P";
+	o->timestamp = mrpt::Clock::time_point(mrpt::Clock::duration(std::numeric_limits<int64_t>::max() / 2));
+	o->pressure_pa = 101325;
+	writeRawlog(dir / "in.rawlog", {o});
+	ExportReport ex;
+	try
+	{
+		exportRawlog((dir / "in.rawlog").string(), (dir / "csv").string(), ex);
+	}
+	catch (const ImportError&)
+	{
+		return;
+	}
+	std::size_t rows = 0;
+	for (const auto& s : ex.sensors) rows += s.rows;
+	EXPECT_EQ(rows, 0u);
+	EXPECT_FALSE(ex.skipped_by_reason.empty());
+}
+
+TEST(ImportAdversarialExport, DISABLED_EmptyCameraNameRoundTrips)
+{
+	// An image whose cameraParams.cameraName is "" is exported as an empty
+	// cell, which the import refuses: "field 'camera_name' is empty".
+	const auto dir = scratch("export_empty_camera_name");
+	auto o = mrpt::obs::CObservationImage::Create();
+	o->sensorLabel = "CAM";
+	o->timestamp = toMrptTime(1000000000000LL);
+	o->image = mrpt::img::CImage(cv::Mat(4, 4, CV_8UC1, cv::Scalar(7)), mrpt::img::DEEP_COPY);
+	o->cameraParams.cameraName = "";
+	writeRawlog(dir / "in.rawlog", {o});
+	ExportReport ex;
+	std::vector<mrpt::obs::CObservation::Ptr> back;
+	ASSERT_NO_THROW(back = exportImport(dir, dir / "in.rawlog", ex));
+	ASSERT_EQ(back.size(), 1u);
+	const auto* b = dynamic_cast<const mrpt::obs::CObservationImage*>(back[0].get());
+	ASSERT_NE(b, nullptr);
+	EXPECT_EQ(b->cameraParams.cameraName, "");
+}

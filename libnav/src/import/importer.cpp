@@ -428,6 +428,7 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 	const TimeNs jump_ns = static_cast<TimeNs>(spec.clock_jump_s * 1e9);
 
 	io::RawlogWriter writer(opt.out_rawlog);
+	report.output_created = true;
 	std::priority_queue<Pending, std::vector<Pending>, std::greater<Pending>> heap;
 	TimeNs written_upto = kNoTime;
 	uint64_t seq = 0;
