@@ -122,6 +122,13 @@ int main(int argc, char** argv)
 			live->onState(n);
 		};
 	}
+	nav->health().on_change = [&](double t, auvnav::NavStatus st, const std::string& why) {
+		outputs->onHealthChange(t, st, why);
+		if (progress) std::fprintf(stderr, "\r%60s\r", "");
+		if (!quiet.getValue())
+			std::fprintf(stderr, "auvnav-run: %.1f s: %s%s%s\n", t, auvnav::navStatusName(st), why.empty() ? "" : ": ",
+						 why.c_str());
+	};
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
 		outputs->onUpdate(label, t, r);
 		if (!gps_labels.count(label)) return;
@@ -151,6 +158,7 @@ int main(int argc, char** argv)
 		error = e.what();
 	}
 	if (progress) std::fprintf(stderr, "\r%60s\r", "");
+	nav->finish();
 	outputs->flush();
 	outputs->writeSummary(*nav, wall(), g_stop != 0, rawlog.getValue(), error);
 
@@ -178,10 +186,25 @@ int main(int argc, char** argv)
 		std::printf("  3D view: %zu states shown\n", outputs->rows());
 		live->hold(view_hold.getValue());
 	}
+	const auto& health = nav->health();
+	std::printf("  status: %s%s%s\n", auvnav::navStatusName(health.status()), health.reason().empty() ? "" : " (",
+				health.reason().empty() ? "" : (health.reason() + ")").c_str());
+	std::fflush(stdout);
 	if (!error.empty())
 	{
 		std::fprintf(stderr, "auvnav-run: error: %s\n", error.c_str());
 		return 2;
 	}
-	return 0;
+	// Exit codes (README): 0 ok or degraded, 1 usage, 2 config/input error,
+	// 3 never initialised, 4 diverged. An interrupted run keeps its status.
+	switch (health.status())
+	{
+		case auvnav::NavStatus::NotInitialized:
+			std::fprintf(stderr, "auvnav-run: %s\n", health.reason().c_str());
+			return 3;
+		case auvnav::NavStatus::Diverged:
+			std::fprintf(stderr, "auvnav-run: diverged: %s\n", health.reason().c_str());
+			return 4;
+		default: return 0;
+	}
 }

@@ -62,6 +62,10 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	nis_.open(fs::path(dir) / "nis.csv");
 	if (!nis_) throw std::runtime_error("cannot write outputs in " + dir);
 	nis_ << "time_s,label,updates,nis_sum,dim_sum\n";
+	health_.open(fs::path(dir) / "health.csv");
+	if (!health_) throw std::runtime_error("cannot write outputs in " + dir);
+	health_ << "time_s,status,reason\n";
+	health_.flush();
 }
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
@@ -135,6 +139,12 @@ void RunOutputs::flush()
 	csv_.flush();
 }
 
+void RunOutputs::onHealthChange(double t_s, NavStatus status, const std::string& reason)
+{
+	health_ << num(t_s) << ',' << navStatusName(status) << ",\"" << reason << "\"\n";
+	health_.flush();
+}
+
 void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
 							  const std::string& error) const
 {
@@ -144,6 +154,12 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 	j << "  \"completed\": " << (interrupted || !error.empty() ? "false" : "true") << ",\n";
 	if (!error.empty()) j << "  \"error\": \"" << jsonEscape(error) << "\",\n";
 	j << "  \"initialized\": " << (nav.initialized() ? "true" : "false") << ",\n";
+	const auto& h = nav.health();
+	j << "  \"status\": \"" << navStatusName(h.status()) << "\",\n";
+	j << "  \"status_reason\": \"" << jsonEscape(h.reason()) << "\",\n";
+	j << "  \"worst_status\": \"" << navStatusName(h.worst()) << "\",\n";
+	j << "  \"worst_status_reason\": \"" << jsonEscape(h.worstReason()) << "\",\n";
+	j << "  \"worst_status_since_s\": " << num(h.worstSince_s()) << ",\n";
 	j << "  \"data_duration_s\": " << num(data_s) << ",\n";
 	j << "  \"wall_time_s\": " << num(wall_s) << ",\n";
 	j << "  \"real_time_factor\": " << num(wall_s > 0 ? data_s / wall_s : 0) << ",\n";

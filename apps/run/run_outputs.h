@@ -14,7 +14,10 @@
  *     off-diagonal terms (cov_pos_*, cov_att_*) for NEES;
  *   - position_fixes.csv: every GPS fix offered to the filter: time, label,
  *     north/east [m] and whether the χ² gate accepted it (for auvnav-view);
- *   - summary.json: per-sensor counts, consistency (mean NIS per dimension),
+ *   - health.csv: every change of the divergence monitor's status (health.h):
+ *     seconds from the first observation, status, reason;
+ *   - summary.json: status (ok, degraded, diverged, not_initialized) with its
+ *     reason and the worst status of the run, per-sensor counts, consistency (mean NIS per dimension),
  *     final standard deviations, run time and real-time factor.
  */
 #include <auvnav/navigator.h>
@@ -37,6 +40,7 @@ class RunOutputs
 	 *  sensor and second of data: time, label, updates, ΣNIS, Σdim. */
 	void onUpdate(const std::string& label, double t, const UpdateResult& r);
 	void onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
+	void onHealthChange(double t_s, NavStatus status, const std::string& reason);
 	void flush();
 	/** Writes summary.json (complete rewrite, atomically via rename). */
 	void writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
@@ -47,7 +51,7 @@ class RunOutputs
 	std::string dir_;
 	double period_s_;
 	double last_t_ = -1e300;
-	std::ofstream tum_, csv_, fixes_, nis_;
+	std::ofstream tum_, csv_, fixes_, nis_, health_;
 	struct NisAcc
 	{
 		std::size_t n = 0, dim = 0;

@@ -79,6 +79,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		ut.alpha = u.inRange("alpha", 1e-4, 1.0, ut.alpha);
 		ut.beta = u.nonNegative("beta", ut.beta);
 		ut.kappa = u.number("kappa", ut.kappa);
+		ut.max_attitude_spread_rad = u.inRange("max_attitude_spread_deg", 10, 170, 90) * kDeg;
 	}
 	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
 	earth_rate_ = f.boolean("earth_rate", true);
@@ -110,6 +111,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	else if (position_source != "config")
 		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
 
+	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
 	if (cfg.has("gates")) recovery_after_s_ = cfg.child("gates").positive("recovery_after_s", recovery_after_s_);
 	if (cfg.has("denial"))
 		for (const auto& d : cfg.sequence("denial"))
@@ -251,6 +253,11 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	t_s_ = t;
 	omega_ib_b_ = w;
 	++imu_stats_.accepted;
+	if (t_s_ >= next_health_check_s_)
+	{
+		next_health_check_s_ = t_s_ + 1.0;
+		health_.onState(t_s_ - t0_s_, ukf_->state(), ukf_->covariance());
+	}
 	if (on_predict) on_predict(*this);
 	return true;
 }
@@ -276,6 +283,25 @@ void Navigator::initialize()
 	x0.setEuclidean(e);
 	ukf_->initialize(x0, P0_);
 	initialized_ = true;
+}
+
+std::string Navigator::waitingFor() const
+{
+	if (initialized_) return "";
+	if (leveling_samples_ == 0)
+		return t0_s_ < 0 ? "no observations at all" : "no valid IMU sample with label '" + imu_label_ + "' (imu.label)";
+	if (t_s_ - leveling_start_s_ < leveling_s_)
+		return "IMU data for levelling: " + std::to_string(t_s_ - leveling_start_s_) + " s of " +
+			   std::to_string(leveling_s_) + " s (imu.leveling_s)";
+	if (position_from_gps_ && !gps_fix_n_)
+		return "a valid GPS fix on label '" + gps_label_ +
+			   "' (filter.initial.position: gps); set filter.initial.position: config to start without one";
+	return "initialisation";
+}
+
+void Navigator::finish()
+{
+	if (!initialized_) health_.setNotInitialized(waitingFor());
 }
 
 void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
@@ -334,6 +360,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
 			const UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
 			if (on_update) on_update(st.label, t_obs, m, r);
+			health_.onUpdate(st.label, t_obs - t0_s_, r);
 			switch (r.status)
 			{
 				case UpdateStatus::Accepted:

@@ -22,6 +22,12 @@ constexpr int kNonlinear = idx::adcp_bias;
 void symmetrize(Covariance& P) { P = 0.5 * (P + P.transpose()).eval(); }
 }  // namespace
 
+double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
+{
+	const double turn = c.head<3>().norm();
+	return turn > max_rad ? max_rad / turn : 1.0;
+}
+
 UtWeights UtWeights::make(int dim, const UtParams& p)
 {
 	UtWeights w;
@@ -102,31 +108,54 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// block; the other 2(n−k) share the centre's propagation of that block.
 	std::array<NavState, 2 * k + 1>& X = sigma_scratch_;
 	X[0] = model_.propagate(x_, omega_ib_b, omega_ie_n, dt);
+	std::array<double, k> scale;
 	for (int j = 0; j < k; ++j)
 	{
-		const TangentVector c = g * L_.col(j);
+		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
+		const TangentVector c = (g * scale[j]) * L_.col(j);
 		X[1 + 2 * j] = model_.propagate(x_.boxplus(c), omega_ib_b, omega_ie_n, dt);
 		X[2 + 2 * j] = model_.propagate(x_.boxplus(-c), omega_ib_b, omega_ie_n, dt);
 	}
 	std::array<double, 2 * k + 1> wm;
 	wm.fill(w_.wi);
 	wm[0] = w_.wm0 + 2 * (n - k) * w_.wi;
+	// A scaled pair (ukf.h) has no point on the manifold at the full step: it
+	// is kept as deviations from the centre's propagation, ŷ± = ±a/s + m
+	// (a, m: antisymmetric and symmetric parts at the shorter step), and
+	// enters the mean and covariance as ŷ± − (x̄ ⊟ X₀).
+	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> y;
+	bool any_scaled = false;
+	for (int j = 0; j < k; ++j)
+		if (scale[j] < 1.0)
+		{
+			any_scaled = true;
+			const Eigen::Matrix<double, k, 1> yp = X[1 + 2 * j].boxminus(X[0]).head<k>(),
+											  ym = X[2 + 2 * j].boxminus(X[0]).head<k>();
+			const Eigen::Matrix<double, k, 1> a = 0.5 * (yp - ym) / scale[j], m = 0.5 * (yp + ym);
+			y[1 + 2 * j] = m + a;
+			y[2 + 2 * j] = m - a;
+		}
+	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1>& d) {
+		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminus(X[0]).head<k>().eval()
+														  : Eigen::Matrix<double, k, 1>::Zero().eval();
+		d[0] = X[0].boxminus(mean).head<k>();
+		for (int j = 0; j < k; ++j)
+			for (int s = 1; s <= 2; ++s)
+				d[2 * j + s] = scale[j] < 1.0 ? (y[2 * j + s] - mu).eval() : X[2 * j + s].boxminus(mean).head<k>().eval();
+	};
 	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
 	// already the exact mean: A x̄ + b).
 	NavState mean = X[0];
 	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> d;
 	for (int iter = 0; iter < 10; ++iter)
 	{
+		deviations(mean, d);
 		TangentVector step = TangentVector::Zero();
-		for (int i = 0; i < 2 * k + 1; ++i)
-		{
-			d[i] = X[i].boxminus(mean).head<k>();
-			step.head<k>() += wm[i] * d[i];
-		}
+		for (int i = 0; i < 2 * k + 1; ++i) step.head<k>() += wm[i] * d[i];
 		if (step.squaredNorm() < 1e-26) break;
 		mean = mean.boxplus(step);
 	}
-	for (int i = 0; i < 2 * k + 1; ++i) d[i] = X[i].boxminus(mean).head<k>();
+	deviations(mean, d);
 	Eigen::Matrix<double, k, k> P_NN = (w_.wc0 + 2 * (n - k) * w_.wi) * d[0] * d[0].transpose();
 	for (int i = 1; i < 2 * k + 1; ++i) P_NN.noalias() += w_.wi * d[i] * d[i].transpose();
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
@@ -182,37 +211,67 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		res.why = "model could not evaluate h";
 		return res;
 	}
+	// Attitude-heavy columns are evaluated at a shorter step (ukf.h).
+	std::array<double, 3> scale{1.0, 1.0, 1.0};
 	for (int j = 0; j < k; ++j)
+	{
+		if (j < 3) scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
+		const double step = j < 3 ? g * scale[j] : g;
 		for (int s = 0; s < 2; ++s)
 		{
-			const TangentVector c = (s == 0 ? g : -g) * L_.col(j);
+			const TangentVector c = (s == 0 ? step : -step) * L_.col(j);
 			if (!model.predict(x_.boxplus(c), meas, ctx, z_sigma_.col(1 + 2 * j + s)))
 			{
 				res.why = "model could not evaluate h";
 				return res;
 			}
 		}
+	}
 	if (!z_sigma_.leftCols(count).allFinite())
 	{
 		res.why = "model returned a non-finite h";
 		return res;
 	}
 	// Mean in the measurement space, via residuals about the centre (wraps
-	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one.
+	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one. A
+	// scaled pair enters as deviations ±a/s + m from z₀ (no point of its own).
 	const double w_center_c = w_.wc0 + 2 * (n - k) * w_.wi;
 	Eigen::VectorXd r(m), z_mean = z_sigma_.col(0);
 	Eigen::VectorXd acc = Eigen::VectorXd::Zero(m);
+	Eigen::MatrixXd D_scaled;  // ŷ± of the scaled pairs, about z₀ (rarely used)
+	for (int j = 0; j < std::min(k, 3); ++j)
+		if (scale[j] < 1.0)
+		{
+			if (D_scaled.cols() == 0) D_scaled.resize(m, 6);
+			Eigen::VectorXd rm(m);
+			model.residual(z_sigma_.col(1 + 2 * j), z_sigma_.col(0), r);
+			model.residual(z_sigma_.col(2 + 2 * j), z_sigma_.col(0), rm);
+			const Eigen::VectorXd a = 0.5 * (r - rm) / scale[j], mid = 0.5 * (r + rm);
+			D_scaled.col(2 * j) = mid + a;
+			D_scaled.col(2 * j + 1) = mid - a;
+		}
+	auto isScaled = [&](int i) { return i >= 1 && i <= 6 && i <= 2 * k && scale[(i - 1) / 2] < 1.0; };
 	for (int i = 1; i < count; ++i)
 	{
-		model.residual(z_sigma_.col(i), z_sigma_.col(0), r);
-		acc += w_.wi * r;
+		if (isScaled(i))
+			acc += w_.wi * D_scaled.col(i - 1);
+		else
+		{
+			model.residual(z_sigma_.col(i), z_sigma_.col(0), r);
+			acc += w_.wi * r;
+		}
 	}
 	z_mean += acc;	// centre residual is zero; its weight does not matter
 	Eigen::MatrixXd E(m, count);
 	for (int i = 0; i < count; ++i)
 	{
-		model.residual(z_sigma_.col(i), z_mean, r);
-		E.col(i) = r;
+		if (isScaled(i))
+			E.col(i) = D_scaled.col(i - 1) - acc;
+		else
+		{
+			model.residual(z_sigma_.col(i), z_mean, r);
+			E.col(i) = r;
+		}
 	}
 	Eigen::MatrixXd S = w_center_c * E.col(0) * E.col(0).transpose() + meas.R;
 	for (int i = 1; i < count; ++i) S.noalias() += w_.wi * E.col(i) * E.col(i).transpose();

@@ -26,7 +26,15 @@ SigmaWeights SigmaWeights::uniform(double gamma, int n)
 	return w;
 }
 
-std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma)
+std::vector<double> spreadScales(const Covariance& P, double gamma, double max_rad)
+{
+	const Covariance L = Eigen::LLT<Covariance>(P).matrixL();
+	std::vector<double> s(idx::dim);
+	for (int j = 0; j < idx::dim; ++j) s[j] = attitudeSpreadScale(gamma * L.col(j), max_rad);
+	return s;
+}
+
+std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma, const std::vector<double>& scale)
 {
 	const Eigen::LLT<Covariance> llt(P);
 	if (llt.info() != Eigen::Success) throw std::runtime_error("reference UKF: P is not positive definite");
@@ -36,7 +44,7 @@ std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double
 	X.push_back(x);
 	for (int j = 0; j < idx::dim; ++j)
 	{
-		const TangentVector c = gamma * L.col(j);
+		const TangentVector c = gamma * (scale.empty() ? 1.0 : scale[j]) * L.col(j);
 		X.push_back(x.boxplus(c));
 		X.push_back(x.boxplus(-c));
 	}
@@ -58,15 +66,38 @@ NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>&
 
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
 					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
-					  const SigmaWeights& w, NavState& x_out, Covariance& P_out)
+					  const SigmaWeights& w, NavState& x_out, Covariance& P_out, double max_spread_rad)
 {
-	std::vector<NavState> Y = sigmaPoints(x, P, w.gamma);
+	const std::vector<double> scale = spreadScales(P, w.gamma, max_spread_rad);
+	std::vector<NavState> Y = sigmaPoints(x, P, w.gamma, scale);
 	for (auto& y : Y) y = model.propagate(y, omega_ib_b, omega_ie_n, dt);
-	const NavState mean = manifoldMean(Y, w.wm, Y[0]);
+	// A scaled pair (ukf.h) has no point of its own: its deviations from Y_0
+	// are ŷ± = ±a/s + m, and from a mean x̄ they are ŷ± − (x̄ ⊟ Y_0).
+	std::vector<TangentVector> D(Y.size(), TangentVector::Zero());
+	for (int j = 0; j < idx::dim; ++j)
+		if (scale[j] < 1.0)
+		{
+			const TangentVector yp = Y[1 + 2 * j].boxminus(Y[0]), ym = Y[2 + 2 * j].boxminus(Y[0]);
+			const TangentVector a = 0.5 * (yp - ym) / scale[j], m = 0.5 * (yp + ym);
+			D[1 + 2 * j] = m + a;
+			D[2 + 2 * j] = m - a;
+		}
+	auto deviation = [&](std::size_t i, const NavState& mean) -> TangentVector {
+		const bool scaled = i > 0 && scale[(i - 1) / 2] < 1.0;
+		return scaled ? TangentVector(D[i] - mean.boxminus(Y[0])) : Y[i].boxminus(mean);
+	};
+	NavState mean = Y[0];
+	for (int iter = 0; iter < 50; ++iter)
+	{
+		TangentVector d = TangentVector::Zero();
+		for (std::size_t i = 0; i < Y.size(); ++i) d += w.wm[i] * deviation(i, mean);
+		mean = mean.boxplus(d);
+		if (iter > 0 && d.head<3>().norm() < 1e-15) break;
+	}
 	Covariance Pn = Covariance::Zero();
 	for (std::size_t i = 0; i < Y.size(); ++i)
 	{
-		const TangentVector d = Y[i].boxminus(mean);
+		const TangentVector d = deviation(i, mean);
 		Pn += w.wc[i] * d * d.transpose();
 	}
 	const double speed_through_water = (x.v_n.head<2>() - x.current_vehicle_ne).norm();
@@ -76,22 +107,47 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 }
 
 bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h, const Measurement& m,
-						const FilterContext& ctx, const SigmaWeights& w, UtResult& out)
+						const FilterContext& ctx, const SigmaWeights& w, UtResult& out, double max_spread_rad)
 {
 	const int dim_z = static_cast<int>(m.z.size());
-	const std::vector<NavState> X = sigmaPoints(x, P, w.gamma);
+	const std::vector<double> scale = spreadScales(P, w.gamma, max_spread_rad);
+	const std::vector<NavState> X = sigmaPoints(x, P, w.gamma, scale);
 	const int count = static_cast<int>(X.size());
 	Eigen::MatrixXd Z(dim_z, count);
 	for (int i = 0; i < count; ++i)
 		if (!h.predict(X[i], m, ctx, Z.col(i))) return false;
+	// A scaled pair: measurement deviations ±a/s + m about z_0, and state
+	// deviations ±γ L_j at the full step (ukf.h).
+	auto scaled = [&](int i) { return i > 0 && scale[(i - 1) / 2] < 1.0; };
+	Eigen::MatrixXd Dz = Eigen::MatrixXd::Zero(dim_z, count);
+	Eigen::VectorXd r(dim_z), rm(dim_z);
+	for (int j = 0; j < idx::dim; ++j)
+		if (scale[j] < 1.0)
+		{
+			h.residual(Z.col(1 + 2 * j), Z.col(0), r);
+			h.residual(Z.col(2 + 2 * j), Z.col(0), rm);
+			const Eigen::VectorXd a = 0.5 * (r - rm) / scale[j], mid = 0.5 * (r + rm);
+			Dz.col(1 + 2 * j) = mid + a;
+			Dz.col(2 + 2 * j) = mid - a;
+		}
 	// Mean in the measurement space (the residual is its ⊟): iterate.
-	Eigen::VectorXd z_mean = Z.col(0), r(dim_z);
+	Eigen::VectorXd z_mean = Z.col(0);
+	auto zdev = [&](int i, const Eigen::VectorXd& about, Eigen::VectorXd& out_r) {
+		if (scaled(i))
+		{
+			Eigen::VectorXd shift(dim_z);
+			h.residual(about, Z.col(0), shift);
+			out_r = Dz.col(i) - shift;
+		}
+		else
+			h.residual(Z.col(i), about, out_r);
+	};
 	for (int iter = 0; iter < 50; ++iter)
 	{
 		Eigen::VectorXd d = Eigen::VectorXd::Zero(dim_z);
 		for (int i = 0; i < count; ++i)
 		{
-			h.residual(Z.col(i), z_mean, r);
+			zdev(i, z_mean, r);
 			d += w.wm[i] * r;
 		}
 		z_mean += d;
@@ -100,17 +156,21 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 	out.z_mean = z_mean;
 	out.Pzz = Eigen::MatrixXd::Zero(dim_z, dim_z);
 	out.Pxz = Eigen::MatrixXd::Zero(idx::dim, dim_z);
+	const Covariance L = Eigen::LLT<Covariance>(P).matrixL();
 	for (int i = 0; i < count; ++i)
 	{
-		h.residual(Z.col(i), z_mean, r);
+		zdev(i, z_mean, r);
 		out.Pzz += w.wc[i] * r * r.transpose();
-		out.Pxz += w.wc[i] * X[i].boxminus(x) * r.transpose();
+		const TangentVector dx = i == 0 ? TangentVector::Zero().eval()
+							   : scaled(i) ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col((i - 1) / 2))
+										   : X[i].boxminus(x);
+		out.Pxz += w.wc[i] * dx * r.transpose();
 	}
 	return true;
 }
 
 ReferenceUkf::ReferenceUkf(const ProcessModel& model, const UtParams& ut)
-	: model_(model), w_(SigmaWeights::fromUt(UtWeights::make(idx::dim, ut)))
+	: model_(model), w_(SigmaWeights::fromUt(UtWeights::make(idx::dim, ut))), max_spread_rad_(ut.max_attitude_spread_rad)
 {
 }
 
@@ -122,13 +182,13 @@ void ReferenceUkf::initialize(const NavState& x0, const Covariance& P0)
 
 void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
 {
-	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_);
+	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_, max_spread_rad_);
 }
 
 bool ReferenceUkf::update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx)
 {
 	UtResult ut;
-	if (!unscentedTransform(x_, P_, model, m, ctx, w_, ut)) return false;
+	if (!unscentedTransform(x_, P_, model, m, ctx, w_, ut, max_spread_rad_)) return false;
 	const Eigen::MatrixXd S = ut.Pzz + m.R;
 	const Eigen::LLT<Eigen::MatrixXd> llt(S);
 	if (llt.info() != Eigen::Success) return false;

@@ -5,8 +5,8 @@
  *  Written independently of ukf.cpp and on purpose without any of its
  *  shortcuts: full Cholesky factor of P, all 2n+1 = 87 sigma points, the full
  *  nonlinear ProcessModel::propagate on every sigma point, h on every sigma
- *  point, iterated manifold means. Only UtWeights::make, the process model and
- *  the state's ⊞/⊟ are shared with the code under test.
+ *  point, iterated manifold means. Only UtWeights::make, attitudeSpreadScale,
+ *  the process model and the state's ⊞/⊟ are shared with the code under test.
  */
 #include <auvnav/measurement_model.h>
 #include <auvnav/process_model.h>
@@ -29,8 +29,12 @@ struct SigmaWeights
 	static SigmaWeights uniform(double gamma, int n = idx::dim);
 };
 
-/** X_0 = x, X_{2j+1} = x ⊞ γ L_j, X_{2j+2} = x ⊞ −γ L_j, L = chol(P) (lower). */
-std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma);
+/** X_0 = x, X_{2j+1} = x ⊞ γ s_j L_j, X_{2j+2} = x ⊞ −γ s_j L_j, L = chol(P)
+ *  (lower), s_j = 1 or the attitude-spread scale of ukf.h (`scale`, empty: 1). */
+std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma,
+								  const std::vector<double>& scale = {});
+/** s_j of every column (ukf.h: attitudeSpreadScale of γ L_j). */
+std::vector<double> spreadScales(const Covariance& P, double gamma, double max_rad);
 
 /** Weighted mean on the manifold: iterate x̄ ← x̄ ⊞ Σ w_i (X_i ⊟ x̄). */
 NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>& w, const NavState& start);
@@ -43,12 +47,14 @@ struct UtResult
 	Eigen::MatrixXd Pxz;  // Σ Wc (X_i ⊟ x)(z_i ⊟ z̄)ᵀ
 };
 bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
-						const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out);
+						const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
+						double max_spread_rad = UtParams{}.max_attitude_spread_rad);
 
 /** Unscented prediction: mean and covariance of propagate(X_i) plus Q. */
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
 					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
-					  const SigmaWeights& w, NavState& x_out, Covariance& P_out);
+					  const SigmaWeights& w, NavState& x_out, Covariance& P_out,
+					  double max_spread_rad = UtParams{}.max_attitude_spread_rad);
 
 class ReferenceUkf
 {
@@ -65,6 +71,7 @@ class ReferenceUkf
    private:
 	ProcessModel model_;
 	SigmaWeights w_;
+	double max_spread_rad_;
 	NavState x_;
 	Covariance P_ = Covariance::Identity();
 };

@@ -293,6 +293,15 @@ TEST(FilterVsReference, ThirtyDegreeHeadingUncertaintyNearWrapAgreesWithDenseUkf
 	expectAgreement(md);
 }
 
+TEST(FilterVsReference, UnknownHeadingScaledSigmaPointsAgreeWithDenseUkf)
+{
+	// Heading σ 180° (γσ ≈ 350°): the heading pairs are evaluated at the
+	// 90° limit and rescaled (ukf.h) in both filters.
+	const MaxDiffs md = runSideBySide({Eigen::Vector3d(3, 3, 180) * kDeg, 100 * kDeg, 29}, allModels());
+	report("heading sigma 180 deg (scaled sigma points)", md);
+	expectAgreement(md);
+}
+
 TEST(FilterVsReference, StronglyNonlinearLargeStepsAgreeWithDenseUkf)
 {
 	// 0.5 s steps at up to ~4 rad/s with a 0.2 rad/s gyro-bias uncertainty:

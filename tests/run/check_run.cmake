@@ -3,7 +3,7 @@
 #         [-DEXTRA_ARGS=a;b] -DEXPECTED_EXIT_CODE=<n> [-DEXPECTED_OUTPUT=<regex>]
 #         [-DTRUNCATE_PERCENT=<p> -DTRUNCATED_RAWLOG=<file>]   run on the first p% of RAWLOG's bytes
 #         [-DCONFIG_REPLACE=<from> -DCONFIG_REPLACE_WITH=<to>] run on a copy of CONFIG with a text replaced
-#         [-DEXPECT_COMPLETED=true|false] [-DMIN_TUM_LINES=<n>] [-DCSV_HEADER_REGEX=<regex>]
+#         [-DEXPECT_COMPLETED=true|false] [-DEXPECT_STATUS=ok|degraded|diverged|not_initialized] [-DMIN_TUM_LINES=<n>] [-DCSV_HEADER_REGEX=<regex>]
 #         -P check_run.cmake
 foreach(var RUN CONFIG RAWLOG OUT_DIR EXPECTED_EXIT_CODE)
   if(NOT DEFINED ${var})
@@ -80,6 +80,12 @@ if(DEFINED EXPECT_COMPLETED)
       message(FATAL_ERROR "${summary}: an incomplete run must say why ('error')")
     endif()
     message(STATUS "summary.json error: ${error}")
+  endif()
+  if(DEFINED EXPECT_STATUS)
+    string(JSON status ERROR_VARIABLE err GET "${json}" status)
+    if(err OR NOT status STREQUAL "${EXPECT_STATUS}")
+      message(FATAL_ERROR "${summary}: status is '${status}', expected '${EXPECT_STATUS}'")
+    endif()
   endif()
   string(JSON n_sensors LENGTH "${json}" sensors)
   if(n_sensors LESS 1)

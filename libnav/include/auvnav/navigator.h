@@ -16,11 +16,14 @@
  *    rejected continuously for `gates.recovery_after_s` gets its next update
  *    with the innovation covariance inflated onto the gate (it cannot lock
  *    itself out, e.g. the DVL after a long dropout).
+ *  - A divergence monitor (health.h) judges every update and, once a second,
+ *    the covariance: ok, degraded, diverged, or not_initialized (finish()).
  *  - Bad input never reaches the state: non-finite or absent IMU data,
  *    duplicate or backward timestamps, NaN measurements are counted and dropped.
  */
 #include <auvnav/config.h>
 #include <auvnav/earth.h>
+#include <auvnav/health.h>
 #include <auvnav/plugin_host.h>
 #include <auvnav/ukf.h>
 #include <mrpt/obs/CObservation.h>
@@ -74,6 +77,14 @@ class Navigator
 	std::vector<SensorStats> stats() const;
 	const SensorStats& imuStats() const { return imu_stats_; }
 	std::size_t predictions() const { return predictions_; }
+	/** The divergence monitor (health.h); its times are seconds from startTime(). */
+	const HealthMonitor& health() const { return health_; }
+	HealthMonitor& health() { return health_; }
+	/** Call once after the last observation: a filter that never started
+	 *  becomes not_initialized, with what it waited for. */
+	void finish();
+	/** What initialisation still waits for (empty once initialised). */
+	std::string waitingFor() const;
 	std::size_t imuGaps() const { return imu_gaps_; }
 
 	/** Position of the body origin (CG) and attitude, from the IMU state. */
@@ -120,6 +131,8 @@ class Navigator
 	std::optional<Eigen::Vector3d> gps_fix_n_;
 	SensorStats imu_stats_;
 	std::size_t predictions_ = 0, imu_gaps_ = 0;
+	HealthMonitor health_;
+	double next_health_check_s_ = 0;
 };
 
 }  // namespace auvnav

@@ -20,6 +20,19 @@
  *  Both give the same numbers as the dense 87-point UKF (tests/libnav keeps
  *  a plain dense implementation as the oracle).
  *
+ *  Large attitude uncertainty. A sigma point turned by π or more about any
+ *  axis is the same rotation as one turned by less (a heading σ of 180° at
+ *  γ ≈ 2 puts the pair at ±354°, i.e. at ∓6°), so the spread recovered by ⊟
+ *  collapsed: a heading σ of 180° became 3° in one prediction, information
+ *  the filter never had. So a sigma-point pair whose attitude step γ‖L_j,att‖
+ *  exceeds `max_attitude_spread_rad` is evaluated at the step scaled down to
+ *  that angle (s_j < 1), and its first-order (antisymmetric) part is scaled
+ *  back up by 1/s_j; the second-order (symmetric) part is kept as measured at
+ *  the shorter step. For a function linear in the state this is exact; below
+ *  the limit nothing changes (with α = 0.3 the limit of 90° is reached at an
+ *  attitude σ of 46°). Only the first three Cholesky columns have attitude
+ *  rows, so at most three pairs are ever scaled.
+ *
  *  A Cholesky failure is repaired (symmetrise, clip eigenvalues) and counted.
  */
 #include <auvnav/measurement_model.h>
@@ -36,7 +49,12 @@ namespace auvnav
 struct UtParams
 {
 	double alpha = 0.3, beta = 2.0, kappa = 0.0;
+	double max_attitude_spread_rad = 1.5707963267948966;	//!< largest sigma-point turn (see above)
 };
+
+/** Scale s ∈ (0, 1] of a sigma-point step `c` (tangent order of state.h) so
+ *  that its attitude part turns by at most `max_rad`. */
+double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad);
 
 /** Sigma-point weights for dimension n. */
 struct UtWeights
