@@ -1,0 +1,264 @@
+// The BlueROV2-Heavy-like missions (config/missions/bluerov2_*.yaml): each
+// runs to the end of its plan within its declared duration, with the sensors
+// its header promises, the logger's stamp jitter as configured and the start
+// recorded in the ground truth; bad new mission keys are refused by name.
+#include <auvnav/io/rawlog.h>
+#include <gtest/gtest.h>
+#include <mrpt/obs/CObservationIMU.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+
+#include "ground_truth.h"
+#include "mission.h"
+
+namespace fs = std::filesystem;
+using namespace auvnav;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+const std::string kRepo = AUVNAV_SOURCE_DIR;
+
+std::string missionFile(const std::string& name)
+{
+	return kRepo + "/config/missions/" + name + ".yaml";
+}
+
+fs::path scratch(const std::string& name)
+{
+	const fs::path d =
+	    fs::temp_directory_path() / ("auvnav_test_brov_" + name + "_" + std::to_string(::getpid()));
+	fs::remove_all(d);
+	return d;
+}
+
+std::string slurp(const fs::path& p)
+{
+	std::ifstream f(p, std::ios::binary);
+	return {std::istreambuf_iterator<char>(f), {}};
+}
+
+double yawOf(const Eigen::Quaterniond& q)
+{
+	const Eigen::Matrix3d R = q.toRotationMatrix();
+	return std::atan2(R(1, 0), R(0, 0));
+}
+
+/** A copy of a repo mission with `from` replaced by `to`, its includes made absolute. */
+fs::path editedMission(const std::string& name, const std::string& from, const std::string& to,
+                       const fs::path& dir)
+{
+	std::string text = slurp(missionFile(name));
+	auto replace = [&](const std::string& a, const std::string& b)
+	{
+		const auto pos = text.find(a);
+		if (pos == std::string::npos) throw std::runtime_error("not in " + name + ": " + a);
+		text.replace(pos, a.size(), b);
+	};
+	replace("../vehicles", kRepo + "/config/vehicles");
+	replace("../sensors", kRepo + "/config/sensors");
+	replace(from, to);
+	fs::create_directories(dir);
+	const fs::path p = dir / (name + "_edited.yaml");
+	std::ofstream(p) << text;
+	return p;
+}
+
+template <class F>
+void expectConfigError(F&& f, const std::string& key)
+{
+	try
+	{
+		f();
+		ADD_FAILURE() << "a bad " << key << " was accepted";
+	}
+	catch (const config::ConfigError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+	}
+}
+}  // namespace
+
+TEST(BlueRov2Missions, PoolSquareRunsWithMagnetometerDvlAndDepthOnlyAndJitteredStamps)
+{
+	const auto spec = sim::MissionSpec::load(missionFile("bluerov2_pool_square"));
+	const fs::path d = scratch("pool");
+	const auto s = sim::runMission(spec, 1, d.string());
+	EXPECT_TRUE(s.plan_completed);
+	EXPECT_LE(s.duration_s, spec.max_duration_s);
+	EXPECT_GT(s.duration_s, 5 * 60.0);  // three 24 m laps at 0.3 m/s plus 90 s of waiting
+	EXPECT_LT(s.duration_s, 10 * 60.0);
+	EXPECT_NEAR(s.max_depth_m, 1.5, 0.2);
+	EXPECT_EQ(s.observations.count("GPS"), 0u);  // indoors
+	EXPECT_EQ(s.observations.count("ADCP"), 0u);
+	const double T = s.duration_s;
+	EXPECT_NEAR(s.observations.at("IMU") / T, 100, 1);
+	EXPECT_NEAR(s.observations.at("MAG") / T, 50, 0.5);
+	EXPECT_NEAR(s.observations.at("DVL") / T, 10, 0.2);
+	EXPECT_NEAR(s.observations.at("PRESSURE") / T, 10, 0.2);
+	EXPECT_GT(double(s.dvl_locked) / s.dvl_total, 0.95);       // 1.4–2.9 m altitude, inside 0.05–50 m
+	EXPECT_EQ(s.stamp_duplicates + s.stamp_out_of_order, 0u);  // off by default
+
+	// The start is the first truth row; the square's corners are visited.
+	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	ASSERT_FALSE(truth.empty());
+	EXPECT_NEAR(truth.front().p_n.x(), 2, 1e-6);
+	EXPECT_NEAR(truth.front().p_n.y(), 2, 1e-6);
+	EXPECT_NEAR(truth.front().p_n.z(), 0.12, 1e-6);
+	EXPECT_NEAR(yawOf(truth.front().q_nb), 30 * kDeg, 1e-6);
+	for (const Eigen::Vector2d& corner :
+	     {Eigen::Vector2d(8, 2), Eigen::Vector2d(8, 8), Eigen::Vector2d(2, 8)})
+	{
+		double closest = INFINITY;
+		for (const auto& r : truth) closest = std::min(closest, (r.p_n.head<2>() - corner).norm());
+		EXPECT_LT(closest, 0.6) << corner.transpose();
+	}
+
+	// The rawlog: in time order (no anomalies configured), the IMU's stamps
+	// jittered by σ 0.5 ms about its regular 100 Hz grid, magnetometer
+	// observations carrying only the field.
+	io::RawlogReader r(s.rawlog_path);
+	const double t0 = spec.start_unix_s;
+	mrpt::Clock::time_point last{};
+	double sum = 0, sum2 = 0;
+	std::size_t n_imu = 0, n_mag = 0;
+	while (auto o = r.next())
+	{
+		EXPECT_GE(o->timestamp, last);
+		last = o->timestamp;
+		if (o->sensorLabel == "IMU")
+		{
+			const double t = mrpt::Clock::toDouble(o->timestamp) - t0;
+			const double jitter = t - 0.01 * std::round(t / 0.01);
+			sum += jitter;
+			sum2 += jitter * jitter;
+			++n_imu;
+		}
+		else if (o->sensorLabel == "MAG")
+		{
+			const auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(o);
+			ASSERT_TRUE(imu);
+			EXPECT_TRUE(imu->has(mrpt::obs::IMU_MAG_X) && imu->has(mrpt::obs::IMU_MAG_Z));
+			EXPECT_FALSE(imu->has(mrpt::obs::IMU_WZ));
+			++n_mag;
+		}
+	}
+	ASSERT_GT(n_imu, 10000u);
+	EXPECT_EQ(n_mag, s.observations.at("MAG"));
+	const double mean = sum / n_imu, sd = std::sqrt(sum2 / n_imu - mean * mean);
+	// Stamps are written with 100 ns ticks and read back through a double of
+	// Unix time (~0.2 µs resolution): negligible against 0.5 ms.
+	EXPECT_NEAR(mean, 0, 4 * 0.0005 / std::sqrt(double(n_imu)) + 1e-6);
+	EXPECT_NEAR(sd, 0.0005, 0.03 * 0.0005);
+	fs::remove_all(d);
+}
+
+TEST(BlueRov2Missions, SameSeedSameBytesWithJitterOn)
+{
+	const auto spec = sim::MissionSpec::load(missionFile("bluerov2_pool_square"));
+	const fs::path a = scratch("det_a"), b = scratch("det_b");
+	sim::runMission(spec, 5, a.string());
+	sim::runMission(spec, 5, b.string());
+	for (const char* f : {"bluerov2_pool_square.rawlog", "ground_truth.csv"})
+		EXPECT_EQ(slurp(a / f), slurp(b / f)) << f;
+	fs::remove_all(a);
+	fs::remove_all(b);
+}
+
+TEST(BlueRov2Missions, LawnmowerSurveyIsAboutTwentyMinutesAtTenMetres)
+{
+	const auto spec = sim::MissionSpec::load(missionFile("bluerov2_lawnmower"));
+	const fs::path d = scratch("lawn");
+	const auto s = sim::runMission(spec, 2, d.string());
+	EXPECT_TRUE(s.plan_completed);
+	EXPECT_LE(s.duration_s, spec.max_duration_s);
+	EXPECT_GT(s.duration_s, 18 * 60.0);
+	EXPECT_LT(s.duration_s, 25 * 60.0);
+	EXPECT_NEAR(s.max_depth_m, 10, 0.5);
+	EXPECT_GT(s.submerged_distance_m, 450);    // ten 45 m lines and nine 5 m steps
+	EXPECT_GT(s.observations.at("GPS"), 30u);  // surface phases only
+	EXPECT_GT(double(s.dvl_locked) / s.dvl_total, 0.95);
+	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	EXPECT_NEAR(yawOf(truth.front().q_nb), -20 * kDeg, 1e-6);
+	fs::remove_all(d);
+}
+
+TEST(BlueRov2Missions, TransitIsALongStraightLineAtFifteenMetres)
+{
+	const auto spec = sim::MissionSpec::load(missionFile("bluerov2_transit"));
+	const fs::path d = scratch("transit");
+	const auto s = sim::runMission(spec, 3, d.string());
+	EXPECT_TRUE(s.plan_completed);
+	EXPECT_LE(s.duration_s, spec.max_duration_s);
+	EXPECT_NEAR(s.max_depth_m, 15, 0.6);
+	EXPECT_GT(s.submerged_distance_m, 1150);
+	// Straight: the leg runs from where the vehicle is when it gets under way
+	// (it drifts with the current while floating and diving) to the target;
+	// until 5 m before the target the truth stays within 1.5 m of that line.
+	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	const Eigen::Vector2d target(848.5, 848.5);
+	std::size_t i0 = 0;
+	while (i0 + 1 < truth.size() && truth[i0].p_n.z() < 14) ++i0;  // dived
+	const Eigen::Vector2d a = truth[i0].p_n.head<2>();
+	const Eigen::Vector2d dir = (target - a).normalized();
+	double worst = 0;
+	std::size_t on_leg = 0;
+	for (std::size_t i = i0; i < truth.size() && (truth[i].p_n.head<2>() - target).norm() > 5; ++i, ++on_leg)
+	{
+		const Eigen::Vector2d e = truth[i].p_n.head<2>() - a;
+		worst = std::max(worst, std::abs(-e.x() * dir.y() + e.y() * dir.x()));
+	}
+	EXPECT_GT(on_leg, 18000u);  // > 30 min at 10 Hz on the leg
+	EXPECT_LT(worst, 1.5);
+	fs::remove_all(d);
+}
+
+TEST(BlueRov2Missions, BadNewMissionKeysAreRefusedWithTheirNames)
+{
+	const fs::path d = scratch("badkeys");
+	const std::string pool = "bluerov2_pool_square";
+	// A magnetometer without the Earth field it should measure.
+	expectConfigError(
+	    [&]
+	    {
+		    const auto spec = sim::MissionSpec::load(
+		        editedMission(pool, "magnetic_field: {", "unused_field: {", d / "nofield").string());
+		    sim::runMission(spec, 1, (d / "out").string());
+	    },
+	    "magnetic_field");
+	expectConfigError(
+	    [&] { sim::MissionSpec::load(editedMission(pool, "depth_m: 0.12", "depth_m: -5", d).string()); },
+	    "start.depth_m");
+	// Sensor and environment keys, set as a mission's sensor_overrides would.
+	const std::vector<std::pair<std::string, std::string>> bad = {
+	    {"magnetometer.noise_sigma_ut", "-1"},
+	    {"magnetometer.rate_hz", "33"},  // not a whole number of 10 ms steps
+	    {"magnetometer.enabled", "maybe"},
+	    {"magnetometer.hard_iron_ut", "5"},
+	    {"gps.enabled", "perhaps"},
+	    {"pressure.resolution_pa", "-20"},
+	    {"dvl.timestamp_jitter_sigma_s", "0.05"},  // > 0.1 periods at 10 Hz
+	    {"imu.duplicate_stamp_probability", "0.9"},
+	    {"thrusters.out_of_order_probability", "-0.1"},
+	    {"imu.gyro.g_sensitivity_dps_per_g", "abc"},
+	    {"imu.accelerometer.scale_factor_error_ppm", "7"},
+	};
+	for (const auto& [key, value] : bad)
+	{
+		auto spec = sim::MissionSpec::load(missionFile(pool));
+		spec.sensors.set(key, value);
+		expectConfigError([&] { sim::runMission(spec, 1, (d / "out").string()); }, key);
+	}
+	for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+	         {"total_intensity_ut", "0"}, {"declination_deg", "-200"}, {"inclination_deg", "91"}})
+	{
+		auto spec = sim::MissionSpec::load(missionFile(pool));
+		spec.environment.set("magnetic_field." + key, value);
+		expectConfigError([&] { sim::runMission(spec, 1, (d / "out").string()); }, "magnetic_field." + key);
+	}
+	fs::remove_all(d);
+}
