@@ -14,10 +14,14 @@
  *    previous recorded stamp of this sensor exactly (fresh data, stale stamp).
  *  - out_of_order_probability [0, 0.5], default 0: the stamp is moved 1.5
  *    periods back, i.e. between the stamps of the two previous samples.
- *  Anomalies apply to the jittered stamp; the observation is still written at
- *  the position of its arrival (its jittered stamp), so the rawlog shows the
- *  anomaly as a real log would. Each clock owns its random stream; with all
- *  keys at their defaults it draws nothing and returns the true stamp.
+ *  Anomalies apply to the jittered stamp. Rawlogs are kept in time order
+ *  (io::RawlogWriter refuses an older stamp), so an out-of-order sample is
+ *  written where its stamp puts it, before its predecessor, as an importer's
+ *  reorder buffer would leave a real log; a duplicate follows the sample whose
+ *  stamp it repeats. An anomaly that would put a stamp more than
+ *  maxEarly_s() before the sample's true time (a run of duplicates) is not
+ *  applied. Each clock owns its random stream; with all keys at their
+ *  defaults it draws nothing and returns the true stamp.
  */
 #include <auvnav/config.h>
 #include <mrpt/core/Clock.h>
@@ -49,19 +53,20 @@ class LoggerClock
 
 	struct Stamp
 	{
-		mrpt::Clock::time_point arrival;   //!< true + jitter: where the logger writes it
-		mrpt::Clock::time_point recorded;  //!< the stamp it writes (arrival unless an anomaly)
+		mrpt::Clock::time_point jittered;  //!< true + jitter
+		mrpt::Clock::time_point recorded;  //!< the stamp written (jittered unless an anomaly)
 	};
 	/** The recorded stamp of a sample taken at `true_stamp`. */
 	Stamp stamp(mrpt::Clock::time_point true_stamp);
-	/** Largest |arrival − true| this clock can produce [s]. */
-	double maxJitter_s() const { return active_ ? clip_s_ : 0.0; }
+	/** Largest time a recorded stamp can lie before the true one [s]: what a
+	 *  writer keeping time order must wait for. */
+	double maxEarly_s() const { return max_early_s_; }
 	std::size_t duplicates() const { return duplicates_; }
 	std::size_t outOfOrder() const { return out_of_order_; }
 
  private:
 	StampParams p_;
-	double period_s_ = 1, clip_s_ = 0;
+	double period_s_ = 1, clip_s_ = 0, max_early_s_ = 0;
 	bool active_ = false, have_previous_ = false;
 	mrpt::Clock::time_point previous_{};
 	std::size_t duplicates_ = 0, out_of_order_ = 0;

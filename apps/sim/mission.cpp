@@ -213,7 +213,7 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 				mag_clk = mag ? clockFor("magnetometer", mag_s.every, 38) : LoggerClock{};
 	double max_jitter_s = 0;
 	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk})
-		max_jitter_s = std::max(max_jitter_s, c->maxJitter_s());
+		max_jitter_s = std::max(max_jitter_s, c->maxEarly_s());
 
 	MissionSummary sum;
 	sum.rawlog_path = (fs::path(out_dir) / (spec.name + ".rawlog")).string();
@@ -223,15 +223,16 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	tum.line("# timestamp north_m east_m down_m qx qy qz qw  (body FRD origin, NED tangent frame at the mission origin)");
 	csv.line(kCsvHeader);
 
-	// Observations wait here until no later-sampled one can arrive before
-	// them: keyed by (arrival stamp, sequence), so equal stamps keep the
-	// simulation order and, without jitter, the rawlog is what it always was.
+	// Observations wait here until no later-sampled one can carry an earlier
+	// stamp: keyed by (recorded stamp, sequence), so the rawlog stays in time
+	// order, equal stamps keep the simulation order and, without jitter, the
+	// rawlog is what it always was.
 	std::map<std::pair<mrpt::Clock::rep, std::uint64_t>, mrpt::obs::CObservation::Ptr> pending;
 	std::uint64_t sequence = 0;
 	auto count = [&](mrpt::obs::CObservation::Ptr o, LoggerClock& clk) {
 		const LoggerClock::Stamp st = clk.stamp(o->timestamp);
 		o->timestamp = st.recorded;
-		pending.emplace(std::make_pair(st.arrival.time_since_epoch().count(), sequence++), std::move(o));
+		pending.emplace(std::make_pair(st.recorded.time_since_epoch().count(), sequence++), std::move(o));
 	};
 	auto flushBefore = [&](mrpt::Clock::rep horizon) {
 		while (!pending.empty() && pending.begin()->first.first < horizon)

@@ -9,9 +9,8 @@
  *  Sensors: imu, dvl, pressure and thrusters are required in the sensors
  *  file; adcp, gps, magnetometer and sonar are optional (absent, or
  *  `enabled: false`). A magnetometer needs environment.magnetic_field.
- *  The rawlog is written in the order in which a logger would receive the
- *  observations (their jittered stamps, logger_clock.h); without jitter that
- *  is the simulation order, as before.
+ *  The rawlog is written in the time order of the recorded stamps (jittered,
+ *  logger_clock.h); without jitter that is the simulation order, as before.
  */
 #include <auvnav/config.h>
 #include <auvnav/sonar/landmarks.h>

@@ -262,3 +262,42 @@ TEST(BlueRov2Missions, BadNewMissionKeysAreRefusedWithTheirNames)
 	}
 	fs::remove_all(d);
 }
+
+TEST(BlueRov2Missions, OptionalDuplicateAndOutOfOrderStampsReachTheRawlog)
+{
+	auto spec = sim::MissionSpec::load(missionFile("bluerov2_pool_square"));
+	// Jitter off for this one: a stamp is then exactly on the 10 ms grid,
+	// half a period off it (early by 1.5 periods) or a repeat.
+	spec.sensors.set("imu.timestamp_jitter_sigma_s", "0");
+	spec.sensors.set("imu.duplicate_stamp_probability", "0.01");
+	spec.sensors.set("imu.out_of_order_probability", "0.005");
+	const fs::path d = scratch("anomalies");
+	const auto s = sim::runMission(spec, 4, d.string());
+	const double n = s.observations.at("IMU");
+	auto binomial4sigma = [n](double q) { return 4 * std::sqrt(n * q * (1 - q)); };
+	EXPECT_NEAR(double(s.stamp_duplicates), 0.01 * n, binomial4sigma(0.01));
+	EXPECT_NEAR(double(s.stamp_out_of_order), 0.005 * n, binomial4sigma(0.005));
+	// The rawlog stays in time order (its writer insists); the anomalies are
+	// in the IMU's stamps: repeats, and stamps half a period off the grid.
+	io::RawlogReader r(s.rawlog_path);
+	const double t0 = spec.start_unix_s;
+	mrpt::Clock::time_point prev{}, prev_imu{};
+	std::size_t repeated = 0, off_grid = 0, imu = 0;
+	while (auto o = r.next())
+	{
+		EXPECT_GE(o->timestamp, prev);
+		prev = o->timestamp;
+		if (o->sensorLabel != "IMU") continue;
+		if (imu++ > 0) repeated += o->timestamp == prev_imu;
+		prev_imu = o->timestamp;
+		const double t = mrpt::Clock::toDouble(o->timestamp) - t0;
+		const double residual = t - 0.01 * std::round(t / 0.01);
+		off_grid += std::abs(residual) > 0.004;  // 0.005 s expected
+	}
+	// A repeat of an early stamp is off the grid as well, and a repeat can
+	// fall next to its original only if no early stamp came between.
+	EXPECT_NEAR(double(repeated), double(s.stamp_duplicates), 0.05 * s.stamp_duplicates + 2);
+	EXPECT_GE(off_grid, s.stamp_out_of_order);
+	EXPECT_LE(double(off_grid), 1.05 * s.stamp_out_of_order + 0.05 * s.stamp_duplicates + 2);
+	fs::remove_all(d);
+}

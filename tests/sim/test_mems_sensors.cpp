@@ -9,6 +9,7 @@
 #include <numeric>
 #include <vector>
 
+#include "guidance.h"
 #include "logger_clock.h"
 #include "sensors.h"
 #include "sim_test_config.h"
@@ -364,10 +365,10 @@ TEST(LoggerClock, JitterHasTheConfiguredSigmaAndKeepsTheSensorsOrder)
 	{
 		const auto t = t0 + std::chrono::microseconds(200000LL * k);
 		const auto s = clk.stamp(t);
-		EXPECT_EQ(s.recorded, s.arrival);  // no anomalies configured
+		EXPECT_EQ(s.recorded, s.jittered);  // no anomalies configured
 		EXPECT_GT(s.recorded, last);
 		last = s.recorded;
-		jitter.push_back(std::chrono::duration<double>(s.arrival - t).count());
+		jitter.push_back(std::chrono::duration<double>(s.jittered - t).count());
 	}
 	const double mean = std::accumulate(jitter.begin(), jitter.end(), 0.0) / n;
 	double var = 0;
@@ -418,7 +419,7 @@ TEST(LoggerClock, DefaultsLeaveTheStampAloneAndBadValuesNameTheKey)
 	LoggerClock clk(none, 0.2, 1);
 	const auto t = mrpt::Clock::fromDouble(1669975200.25);
 	EXPECT_EQ(clk.stamp(t).recorded, t);
-	EXPECT_EQ(clk.maxJitter_s(), 0.0);
+	EXPECT_EQ(clk.maxEarly_s(), 0.0);
 	auto params = [](const std::string& text)
 	{ return StampParams::fromConfig(config::Node::fromText(text), 0.01); };
 	expectConfigError([&] { params("timestamp_jitter_sigma_s: 0.002\n"); },
@@ -459,4 +460,33 @@ TEST(PressureSim, ReadingsAreOnTheResolutionGrid)
 		                1);
 	    },
 	    "resolution_pa");
+}
+
+// ---------------------------------------------------------------- autopilot
+
+TEST(Controller, RollGainsNeedThrustersThatSpanRoll)
+{
+	PlanStep hold;  // hold heading at 2 m for a while
+	hold.kind = PlanStep::Kind::Wait;
+	hold.duration_s = 100;
+	hold.surface = false;
+	hold.depth_m = 2;
+	const std::vector<PlanStep> plan{hold};
+	ControllerGains k;
+	k.roll_kp = 5;
+	// FlatFish: two heave thrusters on the centre line cannot roll it.
+	expectConfigError([&] { Controller(VehicleParams::fromConfig(test::repoVehicle()), k, plan); },
+	                  "controller.roll_kp");
+	// The BlueROV2 Heavy's four vertical thrusters can: a roll error gives a
+	// restoring roll moment through the allocation.
+	const auto heavy = VehicleParams::fromConfig(
+	    config::Node::load(std::string(AUVNAV_SOURCE_DIR) + "/config/vehicles/bluerov2_heavy.yaml"));
+	Controller c(heavy, k, plan);
+	VehicleState x;
+	x.q_nb = Eigen::AngleAxisd(10 * kDeg, Eigen::Vector3d::UnitX());  // rolled 10° to starboard
+	x.p_n = {0, 0, 2};
+	x.thrust_n = Eigen::VectorXd::Zero(8);
+	const Eigen::VectorXd u = c.command(x, 0, 0.05);
+	const Vector6d tau = heavy.configurationMatrix() * u;
+	EXPECT_NEAR(tau[3], -5 * 10 * kDeg, 1e-6);  // −kp · roll
 }
