@@ -200,6 +200,11 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	compass_rng.randomize(streamSeed(seed, 12));
 	heading_error_rad_ =
 		n.inRange("heading_error_sigma_deg", 0, 90, 0.0) * kDeg * compass_rng.drawGaussian1D_normalized();
+	dropout_rate_per_s_ = n.inRange("dropout_rate_per_h", 0, 3600, 0.0) / 3600;
+	dropout_duration_s_ = n.inRange("dropout_duration_s", 0, 600, 0.0);
+	if (dropout_rate_per_s_ > 0 && !(dropout_duration_s_ > 0))
+		n.fail("dropout_duration_s", "must be > 0 when dropout_rate_per_h is set");
+	outage_rng_.randomize(streamSeed(seed, 13));
 }
 
 void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
@@ -253,6 +258,19 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 	obs->frame = frame_;
 	obs->sign = sign_;
 	obs->beam_velocity_sigma_mps = beam_sigma_mps_;
+	bool outage = false;
+	if (dropout_rate_per_s_ > 0)
+	{
+		// Outages start only while locked; the first ping cannot start one.
+		if (t.t_s >= outage_until_s_ && last_ping_s_ >= 0 &&
+			outage_rng_.drawUniform(0.0, 1.0) < 1 - std::exp(-dropout_rate_per_s_ * (t.t_s - last_ping_s_)))
+		{
+			outage_until_s_ = t.t_s - dropout_duration_s_ * std::log(1 - outage_rng_.drawUniform(0.0, 1.0));
+			++outages_;
+		}
+		outage = t.t_s < outage_until_s_;
+		last_ping_s_ = t.t_s;
+	}
 	Eigen::MatrixXd A(beam_dirs_s_.size(), 3);
 	Eigen::VectorXd u(beam_dirs_s_.size());
 	int valid = 0;
@@ -266,7 +284,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const double vertical = range * std::cos(inclination_rad_);
 		const bool dropped = rng_.drawUniform(0.0, 1.0) < beam_dropout_probability_;
 		beam.range_m = range > 0 ? range : 0;
-		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped;
+		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped && !outage;
 		beam.azimuth_rad = beam_azimuths_rad_[i];
 		const double radial = (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
 		if (beam.valid)

@@ -92,7 +92,11 @@ class ImuSim
  *    velocity (NaN);
  *  - sign bottom_over_instrument (Teledyne RDI PD0) negates every velocity.
  *  The radial draws are the same in every mode, so for one seed the modes
- *  differ only in how the same ping is reported. */
+ *  differ only in how the same ping is reported.
+ *  Optional whole-ping outages (small DVLs lose lock in bursts: turns, weed,
+ *  aerated water): they start as a Poisson process of `dropout_rate_per_h`
+ *  while locked and last an exponential time of mean `dropout_duration_s`;
+ *  during one every beam is invalid. Own stream; off by default. */
 class DvlSim
 {
    public:
@@ -102,6 +106,8 @@ class DvlSim
 	auvnav::obs::CObservationDVL::Ptr sample(const Truth& truth, const Environment& env);
 	/** The DVL compass's heading error of this run [rad] (Earth frames only). */
 	double headingError_rad() const { return heading_error_rad_; }
+	/** Whole-ping outages begun so far. */
+	std::size_t outages() const { return outages_; }
 
    private:
 	/** Writes the least-squares sensor-frame velocity `v_ls_s` and its
@@ -118,6 +124,10 @@ class DvlSim
 	auvnav::obs::DvlFrame frame_ = auvnav::obs::DvlFrame::Instrument;
 	auvnav::obs::DvlSign sign_ = auvnav::obs::DvlSign::VehicleOverBottom;
 	double heading_error_rad_ = 0;
+	double dropout_rate_per_s_ = 0, dropout_duration_s_ = 0;
+	double outage_until_s_ = -1, last_ping_s_ = -1;
+	std::size_t outages_ = 0;
+	mrpt::random::CRandomGenerator outage_rng_;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
 };

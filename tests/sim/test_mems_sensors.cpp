@@ -490,3 +490,49 @@ TEST(Controller, RollGainsNeedThrustersThatSpanRoll)
 	const Vector6d tau = heavy.configurationMatrix() * u;
 	EXPECT_NEAR(tau[3], -5 * 10 * kDeg, 1e-6);  // −kp · roll
 }
+
+// ---------------------------------------------------------------- DVL outages
+
+TEST(DvlSim, WholePingOutagesAtTheConfiguredRateAndLength)
+{
+	// Rate 120/h, mean 3 s: with outages starting only while locked, the
+	// unlocked fraction is r d / (1 + r d) = 0.1 / 1.1 = 9.1 %.
+	auto cfg = bluerovSensors().child("dvl");
+	cfg.set("dropout_rate_per_h", "120");
+	cfg.set("dropout_duration_s", "3");
+	cfg.set("beam_dropout_probability", "0");
+	DvlSim dvl(cfg, 11);
+	const Environment env = Environment::fromConfig(test::flatEnvironment(20), 1);
+	Pose p(0, 0, 0);
+	p.x.p_n = {0, 0, 10};
+	const double dt = 0.2;
+	const int n = 10 * 3600 * 5;  // 10 h of pings at 5 Hz
+	int unlocked = 0, runs = 0;
+	bool was_locked = true;
+	for (int k = 0; k < n; ++k)
+	{
+		p.t.t_s = k * dt;
+		const bool locked = dvl.sample(p.t, env)->bottom_lock;
+		unlocked += !locked;
+		runs += !locked && was_locked;
+		was_locked = locked;
+	}
+	// Each outage is a run of lost pings; one starting at the first ping
+	// after another ends merges with it (~2 %).
+	const double outages = double(dvl.outages());
+	EXPECT_LE(runs, outages);
+	EXPECT_GE(runs, 0.96 * outages);
+	const double hours_locked = (n - unlocked) * dt / 3600;
+	// ~1100 outages: Poisson 4σ ≈ 12 %.
+	EXPECT_NEAR(outages / hours_locked, 120, 4 * std::sqrt(120 * hours_locked) / hours_locked);
+	// Mean length in pings × 0.2 s: 3 s plus up to one ping of rounding.
+	const double mean_s = unlocked * dt / outages;
+	EXPECT_GT(mean_s, 2.8);
+	EXPECT_LT(mean_s, 3.4);
+	EXPECT_NEAR(double(unlocked) / n, 0.1 / 1.1, 0.01);
+	auto bad = bluerovSensors().child("dvl");
+	bad.set("dropout_duration_s", "0");
+	expectConfigError([&] { DvlSim(bad, 1); }, "dvl.dropout_duration_s");
+	bad.set("dropout_rate_per_h", "-1");
+	expectConfigError([&] { DvlSim(bad, 1); }, "dvl.dropout_rate_per_h");
+}
