@@ -103,7 +103,8 @@ TEST(BlueRov2Missions, PoolSquareRunsWithMagnetometerDvlAndDepthOnlyAndJitteredS
 	EXPECT_NEAR(s.observations.at("MAG") / T, 50, 0.5);
 	EXPECT_NEAR(s.observations.at("DVL") / T, 10, 0.2);
 	EXPECT_NEAR(s.observations.at("PRESSURE") / T, 10, 0.2);
-	EXPECT_GT(double(s.dvl_locked) / s.dvl_total, 0.95);       // 1.4–2.9 m altitude, inside 0.05–50 m
+	// 1.4–2.9 m altitude, inside 0.05–50 m; beam losses and ~1 % whole-ping outages
+	EXPECT_GT(double(s.dvl_locked) / s.dvl_total, 0.9);
 	EXPECT_EQ(s.stamp_duplicates + s.stamp_out_of_order, 0u);  // off by default
 
 	// The start is the first truth row; the square's corners are visited.
