@@ -82,6 +82,8 @@ ControllerGains ControllerGains::fromConfig(const config::Node& n)
 	k.depth_ki = n.nonNegative("depth_ki", k.depth_ki);
 	k.attitude_kp = n.nonNegative("attitude_kp", k.attitude_kp);
 	k.attitude_kd = n.nonNegative("attitude_kd", k.attitude_kd);
+	k.roll_kp = n.nonNegative("roll_kp", k.roll_kp);
+	k.roll_kd = n.nonNegative("roll_kd", k.roll_kd);
 	k.speed_ramp_mps2 = n.positive("speed_ramp_mps2", k.speed_ramp_mps2);
 	k.depth_rate_mps = n.positive("depth_rate_mps", k.depth_rate_mps);
 	return k;
@@ -94,6 +96,17 @@ Controller::Controller(const VehicleParams& vehicle, const ControllerGains& gain
 	// roll and pitch cannot be set independently (the configuration matrix has
 	// rank 5), so roll is left to the hydrostatic restoring moment.
 	const auto T = vehicle_.configurationMatrix();
+	if (k_.controlsRoll())
+	{
+		// All six axes: only if the thrusters span them (e.g. 4 vertical thrusters).
+		const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod{Eigen::MatrixXd(T)};
+		if (cod.rank() < 6)
+			throw config::ConfigError("controller.roll_kp/roll_kd: the thrusters cannot produce all six axes "
+									  "(configuration matrix rank " + std::to_string(cod.rank()) +
+									  "); leave roll to the restoring moment (gains 0)");
+		allocation_ = cod.pseudoInverse();
+		return;
+	}
 	Eigen::MatrixXd T_controlled(5, T.cols());
 	T_controlled << T.row(0), T.row(1), T.row(2), T.row(4), T.row(5);
 	allocation_ = T_controlled.completeOrthogonalDecomposition().pseudoInverse();
@@ -145,6 +158,11 @@ Vector6d Controller::wrench(const VehicleState& x, double dt_s)
 	// pitch the vehicle steeply while diving.
 	const double pitch = -std::asin(std::clamp(R_nb(2, 0), -1.0, 1.0));
 	tau[4] = -k_.attitude_kp * pitch - k_.attitude_kd * x.nu_b[4];
+	if (k_.controlsRoll())
+	{
+		const double roll = std::atan2(R_nb(2, 1), R_nb(2, 2));
+		tau[3] = -k_.roll_kp * roll - k_.roll_kd * x.nu_b[3];
+	}
 	if (!s.surface)
 	{
 		// Slew the depth demand: dives and climbs at a bounded rate, no overshoot.
@@ -183,9 +201,15 @@ Eigen::VectorXd Controller::command(const VehicleState& x, double t_s, double dt
 		beginStep(x, t_s);
 	}
 	const Vector6d tau = wrench(x, dt_s);
-	Eigen::Matrix<double, 5, 1> tau_controlled;
-	tau_controlled << tau[0], tau[1], tau[2], tau[4], tau[5];
-	Eigen::VectorXd u = allocation_ * tau_controlled;
+	Eigen::VectorXd u;
+	if (k_.controlsRoll())
+		u = allocation_ * tau;
+	else
+	{
+		Eigen::Matrix<double, 5, 1> tau_controlled;
+		tau_controlled << tau[0], tau[1], tau[2], tau[4], tau[5];
+		u = allocation_ * tau_controlled;
+	}
 	for (Eigen::Index i = 0; i < u.size(); ++i)
 		u[i] = std::clamp(u[i], -vehicle_.thrusters[i].max_force_n, vehicle_.thrusters[i].max_force_n);
 	return u;

@@ -3,7 +3,8 @@
  *  Mission plan and the vehicle's guidance & control: line-of-sight waypoint
  *  following, surge-speed, depth, pitch and heading loops producing a body
  *  wrench, and thrust allocation through the pseudo-inverse of the thruster
- *  configuration matrix (roll row dropped) with per-thruster saturation. The controller sees
+ *  configuration matrix (roll row dropped unless roll gains are set, for vehicles whose
+ *  thrusters can roll them, e.g. the BlueROV2 Heavy) with per-thruster saturation. The controller sees
  *  the true state (the simulator's autopilot is not under test).
  */
 #include <auvnav/config.h>
@@ -43,6 +44,10 @@ struct ControllerGains
 	double sway_kp = 80;						// N/(m/s)
 	double depth_kp = 60, depth_kd = 250, depth_ki = 2;	 // N/m, N/(m/s), N/(m·s)
 	double attitude_kp = 200, attitude_kd = 60;	 // pitch hold, N·m/rad, N·m/(rad/s)
+	//! Roll hold, N·m/rad, N·m/(rad/s); 0 (default): roll left to the restoring
+	//! moment and the roll row dropped from the allocation (5 controlled axes).
+	double roll_kp = 0, roll_kd = 0;
+	bool controlsRoll() const { return roll_kp > 0 || roll_kd > 0; }
 	double speed_ramp_mps2 = 0.02;
 	double depth_rate_mps = 0.15;  //!< slew limit of the depth demand
 	static ControllerGains fromConfig(const config::Node& n);

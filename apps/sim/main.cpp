@@ -1,4 +1,5 @@
-// auvnav-sim: simulate a FlatFish-like AUV mission into an MRPT rawlog with
+// auvnav-sim: simulate an AUV mission (the vehicle and sensor files the
+// mission names: FlatFish-like, BlueROV2-Heavy-like) into an MRPT rawlog with
 // ground truth. See README.md and config/missions/.
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
@@ -12,8 +13,9 @@
 int main(int argc, char** argv)
 {
 	TCLAP::CmdLine cmd(
-		"Simulates an AUV mission (6-DOF FlatFish-like vehicle, autopilot, IMU, DVL, ADCP, "
-		"pressure, GPS, thruster commands) and writes DIR/<mission>.rawlog (MRPT rawlog; load "
+		"Simulates an AUV mission (6-DOF vehicle from the mission's vehicle file, e.g. FlatFish-like "
+		"or BlueROV2-Heavy-like; autopilot; IMU, DVL, ADCP, pressure, GPS, magnetometer, thruster "
+		"commands as its sensors file configures them) and writes DIR/<mission>.rawlog (MRPT rawlog; load "
 		"libauvnav_obs.so in MRPT tools to read DVL/ADCP/pressure/thruster observations), "
 		"DIR/ground_truth.tum and DIR/ground_truth.csv. The same seed gives byte-identical files.",
 		' ', "0.1.0");
@@ -47,6 +49,9 @@ int main(int argc, char** argv)
 		if (s.adcp_profiles)
 			std::printf("  ADCP %.2f valid cells per profile\n", double(s.adcp_valid_cells) / s.adcp_profiles);
 		std::printf("  GPS gross outliers injected: %zu\n", s.gps_outliers);
+		if (s.stamp_duplicates || s.stamp_out_of_order)
+			std::printf("  logger stamps injected: %zu duplicated, %zu out of order\n", s.stamp_duplicates,
+						s.stamp_out_of_order);
 		std::printf("  wrote %s (%.1f MB), ground_truth.tum, ground_truth.csv\n", s.rawlog_path.c_str(),
 					std::filesystem::file_size(s.rawlog_path) / 1e6);
 		return s.plan_completed ? 0 : 3;

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <memory>
 
 #include "sensors.h"
@@ -118,6 +120,7 @@ MissionSpec MissionSpec::load(const std::string& mission_file)
 	if (ne.size() != 2) st.fail("position_ne_m", "expected [north_m, east_m]");
 	s.start_ne = {ne[0], ne[1]};
 	s.start_heading_rad = st.inRange("heading_deg", -360, 360) * kDeg;
+	s.start_depth_m = st.inRange("depth_m", -1, 11000, s.start_depth_m);
 	if (m.has("simulation"))
 	{
 		const auto sim = m.child("simulation");
@@ -141,11 +144,27 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 						  planFromConfig(spec.mission));
 
 	const auto& sc = spec.sensors;
+	// Optional sensors: absent, or present with `enabled: false`.
+	auto enabled = [&sc](const char* key, bool default_on) {
+		return sc.has(key) && sc.child(key).boolean("enabled", default_on);
+	};
 	ImuSim imu(sc.child("imu"), seed);
 	DvlSim dvl(sc.child("dvl"), seed);
-	AdcpSim adcp(sc.child("adcp"), seed);
+	// The ADCP object also defines the far-current column of the truth, so it
+	// exists whenever it is configured, as before.
+	std::unique_ptr<AdcpSim> adcp = sc.has("adcp") ? std::make_unique<AdcpSim>(sc.child("adcp"), seed) : nullptr;
 	PressureSim pressure(sc.child("pressure"), seed);
-	GpsSim gps(sc.child("gps"), seed);
+	std::unique_ptr<GpsSim> gps = enabled("gps", true) ? std::make_unique<GpsSim>(sc.child("gps"), seed) : nullptr;
+	std::unique_ptr<MagnetometerSim> mag;
+	if (enabled("magnetometer", true))
+	{
+		if (!spec.environment.has("magnetic_field"))
+			spec.environment.fail("magnetic_field", "the sensors file has a magnetometer: give the Earth field "
+													"{total_intensity_ut, declination_deg, inclination_deg}");
+		mag = std::make_unique<MagnetometerSim>(sc.child("magnetometer"),
+												MagneticField::fromConfig(spec.environment.child("magnetic_field")),
+												vehicle.params().thrusters.size(), seed);
+	}
 	const auto thr_cfg = sc.child("thrusters");
 	const std::string thr_label = thr_cfg.string("label", "THRUSTERS");
 	const double dt = spec.dt_s;
@@ -153,14 +172,18 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	const Schedule imu_s{stepsOf(imu.period_s(), dt, sc.child("imu"), "rate_hz"), 0};
 	const Schedule dvl_s{stepsOf(dvl.period_s(), dt, sc.child("dvl"), "rate_hz"),
 						 std::lround(dvl.offset_s() / dt)};
-	const Schedule adcp_s{stepsOf(adcp.period_s(), dt, sc.child("adcp"), "rate_hz"),
-						  std::lround(adcp.offset_s() / dt)};
+	const Schedule adcp_s = adcp ? Schedule{stepsOf(adcp->period_s(), dt, sc.child("adcp"), "rate_hz"),
+											std::lround(adcp->offset_s() / dt)}
+								 : Schedule{};
 	const Schedule pres_s{stepsOf(pressure.period_s(), dt, sc.child("pressure"), "rate_hz"),
 						  std::lround(pressure.offset_s() / dt)};
-	const Schedule gps_s{stepsOf(gps.period_s(), dt, sc.child("gps"), "rate_hz"), 0};
+	const Schedule gps_s = gps ? Schedule{stepsOf(gps->period_s(), dt, sc.child("gps"), "rate_hz"), 0} : Schedule{};
+	const Schedule mag_s = mag ? Schedule{stepsOf(mag->period_s(), dt, sc.child("magnetometer"), "rate_hz"),
+										  std::lround(mag->offset_s() / dt)}
+							   : Schedule{};
 	const Schedule ctl_s{stepsOf(1.0 / thr_cfg.positive("rate_hz"), dt, thr_cfg, "rate_hz"), 0};
 	const Schedule truth_s{stepsOf(1.0 / spec.ground_truth_rate_hz, dt, spec.mission, "simulation.ground_truth_rate_hz"), 0};
-	const bool use_adcp = sc.child("adcp").boolean("enabled", true);
+	const bool use_adcp = adcp && sc.child("adcp").boolean("enabled", true);
 	const bool use_sonar = sc.has("sonar") && sc.child("sonar").boolean("enabled", false);
 	std::unique_ptr<SonarSim> sonar;
 	Schedule sonar_s{1, 0};
@@ -175,6 +198,23 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 		sonar_truth->line("unix_time_s,pole_id,bearing_deg,range_m");
 	}
 
+	// The logger's clock per sensor (logger_clock.h), each with its own stream.
+	auto clockFor = [&](const char* key, long every_steps, uint32_t id) {
+		if (!sc.has(key)) return LoggerClock{};
+		const double period = every_steps * dt;
+		return LoggerClock(StampParams::fromConfig(sc.child(key), period), period, seed * 7919u + id * 104729u + 1u);
+	};
+	LoggerClock imu_clk = clockFor("imu", imu_s.every, 31), dvl_clk = clockFor("dvl", dvl_s.every, 32),
+				adcp_clk = use_adcp ? clockFor("adcp", adcp_s.every, 33) : LoggerClock{},
+				pres_clk = clockFor("pressure", pres_s.every, 34),
+				gps_clk = gps ? clockFor("gps", gps_s.every, 35) : LoggerClock{},
+				thr_clk = clockFor("thrusters", ctl_s.every, 36),
+				sonar_clk = use_sonar ? clockFor("sonar", sonar_s.every, 37) : LoggerClock{},
+				mag_clk = mag ? clockFor("magnetometer", mag_s.every, 38) : LoggerClock{};
+	double max_jitter_s = 0;
+	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk})
+		max_jitter_s = std::max(max_jitter_s, c->maxEarly_s());
+
 	MissionSummary sum;
 	sum.rawlog_path = (fs::path(out_dir) / (spec.name + ".rawlog")).string();
 	io::RawlogWriter rawlog(sum.rawlog_path, spec.rawlog_compression);
@@ -183,15 +223,34 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	tum.line("# timestamp north_m east_m down_m qx qy qz qw  (body FRD origin, NED tangent frame at the mission origin)");
 	csv.line(kCsvHeader);
 
+	// Observations wait here until no later-sampled one can carry an earlier
+	// stamp: keyed by (recorded stamp, sequence), so the rawlog stays in time
+	// order, equal stamps keep the simulation order and, without jitter, the
+	// rawlog is what it always was.
+	std::map<std::pair<mrpt::Clock::rep, std::uint64_t>, mrpt::obs::CObservation::Ptr> pending;
+	std::uint64_t sequence = 0;
+	auto count = [&](mrpt::obs::CObservation::Ptr o, LoggerClock& clk) {
+		const LoggerClock::Stamp st = clk.stamp(o->timestamp);
+		o->timestamp = st.recorded;
+		pending.emplace(std::make_pair(st.recorded.time_since_epoch().count(), sequence++), std::move(o));
+	};
+	auto flushBefore = [&](mrpt::Clock::rep horizon) {
+		while (!pending.empty() && pending.begin()->first.first < horizon)
+		{
+			const auto& o = *pending.begin()->second;
+			rawlog.write(o);
+			++sum.observations[o.sensorLabel];
+			pending.erase(pending.begin());
+		}
+	};
+	const auto jitter_window =
+		std::chrono::duration_cast<mrpt::Clock::duration>(std::chrono::duration<double>(max_jitter_s)).count();
+
 	VehicleState x;
-	x.p_n = {spec.start_ne.x(), spec.start_ne.y(), 0.25};
+	x.p_n = {spec.start_ne.x(), spec.start_ne.y(), spec.start_depth_m};
 	x.q_nb = Eigen::AngleAxisd(spec.start_heading_rad, Eigen::Vector3d::UnitZ());
 	x.thrust_n = Eigen::VectorXd::Zero(vehicle.params().thrusters.size());
 	Eigen::VectorXd cmd = x.thrust_n;
-	auto count = [&](const mrpt::obs::CObservation& o) {
-		rawlog.write(o);
-		++sum.observations[o.sensorLabel];
-	};
 
 	for (long k = 0;; ++k)
 	{
@@ -205,6 +264,7 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 		truth.x = &x;
 		truth.current_n = current_n;
 		truth.nu_dot_b = vehicle.rates(x, cmd, current_n).nu_dot_b;
+		flushBefore(truth.stamp.time_since_epoch().count() - jitter_window);
 
 		if (ctl_s.due(k))
 		{
@@ -214,33 +274,33 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 				break;
 			}
 			cmd = controller.command(x, t, ctl_s.every * dt);
-			auvnav::obs::CObservationThrusters thr;
-			thr.timestamp = truth.stamp;
-			thr.sensorLabel = thr_label;
-			thr.unit = auvnav::obs::EffortUnit::Force_N;
-			thr.effort.assign(cmd.data(), cmd.data() + cmd.size());
-			count(thr);
+			auto thr = auvnav::obs::CObservationThrusters::Create();
+			thr->timestamp = truth.stamp;
+			thr->sensorLabel = thr_label;
+			thr->unit = auvnav::obs::EffortUnit::Force_N;
+			thr->effort.assign(cmd.data(), cmd.data() + cmd.size());
+			count(thr, thr_clk);
 			truth.nu_dot_b = vehicle.rates(x, cmd, current_n).nu_dot_b;
 		}
-		if (imu_s.due(k)) count(*imu.sample(truth, frame));
+		if (imu_s.due(k)) count(imu.sample(truth, frame), imu_clk);
 		if (dvl_s.due(k))
 		{
 			const auto o = dvl.sample(truth, env);
 			sum.dvl_total++;
 			sum.dvl_locked += o->bottom_lock;
-			count(*o);
+			count(o, dvl_clk);
 		}
 		if (use_adcp && adcp_s.due(k))
 		{
-			const auto o = adcp.sample(truth, env);
+			const auto o = adcp->sample(truth, env);
 			sum.adcp_profiles++;
 			for (const auto& c : o->cells) sum.adcp_valid_cells += c.valid;
-			count(*o);
+			count(o, adcp_clk);
 		}
 		if (use_sonar && sonar_s.due(k))
 		{
 			std::vector<PoleInView> in_view;
-			count(*sonar->sample(truth, env, in_view));
+			count(sonar->sample(truth, env, in_view), sonar_clk);
 			const Eigen::Matrix3d R = x.R_nb();
 			const double unix_t = spec.start_unix_s + t;
 			sonar_frames->line(fmt("%.3f,%.4f,%.4f,%.6f,%.6f,%zu", unix_t, x.p_n.x(), x.p_n.y(),
@@ -251,9 +311,10 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 			sum.sonar_frames++;
 			sum.sonar_poles_in_view += in_view.size();
 		}
-		if (pres_s.due(k)) count(*pressure.sample(truth, env, frame));
-		if (gps_s.due(k))
-			if (const auto o = gps.sample(truth, frame)) count(*o);
+		if (pres_s.due(k)) count(pressure.sample(truth, env, frame), pres_clk);
+		if (gps && gps_s.due(k))
+			if (const auto o = gps->sample(truth, frame)) count(o, gps_clk);
+		if (mag && mag_s.due(k)) count(mag->sample(truth), mag_clk);
 
 		if (truth_s.due(k))
 		{
@@ -263,14 +324,14 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 			const double roll = std::atan2(R(2, 1), R(2, 2));
 			const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0));
 			const double yaw = std::atan2(R(1, 0), R(0, 0));
-			const Eigen::Vector3d far = env.current(x.p_n.z() + adcp.farRange_m());
+			const Eigen::Vector3d far = env.current(x.p_n.z() + (adcp ? adcp->farRange_m() : 0.0));
 			const double seabed = env.seabedDepth(x.p_n.x(), x.p_n.y());
 			const auto& q = x.q_nb;
 			const double unix_t = spec.start_unix_s + t;
 			tum.line(fmt("%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", unix_t, x.p_n.x(), x.p_n.y(),
 						 x.p_n.z(), q.x(), q.y(), q.z(), q.w()));
 			const Eigen::Vector3d bg = imu.gyroBias(), ba = imu.accelBias();
-			const Eigen::Vector2d bc = adcp.bias();
+			const Eigen::Vector2d bc = adcp ? adcp->bias() : Eigen::Vector2d::Zero();
 			csv.line(fmt("%.3f,%.6f,%.6f,%.6f,%.6f,%.10f,%.10f,%.9f,%.9f,%.9f,%.9f,%.5f,%.5f,%.5f,"
 						 "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.7f,%.7f,%.7f,%.6f,%.6f,%.6f,%.6f,"
 						 "%.4e,%.4e,%.4e,%.4e,%.4e,%.4e,%.6f,%.6f,%.4f,%.4f,%.4f,%d",
@@ -291,7 +352,13 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 		if (!x.p_n.allFinite() || !x.nu_b.allFinite())
 			throw std::runtime_error("vehicle state diverged at t = " + std::to_string(t) + " s");
 	}
-	sum.gps_outliers = gps.outliers();
+	flushBefore(std::numeric_limits<mrpt::Clock::rep>::max());
+	sum.gps_outliers = gps ? gps->outliers() : 0;
+	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk})
+	{
+		sum.stamp_duplicates += c->duplicates();
+		sum.stamp_out_of_order += c->outOfOrder();
+	}
 	return sum;
 }
 

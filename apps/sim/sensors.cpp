@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
 #include <cmath>
 
 namespace auvnav::sim
@@ -82,6 +83,30 @@ ImuSim::ImuSim(const config::Node& n, uint32_t seed)
 		gyro_.emplace_back(gp, rng_);
 		accel_.emplace_back(ap, rng_);
 	}
+	// MEMS calibration errors, fixed per unit (config values, no draw).
+	auto scale = [](const config::Node& block) {
+		const Eigen::Vector3d ppm = block.vector3("scale_factor_error_ppm", Eigen::Vector3d::Zero());
+		if ((ppm.array().abs() > 1e5).any())
+			block.fail("scale_factor_error_ppm", "expected |error| <= 100000 ppm (10 %) per axis");
+		return Eigen::Vector3d(1e-6 * ppm);
+	};
+	gyro_scale_ = scale(g);
+	accel_scale_ = scale(a);
+	if (g.has("g_sensitivity_dps_per_g"))
+	{
+		const auto v = g.numbers("g_sensitivity_dps_per_g");
+		if (v.size() != 3 && v.size() != 9)
+			g.fail("g_sensitivity_dps_per_g", "expected 3 values (diagonal) or 9 (row-major matrix, row = gyro axis)");
+		for (double e : v)
+			if (std::abs(e) > 1.0) g.fail("g_sensitivity_dps_per_g", "expected |value| <= 1 deg/s per g");
+		Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+		for (int r = 0; r < 3; ++r)
+			for (int c = 0; c < 3; ++c)
+				if (v.size() == 9) G(r, c) = v[3 * r + c];
+		if (v.size() == 3) G.diagonal() << v[0], v[1], v[2];
+		G_radps_per_mps2_ = G * (kDeg / 9.80665);  // (deg/s)/g -> (rad/s)/(m/s²)
+	}
+	has_scale_or_g_ = !gyro_scale_.isZero(0) || !accel_scale_.isZero(0) || !G_radps_per_mps2_.isZero(0);
 }
 
 mrpt::obs::CObservationIMU::Ptr ImuSim::sample(const Truth& t, const earth::TangentFrame& frame)
@@ -101,8 +126,15 @@ mrpt::obs::CObservationIMU::Ptr ImuSim::sample(const Truth& t, const earth::Tang
 		a_imu_b + R_nb.transpose() * (2 * omega_ie_n.cross(imu.v_n) - frame.gravityNed(imu.p_n));
 	const Eigen::Vector3d omega_ib_b = w_b + R_nb.transpose() * omega_ie_n;
 	const Eigen::Matrix3d R_sb = mount_.R_bs_true.transpose();
-	const Eigen::Vector3d f_s = R_sb * f_b;
-	const Eigen::Vector3d w_s = R_sb * omega_ib_b;
+	Eigen::Vector3d f_s = R_sb * f_b;
+	Eigen::Vector3d w_s = R_sb * omega_ib_b;
+	if (has_scale_or_g_)
+	{
+		// g-sensitivity acts on the true specific force, before the
+		// accelerometer's own scale error.
+		w_s = w_s.cwiseProduct(Eigen::Vector3d::Ones() + gyro_scale_) + G_radps_per_mps2_ * f_s;
+		f_s = f_s.cwiseProduct(Eigen::Vector3d::Ones() + accel_scale_);
+	}
 
 	auto obs = mrpt::obs::CObservationIMU::Create();
 	obs->timestamp = t.stamp;
@@ -168,6 +200,11 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	compass_rng.randomize(streamSeed(seed, 12));
 	heading_error_rad_ =
 		n.inRange("heading_error_sigma_deg", 0, 90, 0.0) * kDeg * compass_rng.drawGaussian1D_normalized();
+	dropout_rate_per_s_ = n.inRange("dropout_rate_per_h", 0, 3600, 0.0) / 3600;
+	dropout_duration_s_ = n.inRange("dropout_duration_s", 0, 600, 0.0);
+	if (dropout_rate_per_s_ > 0 && !(dropout_duration_s_ > 0))
+		n.fail("dropout_duration_s", "must be > 0 when dropout_rate_per_h is set");
+	outage_rng_.randomize(streamSeed(seed, 13));
 }
 
 void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
@@ -221,6 +258,19 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 	obs->frame = frame_;
 	obs->sign = sign_;
 	obs->beam_velocity_sigma_mps = beam_sigma_mps_;
+	bool outage = false;
+	if (dropout_rate_per_s_ > 0)
+	{
+		// Outages start only while locked; the first ping cannot start one.
+		if (t.t_s >= outage_until_s_ && last_ping_s_ >= 0 &&
+			outage_rng_.drawUniform(0.0, 1.0) < 1 - std::exp(-dropout_rate_per_s_ * (t.t_s - last_ping_s_)))
+		{
+			outage_until_s_ = t.t_s - dropout_duration_s_ * std::log(1 - outage_rng_.drawUniform(0.0, 1.0));
+			++outages_;
+		}
+		outage = t.t_s < outage_until_s_;
+		last_ping_s_ = t.t_s;
+	}
 	Eigen::MatrixXd A(beam_dirs_s_.size(), 3);
 	Eigen::VectorXd u(beam_dirs_s_.size());
 	int valid = 0;
@@ -234,7 +284,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const double vertical = range * std::cos(inclination_rad_);
 		const bool dropped = rng_.drawUniform(0.0, 1.0) < beam_dropout_probability_;
 		beam.range_m = range > 0 ? range : 0;
-		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped;
+		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped && !outage;
 		beam.azimuth_rad = beam_azimuths_rad_[i];
 		const double radial = (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
 		if (beam.valid)
@@ -340,6 +390,7 @@ PressureSim::PressureSim(const config::Node& n, uint32_t seed)
 	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
 	  mount_(Mounting::fromConfig(n)),
 	  sigma_pa_(n.nonNegative("noise_sigma_pa")),
+	  resolution_pa_(n.inRange("resolution_pa", 0, 1e4, 0.0)),
 	  label_(n.string("label", "PRESSURE"))
 {
 	rng_.randomize(streamSeed(seed, 4));
@@ -358,6 +409,7 @@ auvnav::obs::CObservationPressure::Ptr PressureSim::sample(const Truth& t, const
 	obs->sensorPose = mount_.nominalPose();
 	obs->pressure_pa = env.water().atmospheric_pressure_pa + env.water().density_kg_m3 * g * depth +
 					   bias_pa_ + sigma_pa_ * rng_.drawGaussian1D_normalized();
+	if (resolution_pa_ > 0) obs->pressure_pa = resolution_pa_ * std::round(obs->pressure_pa / resolution_pa_);
 	obs->temperature_c = env.temperature(depth);
 	return obs;
 }
@@ -431,6 +483,89 @@ mrpt::obs::CObservationGPS::Ptr GpsSim::sample(const Truth& t, const earth::Tang
 	obs->sensorLabel = label_;
 	obs->sensorPose = mount_.nominalPose();
 	obs->setMsg(gga);
+	return obs;
+}
+
+// ---------------------------------------------------------------- magnetometer
+Eigen::Vector3d MagneticField::fieldNed_ut() const
+{
+	const double cI = std::cos(inclination_rad), sI = std::sin(inclination_rad);
+	return total_intensity_ut * Eigen::Vector3d(cI * std::cos(declination_rad), cI * std::sin(declination_rad), sI);
+}
+
+MagneticField MagneticField::fromConfig(const config::Node& n)
+{
+	MagneticField f;
+	// The geomagnetic field at the surface spans about 22–67 µT (WMM).
+	f.total_intensity_ut = n.inRange("total_intensity_ut", 15, 70);
+	f.declination_rad = n.inRange("declination_deg", -180, 180) * kDeg;
+	f.inclination_rad = n.inRange("inclination_deg", -90, 90) * kDeg;
+	return f;
+}
+
+MagnetometerSim::MagnetometerSim(const config::Node& n, const MagneticField& field, std::size_t thruster_count,
+								 uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
+	  mount_(Mounting::fromConfig(n)),
+	  m_n_ut_(field.fieldNed_ut()),
+	  sigma_ut_(n.nonNegative("noise_sigma_ut")),
+	  label_(n.string("label", "MAG"))
+{
+	rng_.randomize(streamSeed(seed, 6));
+	hard_iron_ut_ = n.vector3("hard_iron_ut", Eigen::Vector3d::Zero());
+	if ((hard_iron_ut_.array().abs() > 1000).any()) n.fail("hard_iron_ut", "expected |offset| <= 1000 uT per axis");
+	if (n.has("soft_iron"))
+	{
+		const auto v = n.numbers("soft_iron");
+		if (v.size() != 9) n.fail("soft_iron", "expected 9 values (3x3 matrix, row-major)");
+		for (int r = 0; r < 3; ++r)
+			for (int c = 0; c < 3; ++c) soft_iron_(r, c) = v[3 * r + c];
+		// A soft-iron matrix is a mild distortion of the field: invertible,
+		// orientation-preserving, gains within a factor of a few.
+		const Eigen::JacobiSVD<Eigen::Matrix3d> svd(soft_iron_);
+		const auto sv = svd.singularValues();
+		if (soft_iron_.determinant() <= 0 || sv.minCoeff() < 0.2 || sv.maxCoeff() > 5)
+			n.fail("soft_iron", "expected an invertible matrix with positive determinant and singular values in "
+								"[0.2, 5]");
+	}
+	thruster_gain_ut_per_n_ = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, thruster_count);
+	if (n.has("thruster_disturbance_ut_per_n"))
+	{
+		const auto v = n.numbers("thruster_disturbance_ut_per_n");
+		if (v.size() != 3 && v.size() != 3 * thruster_count)
+			n.fail("thruster_disturbance_ut_per_n", "expected 3 values (every thruster) or 3 per thruster (" +
+														std::to_string(3 * thruster_count) + ")");
+		for (std::size_t i = 0; i < thruster_count; ++i)
+			for (int k = 0; k < 3; ++k)
+			{
+				const double g = v.size() == 3 ? v[k] : v[3 * i + k];
+				if (std::abs(g) > 10) n.fail("thruster_disturbance_ut_per_n", "expected |gain| <= 10 uT/N");
+				thruster_gain_ut_per_n_(k, static_cast<Eigen::Index>(i)) = g;
+			}
+	}
+}
+
+Eigen::Vector3d MagnetometerSim::expected_ut(const VehicleState& x) const
+{
+	const Eigen::Matrix3d R_ns = x.R_nb() * mount_.R_bs_true;
+	Eigen::Vector3d h = soft_iron_ * (R_ns.transpose() * m_n_ut_) + hard_iron_ut_;
+	if (x.thrust_n.size() == thruster_gain_ut_per_n_.cols()) h += thruster_gain_ut_per_n_ * x.thrust_n.cwiseAbs();
+	return h;
+}
+
+mrpt::obs::CObservationIMU::Ptr MagnetometerSim::sample(const Truth& t)
+{
+	const Eigen::Vector3d h_ut = expected_ut(*t.x);
+	auto obs = mrpt::obs::CObservationIMU::Create();
+	obs->timestamp = t.stamp;
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	using namespace mrpt::obs;
+	const TIMUDataIndex idx[3] = {IMU_MAG_X, IMU_MAG_Y, IMU_MAG_Z};
+	constexpr double kGaussPerMicrotesla = 0.01;  // 1 G = 100 µT
+	for (int i = 0; i < 3; ++i)
+		obs->set(idx[i], kGaussPerMicrotesla * (h_ut[i] + sigma_ut_ * rng_.drawGaussian1D_normalized()));
 	return obs;
 }
 

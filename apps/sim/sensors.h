@@ -20,6 +20,7 @@
 #include <optional>
 
 #include "environment.h"
+#include "logger_clock.h"
 #include "noise.h"
 #include "vehicle.h"
 
@@ -46,6 +47,15 @@ struct Mounting
 	static Mounting fromConfig(const config::Node& n);
 };
 
+/** Inertial measurement unit: angular rate and specific force of the IMU
+ *  point in sensor axes, each axis with white noise, turn-on bias and bias
+ *  wander (noise.h); optionally (MEMS) a per-axis scale-factor error
+ *  (`scale_factor_error_ppm`, gyro and accelerometer) and the gyro's
+ *  g-sensitivity (`g_sensitivity_dps_per_g`: 3 values = each gyro axis
+ *  sensitive to the specific force along its own axis, or 9 values = the full
+ *  matrix row-major, row = gyro axis, column = specific-force axis). Both are
+ *  fixed config values (a unit's calibration error), so they cost no random
+ *  draw and leave the noise of a seed unchanged. */
 class ImuSim
 {
    public:
@@ -61,6 +71,11 @@ class ImuSim
 	Mounting mount_;
 	mrpt::random::CRandomGenerator rng_;
 	std::vector<InertialAxisError> gyro_, accel_;
+	// Deterministic MEMS errors (config values, no random draw): output =
+	// (1 + scale) ∘ true + G_g · f (gyro only) + bias + noise, in sensor axes.
+	Eigen::Vector3d gyro_scale_ = Eigen::Vector3d::Zero(), accel_scale_ = Eigen::Vector3d::Zero();
+	Eigen::Matrix3d G_radps_per_mps2_ = Eigen::Matrix3d::Zero();  //!< gyro g-sensitivity
+	bool has_scale_or_g_ = false;
 	std::string label_;
 };
 
@@ -77,7 +92,11 @@ class ImuSim
  *    velocity (NaN);
  *  - sign bottom_over_instrument (Teledyne RDI PD0) negates every velocity.
  *  The radial draws are the same in every mode, so for one seed the modes
- *  differ only in how the same ping is reported. */
+ *  differ only in how the same ping is reported.
+ *  Optional whole-ping outages (small DVLs lose lock in bursts: turns, weed,
+ *  aerated water): they start as a Poisson process of `dropout_rate_per_h`
+ *  while locked and last an exponential time of mean `dropout_duration_s`;
+ *  during one every beam is invalid. Own stream; off by default. */
 class DvlSim
 {
    public:
@@ -87,6 +106,8 @@ class DvlSim
 	auvnav::obs::CObservationDVL::Ptr sample(const Truth& truth, const Environment& env);
 	/** The DVL compass's heading error of this run [rad] (Earth frames only). */
 	double headingError_rad() const { return heading_error_rad_; }
+	/** Whole-ping outages begun so far. */
+	std::size_t outages() const { return outages_; }
 
    private:
 	/** Writes the least-squares sensor-frame velocity `v_ls_s` and its
@@ -103,6 +124,10 @@ class DvlSim
 	auvnav::obs::DvlFrame frame_ = auvnav::obs::DvlFrame::Instrument;
 	auvnav::obs::DvlSign sign_ = auvnav::obs::DvlSign::VehicleOverBottom;
 	double heading_error_rad_ = 0;
+	double dropout_rate_per_s_ = 0, dropout_duration_s_ = 0;
+	double outage_until_s_ = -1, last_ping_s_ = -1;
+	std::size_t outages_ = 0;
+	mrpt::random::CRandomGenerator outage_rng_;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
 };
@@ -128,6 +153,9 @@ class AdcpSim
 	std::string label_;
 };
 
+/** Absolute pressure at the sensor: atmosphere + ρ g depth + a constant bias
+ *  per run + white noise, rounded to the sensor's resolution (`resolution_pa`,
+ *  0 = none) as a digital sensor (MS5837 class) reports it. */
 class PressureSim
 {
    public:
@@ -140,7 +168,7 @@ class PressureSim
    private:
 	double period_s_, offset_s_;
 	Mounting mount_;
-	double sigma_pa_, bias_pa_;
+	double sigma_pa_, bias_pa_, resolution_pa_;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
 };
@@ -163,6 +191,56 @@ class GpsSim
 	double last_t_s_ = 0;
 	double surfaced_since_s_ = -1;	// −1: antenna under water
 	std::size_t outliers_ = 0;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+/** The Earth's magnetic field at the mission site (environment.magnetic_field):
+ *  total intensity F [µT], declination D (east of true north) and inclination I
+ *  (below the horizontal, positive down: northern hemisphere), constant over
+ *  the mission. m_n = F [cos I cos D, cos I sin D, sin I] in NED. */
+struct MagneticField
+{
+	double total_intensity_ut = 50, declination_rad = 0, inclination_rad = 0;
+	Eigen::Vector3d fieldNed_ut() const;
+	static MagneticField fromConfig(const config::Node& n);
+};
+
+/** A 3-axis magnetometer (MMC5983/HMC5883 class on a small vehicle):
+ *    h_s = S · R_sn m_n + b_hard + Σ_i g_i |F_i| + w,   w ~ N(0, σ² I)
+ *  with the soft-iron matrix S (`soft_iron`, 9 values row-major, default
+ *  identity), hard-iron offset b_hard (`hard_iron_ut`), a disturbance
+ *  proportional to the force each thruster produces now, |F_i| [N] (motor
+ *  currents grow with it; `thruster_disturbance_ut_per_n`: 3 values for
+ *  every thruster or 3 per thruster) and white noise (`noise_sigma_ut`).
+ *  R_sn uses the TRUE mounting (nominal + misalignment); the nominal one is
+ *  written as sensorPose.
+ *
+ *  Output contract (the navigator's magnetometer plugin reads exactly this):
+ *  an mrpt::obs::CObservationIMU labelled `label` (default "MAG") with only
+ *  IMU_MAG_X/Y/Z set and marked present, in GAUSS (MRPT's unit; 1 G = 100 µT),
+ *  in the sensor axes (FRD when mounted with zero orientation, i.e. the
+ *  IMU/body axes), sensorPose = the nominal mounting. */
+class MagnetometerSim
+{
+   public:
+	MagnetometerSim(const config::Node& n, const MagneticField& field, std::size_t thruster_count, uint32_t seed);
+	double period_s() const { return period_s_; }
+	double offset_s() const { return offset_s_; }
+	mrpt::obs::CObservationIMU::Ptr sample(const Truth& truth);
+	/** The noise-free reading for a state [µT] (for tests and evaluation). */
+	Eigen::Vector3d expected_ut(const VehicleState& x) const;
+	const Eigen::Matrix3d& softIron() const { return soft_iron_; }
+	const Eigen::Vector3d& hardIron_ut() const { return hard_iron_ut_; }
+
+   private:
+	double period_s_, offset_s_;
+	Mounting mount_;
+	Eigen::Vector3d m_n_ut_;
+	Eigen::Matrix3d soft_iron_ = Eigen::Matrix3d::Identity();
+	Eigen::Vector3d hard_iron_ut_ = Eigen::Vector3d::Zero();
+	Eigen::Matrix<double, 3, Eigen::Dynamic> thruster_gain_ut_per_n_;
+	double sigma_ut_;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
 };
