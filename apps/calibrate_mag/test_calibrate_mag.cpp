@@ -17,6 +17,7 @@
 #include <string>
 
 #include "mag_fit.h"
+#include "magnetometer.h"
 
 namespace fs = std::filesystem;
 using namespace auvnav;
@@ -272,6 +273,30 @@ TEST(CalibrateMag, CommandLine)
 	for (int i = 0; i < 9; ++i)
 		EXPECT_NEAR(S[static_cast<std::size_t>(i)], softTrue()(i / 3, i % 3), 0.003) << i;
 	EXPECT_EQ(cfg.keys(), (std::vector<std::string>{"hard_iron_ut", "soft_iron"}));
+	// The magnetometer plugin takes the file as it is, and its heading from
+	// a distorted reading at a known attitude comes out right.
+	plugins::MagnetometerModel calibrated(cfg, "MAG");
+	plugins::MagnetometerModel uncalibrated(config::Node::fromText("{}"), "MAG");
+	NavState truth;
+	truth.R_nb = (Eigen::AngleAxisd(123 * kDeg, Eigen::Vector3d::UnitZ()) *
+	              Eigen::AngleAxisd(10 * kDeg, Eigen::Vector3d::UnitY()) *
+	              Eigen::AngleAxisd(-5 * kDeg, Eigen::Vector3d::UnitX()))
+	                 .toRotationMatrix();
+	FilterContext ctx;
+	ctx.mean = &truth;
+	auto obs = mrpt::obs::CObservationIMU::Create();
+	const Eigen::Vector3d raw_ut = kHard + softTrue() * (truth.R_nb.transpose() * kFieldN);
+	obs->set(mrpt::obs::IMU_MAG_X, raw_ut.x() / 100);
+	obs->set(mrpt::obs::IMU_MAG_Y, raw_ut.y() / 100);
+	obs->set(mrpt::obs::IMU_MAG_Z, raw_ut.z() / 100);
+	std::vector<Measurement> m;
+	std::string why;
+	ASSERT_EQ(calibrated.prepare(*obs, ctx, m, why), PrepareStatus::Ok) << why;
+	EXPECT_NEAR(m[0].z[0], 123 * kDeg, 0.2 * kDeg);  // measured 0.098° (fit error over F cos I)
+	const PrepareStatus raw_status = uncalibrated.prepare(*obs, ctx, m, why);
+	EXPECT_TRUE(raw_status == PrepareStatus::Skip ||
+	            (!m.empty() && std::abs(m[0].z[0] - 123 * kDeg) > 5 * kDeg))
+	    << why;
 
 	// The level turn only: refused with the reason, exit 3, nothing written.
 	const std::string yaml2 = dir.file("mag2.yaml");
