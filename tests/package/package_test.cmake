@@ -49,6 +49,9 @@ foreach(f
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_dvl.so ${LIBDIR}/auvnav/plugins/dvl.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_pressure.so ${LIBDIR}/auvnav/plugins/pressure.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_gps.so ${LIBDIR}/auvnav/plugins/gps.yaml
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_magnetometer.so ${LIBDIR}/auvnav/plugins/magnetometer.yaml
+    ${LIBDIR}/auvnav/plugins/libauvnav_plugin_ahrs.so ${LIBDIR}/auvnav/plugins/ahrs.yaml
+    bin/auvnav-calibrate-mag
     include/auvnav/navigator.h include/auvnav/plugin_api.h include/auvnav/plugin_host.h
     include/auvnav/measurement_model.h include/auvnav/obs/CObservationDVL.h include/auvnav/obs/register.h
     include/auvnav/io/rawlog.h include/auvnav/testing/model_checks.h
@@ -66,7 +69,7 @@ file(GLOB installed_plugins RELATIVE "${plugin_dir}" "${plugin_dir}/*.so")
 list(SORT installed_plugins)
 message(STATUS "installed plugins: ${installed_plugins}")
 foreach(p ${installed_plugins})
-  if(NOT p MATCHES "^libauvnav_plugin_(inertial|dvl|pressure|gps|adcp|model_aiding|sonar_heading)\\.so$")
+  if(NOT p MATCHES "^libauvnav_plugin_(inertial|dvl|pressure|gps|adcp|model_aiding|sonar_heading|magnetometer|ahrs)\\.so$")
     message(FATAL_ERROR "unexpected file in the installed plugin directory (test plugin?): ${p}")
   endif()
 endforeach()

@@ -1,0 +1,112 @@
+#pragma once
+/** @file magnetometer.h
+ *  Raw 3-axis magnetometer update (plugin "magnetometer").
+ *
+ *  Observation (fixed contract; auvnav-sim and auvnav-import write it):
+ *  mrpt::obs::CObservationIMU with IMU_MAG_X/Y/Z present, in GAUSS
+ *  (1 G = 100 µT), in the sensor axes; sensorPose is the sensor's mounting in
+ *  the body frame (FRD; its rotation is R_bs). Navigation frame NED.
+ *
+ *  Field model (µT), m_n from the config (total intensity F, declination D,
+ *  inclination I, positive down):
+ *      m_n = F [cos I cos D, cos I sin D, sin I]
+ *      m_s = b_hard + S_soft · R_bsᵀ · R_nbᵀ · m_n          (raw reading)
+ *  and the calibrated reading m_c = S_soft⁻¹ (m_s − b_hard), |m_c| ≈ F.
+ *
+ *  Modes:
+ *   - `vector`: z = the raw reading m_s [µT] (3), h as above, R = σ² I₃.
+ *   - `heading` (default): a tilt-compensated heading, 1-D. The calibrated
+ *     field in body axes m_b = R_bs m_c is levelled with the filter's mean
+ *     attitude R̂ (the state's tilt); its azimuth α (in NED) says the
+ *     vehicle's heading is off by D − α. z = ψ̂ + D − α, h(x) = the heading
+ *     of x measured as the azimuth of a body direction R̂ places horizontally
+ *     (level_heading.h: no roll/pitch information), residual wrapped.
+ *     R = heading_sigma².
+ *
+ *  Disturbance gate (in prepare, before the filter's χ² gate): the reading is
+ *  skipped, with a reason and counted (disturbedCount()), when the calibrated
+ *  norm |m_c| is off F by more than `norm_tolerance`·F, or when the dip angle
+ *  of R̂ R_bs m_c is off I by more than `dip_tolerance_deg` (dip needs the
+ *  mean; without one only the norm is checked). Thruster currents, a nearby
+ *  hull or a battery change the norm and dip long before they are caught by
+ *  a heading innovation.
+ *
+ *  Invalid (counted by the host): wrong class, a missing IMU_MAG_* field,
+ *  a non-finite value. Skipped: disturbed, rate-limited (`min_interval_s`),
+ *  heading mode without a filter mean.
+ *
+ *  h reads only the attitude: uses() = kAttitude. h is pure: R_bs (vector
+ *  mode) or u_b (heading mode) travel in Measurement::aux.
+ */
+#include <auvnav/config.h>
+#include <auvnav/measurement_model.h>
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+
+namespace auvnav::plugins
+{
+/** Earth field in NED [µT] from total intensity [µT], declination and
+ *  inclination [rad] (positive east / down). */
+Eigen::Vector3d earthField_n(double total_ut, double declination_rad, double inclination_rad);
+
+/** The raw reading [µT, sensor axes] the model predicts. */
+Eigen::Vector3d predictedReading_s(const Eigen::Matrix3d& R_nb, const Eigen::Matrix3d& R_bs,
+                                   const Eigen::Vector3d& m_n_ut, const Eigen::Vector3d& b_hard_ut,
+                                   const Eigen::Matrix3d& S_soft);
+
+class MagnetometerModel final : public SafeMeasurementModel
+{
+ public:
+	enum class Mode
+	{
+		Vector,
+		Heading
+	};
+
+	MagnetometerModel(const config::Node& cfg, const std::string& label);
+
+	uint32_t uses() const noexcept override { return kAttitude; }
+	double gateProbability() const noexcept override { return gate_probability_; }
+	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+
+	Mode mode() const { return mode_; }
+	const Eigen::Vector3d& field_n_ut() const { return m_n_ut_; }
+	const Eigen::Vector3d& hardIron_ut() const { return b_hard_ut_; }
+	const Eigen::Matrix3d& softIron() const { return S_soft_; }
+	double headingSigma_rad() const { return heading_sigma_rad_; }
+	double noise_ut() const { return noise_ut_; }
+	//! Readings skipped by the disturbance gate (norm or dip) so far.
+	std::size_t disturbedCount() const { return disturbed_; }
+	//! Readings skipped by min_interval_s so far.
+	std::size_t rateLimitedCount() const { return rate_limited_; }
+
+ protected:
+	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                        std::vector<Measurement>& out, std::string& why) override;
+	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+
+ private:
+	std::string label_;
+	Mode mode_ = Mode::Heading;
+	double field_ut_ = 0;
+	double declination_rad_ = 0;
+	double inclination_rad_ = 0;
+	Eigen::Vector3d m_n_ut_ = Eigen::Vector3d::Zero();
+	Eigen::Vector3d b_hard_ut_ = Eigen::Vector3d::Zero();
+	Eigen::Matrix3d S_soft_ = Eigen::Matrix3d::Identity();
+	Eigen::Matrix3d S_soft_inv_ = Eigen::Matrix3d::Identity();
+	double noise_ut_ = 2.0;
+	double heading_sigma_rad_ = 0;
+	double norm_tolerance_ = 0.1;
+	double dip_tolerance_rad_ = 0;
+	double gate_probability_ = 0.999;
+	double min_interval_s_ = 0;
+	double last_used_s_ = -1e300;
+	std::size_t disturbed_ = 0;
+	std::size_t rate_limited_ = 0;
+};
+}  // namespace auvnav::plugins
