@@ -892,7 +892,7 @@ TEST(ImportAdversarialOrder, DISABLED_IsolatedFarFutureStampIsRejectedNotWritten
 	EXPECT_LT(fromMrptTime(obs.back()->timestamp), 2000000000000LL);
 }
 
-TEST(ImportAdversarialTime, DISABLED_ToMrptTimeAtTheInt64LimitDoesNotOverflow)
+TEST(ImportAdversarialTime, ToMrptTimeAtTheInt64LimitDoesNotOverflow)
 {
 	// toMrptTime rounds with floorDiv(t + 50, 100): t + 50 overflows for the
 	// largest stamps parseTime accepts ("9223372036854775807" in ns).
