@@ -311,7 +311,7 @@ TEST(ImportAdversarialCsv, RejectionReasonsDoNotGrowWithEveryDistinctBadValue)
 
 // ================================================================ specs
 
-TEST(ImportAdversarialSpec, DISABLED_CheckValidatesUnitsAndClassKeys)
+TEST(ImportAdversarialSpec, CheckValidatesUnitsAndClassKeys)
 {
 	// validateSpec (--check) only parsed the common keys: the converters (units,
 	// required frame/sign, ...) were built only when the inputs were opened.
@@ -330,7 +330,7 @@ sensors:
 				HasSubstr("frame"));
 }
 
-TEST(ImportAdversarialSpec, DISABLED_OptionalSensorWithoutInputStillHasItsSpecChecked)
+TEST(ImportAdversarialSpec, OptionalSensorWithoutInputStillHasItsSpecChecked)
 {
 	// An optional sensor whose file is absent never built its converter, so a
 	// wrong unit or a missing required key in it passed unnoticed (all sensors
@@ -849,7 +849,7 @@ TEST(ImportAdversarialExport, MagnetometerRoundTripIsBitExact)
 // ================================================================ second round
 // Added after the first fixes landed in the working tree (still open there).
 
-TEST(ImportAdversarialOrder, DISABLED_FarFutureFirstStampDoesNotDiscardTheRestOfItsSensor)
+TEST(ImportAdversarialOrder, FarFutureFirstStampDoesNotDiscardTheRestOfItsSensor)
 {
 	// The jump guard needs a previous stamp: when the *first* row of A is a year
 	// ahead, A's frontier is a year ahead, A is read only after B, and 99 of its
@@ -871,7 +871,7 @@ TEST(ImportAdversarialOrder, DISABLED_FarFutureFirstStampDoesNotDiscardTheRestOf
 	EXPECT_EQ(rep.sensors[1].written, 100u);
 }
 
-TEST(ImportAdversarialOrder, DISABLED_IsolatedFarFutureStampIsRejectedNotWrittenAYearLater)
+TEST(ImportAdversarialOrder, IsolatedFarFutureStampIsRejectedNotWrittenAYearLater)
 {
 	// One row a year ahead between ordinary neighbours is a bad stamp, not data a
 	// year later: written, it ends the rawlog with a one-year step (auvnav-run
