@@ -1,6 +1,5 @@
-// OPEN: the tests named DISABLED_* below are regressions for review findings
-// not fixed yet (gtest reports them as disabled; run them with
-// --gtest_also_run_disabled_tests). Each fails today and must pass once fixed.
+// Review findings still open are DISABLED_* tests (none at present); each
+// must fail on the code it describes and pass once fixed.
 // Regression tests from the review of the importer/exporter: adversarial CSV
 // data, bad specs, time stamps at the edges, the reorder buffer, and the
 // export → import round trip. Each test states the behaviour that should
