@@ -891,6 +891,34 @@ TEST(ImportAdversarialOrder, IsolatedFarFutureStampIsRejectedNotWrittenAYearLate
 	EXPECT_LT(fromMrptTime(obs.back()->timestamp), 2000000000000LL);
 }
 
+TEST(ImportAdversarialOrder, SlowSensorAndRealClockJumpsAreNotTakenForIsolatedStamps)
+{
+	// The isolated-stamp rule must not touch a sensor slower than clock_jump_s
+	// (a GPS fix a minute: every step is "a jump", but no neighbour pair agrees
+	// without the record between them), nor a clock that really jumped (the
+	// records after the jump follow it), in either direction.
+	const auto dir = scratch("not_isolated");
+	std::string gps = "t,p\n", jump = "t,p\n";
+	for (int i = 0; i < 10; ++i) gps += std::to_string(1000 + 60 * i) + "," + std::to_string(i) + "\n";
+	for (int i = 0; i < 10; ++i) jump += std::to_string(i < 5 ? 1000 + i : 5000 + i) + "," + std::to_string(i) + "\n";
+	write(dir / "slow.csv", gps);
+	write(dir / "jump.csv", jump);
+	ImportReport rep;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("S", "slow.csv") + pressureSensor("J", "jump.csv"), rep),
+			  "");
+	EXPECT_EQ(rep.sensors[0].written, 10u);
+	EXPECT_EQ(rep.sensors[0].rejected, 0u);
+	EXPECT_EQ(rep.sensors[1].written, 10u);
+	EXPECT_EQ(rep.sensors[1].rejected, 0u);
+	EXPECT_EQ(rep.sensors[1].clock_jumps, 1u);
+	// A far-past first stamp followed by ordinary ones is not judged (it goes
+	// forward, as a slow sensor's does): written, not rejected.
+	write(dir / "p.csv", "t,p\n10,1\n1000,1\n1001,1\n1002,1\n");
+	ImportReport first;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("P", "p.csv"), first), "");
+	EXPECT_EQ(first.sensors[0].written, 4u);
+}
+
 TEST(ImportAdversarialTime, ToMrptTimeAtTheInt64LimitDoesNotOverflow)
 {
 	// toMrptTime rounds with floorDiv(t + 50, 100): t + 50 overflows for the
