@@ -345,6 +345,45 @@ TEST(ImportAdversarialSpec, OptionalSensorWithoutInputStillHasItsSpecChecked)
 				HasSubstr("furlong"));
 }
 
+TEST(ImportAdversarialSpec, AxesThatCannotBeAppliedAreAnError)
+{
+	// `axes` rotated an IMU's rates but not its orientation quaternion, and a
+	// DVL's instrument velocities but not its beam azimuths: both were left in
+	// the source frame without a word.
+	const auto dir = scratch("axes_not_applied");
+	EXPECT_THAT(validateError(dir, R"(
+sensors:
+  - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s}, axes: [x, -y, -z],
+     angular_velocity: {fields: [gx, gy, gz], unit: rad/s}, orientation: {fields: [qw, qx, qy, qz]}}
+)"),
+				HasSubstr("sensors[0].axes"));
+	EXPECT_THAT(validateError(dir, R"(
+sensors:
+  - {label: DVL, class: dvl, source: {csv: dvl.csv}, time: {field: t, format: s}, axes: [x, -y, -z],
+     frame: beam, sign: vehicle_over_bottom, beam_inclination: {value: 30, unit: deg},
+     beams: {count: 4, range: {field: 'r{i}', unit: m}, velocity: {field: 'v{i}', unit: m/s}, azimuth: {field: 'a{i}', unit: rad}}}
+)"),
+				HasSubstr("beam azimuths"));
+	// A per-record frame: the beam rows are rejected (counted with lenient), the others converted.
+	write(dir / "dvl.csv", "t,f,vx,vy,vz\n1,instrument,0.5,0.25,0\n2,beam,0.5,0.25,0\n");
+	ImportReport rep;
+	const char* spec = R"(
+sensors:
+  - {label: DVL, class: dvl, source: {csv: dvl.csv}, time: {field: t, format: s}, axes: [x, -y, -z],
+     frame: {field: f}, sign: vehicle_over_bottom, velocity: {fields: [vx, vy, vz], unit: m/s}}
+)";
+	EXPECT_THAT(importError(dir, spec, rep), HasSubstr("dvl.csv:3"));
+	ImportReport lenient;
+	ASSERT_EQ(importError(dir, spec, lenient, true), "");
+	EXPECT_EQ(lenient.sensors[0].written, 1u);
+	EXPECT_EQ(lenient.sensors[0].rejected, 1u);
+	const auto obs = readAll((dir / "out.rawlog").string());
+	ASSERT_EQ(obs.size(), 1u);
+	const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(obs[0].get());
+	ASSERT_NE(d, nullptr);
+	EXPECT_EQ(d->velocity_s_mps[1], -0.25);	 // axes applied to the instrument-frame row
+}
+
 TEST(ImportAdversarialSpec, HugeClockJumpThresholdDoesNotFlagEveryStep)
 {
 	// clock_jump_s * 1e9 was cast to int64 unchecked: 1e10 s (~"never") is

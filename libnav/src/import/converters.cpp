@@ -229,6 +229,12 @@ class ImuConverter final : public Converter
 		temp_ = parseScalar(q, "temperature", UnitKind::Temperature);
 		if (!gyro_[0].present && !acc_[0].present && !mag_[0].present && !quat_[0].present)
 			s.fail("class", "an imu needs at least one of angular_velocity, linear_acceleration, magnetic_field, orientation");
+		// The quaternion is an attitude of the source frame in the IMU's own world
+		// frame: `axes` (possibly a reflection) cannot be applied to it, and leaving
+		// it unrotated beside rotated rates would be silently inconsistent.
+		if (quat_[0].present && !axes_.isIdentity(1e-12))
+			s.fail("axes", "not applicable to orientation (a quaternion of the source frame): give the orientation "
+						   "in the sensor frame without axes, or import it as a separate sensor");
 	}
 
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
@@ -341,6 +347,8 @@ class DvlConverter final : public Converter
 			auvnav::obs::DvlSign x;
 			return auvnav::obs::parseDvlSign(n, x);
 		});
+		if (frame_.is_constant && frame_.constant == "beam" && !axes_.isIdentity(1e-12))
+			s.fail("axes", "not applied to beam azimuths with frame: beam (give them in the sensor frame, without axes)");
 		velocity_ = parseVector(q, "velocity", UnitKind::Velocity, 3);
 		cov_ = parseVector(q, "velocity_covariance", UnitKind::VelocitySquared, 9);
 		sigma_ = parseScalar(q, "velocity_sigma", UnitKind::Velocity);
@@ -384,6 +392,13 @@ class DvlConverter final : public Converter
 		if (!auvnav::obs::parseDvlFrame(name, o->frame))
 		{
 			why = "frame '" + name + "' unknown";
+			return nullptr;
+		}
+		// Beam azimuths and radial velocities are not rotated by `axes`: a beam-frame
+		// record with axes would be silently in the source frame.
+		if (o->frame == DvlFrame::Beam && !axes_.isIdentity(1e-12))
+		{
+			why = "frame beam: axes are not applied to beam azimuths (give them in the sensor frame, without axes)";
 			return nullptr;
 		}
 		if (!readText(sign_, r, cols_, name, why)) return nullptr;
