@@ -956,6 +956,13 @@ TEST(ImportAdversarialOrder, SlowSensorAndRealClockJumpsAreNotTakenForIsolatedSt
 	ImportReport first;
 	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("P", "p.csv"), first), "");
 	EXPECT_EQ(first.sensors[0].written, 4u);
+	// Stamps stepping back 20 s each: only the first is judged, the rest are
+	// the log's backward stamps (written in time order), not all rejected.
+	write(dir / "back.csv", "t,p\n1100,1\n1080,1\n1060,1\n1040,1\n");
+	ImportReport back;
+	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("P", "back.csv"), back), "");
+	EXPECT_EQ(back.sensors[0].rejected, 1u);
+	EXPECT_EQ(back.sensors[0].written, 3u);
 }
 
 TEST(ImportAdversarialTime, ToMrptTimeAtTheInt64LimitDoesNotOverflow)

@@ -140,7 +140,7 @@ struct SensorRun
 		std::string where;
 	};
 	std::optional<Held> suspect;
-	bool has_placed = false;
+	bool has_placed = false, first_rejected = false;
 	TimeNs placed_prev = 0;	// stamp of the last record placed (valid with has_placed)
 };
 
@@ -541,9 +541,12 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			run.suspect.reset();
 			// The first record is a bad stamp when the next goes back more than
 			// clock_jump_s (a later one, when its neighbours agree without it).
+			// Only the very first record is judged so: a log stepping back more
+			// than clock_jump_s at every record must not lose all but its last.
 			const bool isolated = !run.has_placed
-									  ? far(h.t, s.t) && h.t < s.t
+									  ? !run.first_rejected && far(h.t, s.t) && h.t < s.t
 									  : far(s.t, run.placed_prev) && far(h.t, s.t) && !far(h.t, run.placed_prev);
+			if (isolated && !run.has_placed) run.first_rejected = true;
 			if (isolated)
 			{
 				// Like "behind the reorder window": the log's fact, counted, not fatal.
