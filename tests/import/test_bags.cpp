@@ -3,7 +3,10 @@
 // DVL type proves that the readers use the definitions stored in the bags.
 // Also the definition parser and decoder on their own, and how missing,
 // foreign, truncated and inconsistent files are reported.
+#include <auvnav/import/importer.h>
 #include <auvnav/import/record.h>
+#include <auvnav/import/time_format.h>
+#include <auvnav/io/rawlog.h>
 #include <gtest/gtest.h>
 
 #include "bag_writers.h"
@@ -830,6 +833,41 @@ TEST(Ros1Bag, CustomTypeUsesTheStoredDefinition)
 	EXPECT_EQ(num(r[0], "header.seq"), 11.0);
 	EXPECT_EQ(r[0].indexOf("STATUS_OK"), -1);
 	EXPECT_EQ(r[0].indexOf("NOTE"), -1);
+}
+
+TEST(Ros1Bag, NumericTimeFieldNeedsAFormat)
+{
+	// A bag's number has no unit: taking a float64 (here fluid_pressure, 101325
+	// + 1000 i) as seconds without time.format would be a silent 1e3..1e9 error.
+	const fs::path dir = fs::path(scratch("numeric_time_dir"));
+	fs::create_directories(dir);
+	auto import = [&](const std::string& time) {
+		std::ofstream(dir / "spec.yaml") << "sensors:\n  - {label: P, class: pressure, source: {ros1: '" + ros1Bag() +
+												"', topic: /depth}, time: " + time + ", pressure_reference: absolute}\n";
+		ImportOptions opt;
+		opt.spec_path = (dir / "spec.yaml").string();
+		opt.inputs = {ros1Bag()};
+		opt.out_rawlog = (dir / "out.rawlog").string();
+		opt.lenient = true;	 // a spec error stops the import even so
+		ImportReport rep;
+		try
+		{
+			runImport(opt, rep);
+		}
+		catch (const ImportError& e)
+		{
+			return std::string(e.what());
+		}
+		return std::string();
+	};
+	const std::string err = import("{field: fluid_pressure}");
+	EXPECT_NE(err.find("time.format"), std::string::npos) << err;
+	EXPECT_NE(err.find("fluid_pressure"), std::string::npos) << err;
+	ASSERT_EQ(import("{field: fluid_pressure, format: ms}"), "");
+	auvnav::io::RawlogReader r((dir / "out.rawlog").string());
+	const auto o = r.next();
+	ASSERT_TRUE(o);
+	EXPECT_EQ(fromMrptTime(o->timestamp), 101325000000LL);	// 101325 ms
 }
 
 TEST(Ros1Bag, CompressedChunks)

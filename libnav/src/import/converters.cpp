@@ -22,6 +22,7 @@ namespace
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kGaussPerTesla = 1e4;	// MRPT's CObservationIMU keeps IMU_MAG_* in gauss
 constexpr int kMaxArray = 256;
+constexpr double kMaxImageSide = 1 << 20;	// pixels; far beyond any camera or sonar image
 
 const std::vector<std::string> kCommonKeys = {"label", "class", "source", "time", "axes", "mounting", "optional"};
 
@@ -203,6 +204,14 @@ struct CountSpec
 		out = static_cast<int>(v);
 		return true;
 	}
+	/** A record whose count field names more elements than it has columns is a
+	 *  bad record (the count is data), not a spec error: `why` must then not
+	 *  start with "no field", which makes the importer stop even with lenient. */
+	void explainMissing(int n, std::string& why) const
+	{
+		if (!is_constant && why.rfind("no field", 0) == 0)
+			why = "count field '" + field.field + "' says " + std::to_string(n) + " elements, but there is " + why;
+	}
 };
 
 // ---------------------------------------------------------------- IMU
@@ -220,6 +229,12 @@ class ImuConverter final : public Converter
 		temp_ = parseScalar(q, "temperature", UnitKind::Temperature);
 		if (!gyro_[0].present && !acc_[0].present && !mag_[0].present && !quat_[0].present)
 			s.fail("class", "an imu needs at least one of angular_velocity, linear_acceleration, magnetic_field, orientation");
+		// The quaternion is an attitude of the source frame in the IMU's own world
+		// frame: `axes` (possibly a reflection) cannot be applied to it, and leaving
+		// it unrotated beside rotated rates would be silently inconsistent.
+		if (quat_[0].present && !axes_.isIdentity(1e-12))
+			s.fail("axes", "not applicable to orientation (a quaternion of the source frame): give the orientation "
+						   "in the sensor frame without axes, or import it as a separate sensor");
 	}
 
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
@@ -332,6 +347,8 @@ class DvlConverter final : public Converter
 			auvnav::obs::DvlSign x;
 			return auvnav::obs::parseDvlSign(n, x);
 		});
+		if (frame_.is_constant && frame_.constant == "beam" && !axes_.isIdentity(1e-12))
+			s.fail("axes", "not applied to beam azimuths with frame: beam (give them in the sensor frame, without axes)");
 		velocity_ = parseVector(q, "velocity", UnitKind::Velocity, 3);
 		cov_ = parseVector(q, "velocity_covariance", UnitKind::VelocitySquared, 9);
 		sigma_ = parseScalar(q, "velocity_sigma", UnitKind::Velocity);
@@ -355,6 +372,11 @@ class DvlConverter final : public Converter
 		}
 		if (!velocity_[0].present && !(has_beams_ && beam_velocity_.present))
 			s.fail("velocity", "a dvl needs velocity (3 fields) or beams.velocity");
+		// altitude from slant ranges is range × cos(inclination): without the
+		// inclination it would be the slant range (15 % high at 30 deg).
+		if (has_beams_ && range_.present && !ranges_vertical_ && !inclination_.present && !altitude_.present)
+			s.fail("beam_inclination", "required with slant beams.range and no altitude (altitude = range x "
+									   "cos(beam_inclination)); or give beams.range_is: vertical");
 		if (ranges_vertical_ && !inclination_.present && !altitude_.present)
 			notes_.push_back("beams.range_is vertical: altitude = mean of the valid vertical ranges");
 	}
@@ -372,6 +394,13 @@ class DvlConverter final : public Converter
 			why = "frame '" + name + "' unknown";
 			return nullptr;
 		}
+		// Beam azimuths and radial velocities are not rotated by `axes`: a beam-frame
+		// record with axes would be silently in the source frame.
+		if (o->frame == DvlFrame::Beam && !axes_.isIdentity(1e-12))
+		{
+			why = "frame beam: axes are not applied to beam azimuths (give them in the sensor frame, without axes)";
+			return nullptr;
+		}
 		if (!readText(sign_, r, cols_, name, why)) return nullptr;
 		if (!auvnav::obs::parseDvlSign(name, o->sign))
 		{
@@ -379,7 +408,8 @@ class DvlConverter final : public Converter
 			return nullptr;
 		}
 		double x = 0;
-		if (readScalar(inclination_, r, cols_, x, why) == Read::Ok) o->beam_inclination_rad = x;
+		inclination_read_ = readScalar(inclination_, r, cols_, x, why) == Read::Ok;
+		if (inclination_read_) o->beam_inclination_rad = x;
 		else if (!why.empty()) return nullptr;
 		if (readScalar(beam_sigma_, r, cols_, x, why) == Read::Ok) o->beam_velocity_sigma_mps = x;
 		else if (!why.empty()) return nullptr;
@@ -439,22 +469,22 @@ class DvlConverter final : public Converter
 			auto& b = o.beams[static_cast<std::size_t>(i)];
 			double range = NAN, valid = 1, vel = NAN, az = 0;
 			const Read rr = readScalar(range_, r, cols_, range, why, i);
-			if (rr == Read::Bad) return false;
+			if (rr == Read::Bad) return beam_count_.explainMissing(n, why), false;
 			if (rr == Read::Missing) range = NAN;
 			const Read rv = readScalar(valid_, r, cols_, valid, why, i);
-			if (rv == Read::Bad) return false;
+			if (rv == Read::Bad) return beam_count_.explainMissing(n, why), false;
 			const Read rb = readScalar(beam_velocity_, r, cols_, vel, why, i);
-			if (rb == Read::Bad) return false;
+			if (rb == Read::Bad) return beam_count_.explainMissing(n, why), false;
 			if (rb == Read::Missing) vel = NAN;
 			const Read rz = readScalar(azimuth_, r, cols_, az, why, i);
-			if (rz == Read::Bad) return false;
+			if (rz == Read::Bad) return beam_count_.explainMissing(n, why), false;
 			// Without a validity field a beam is valid when its range (and, in
 			// beam mode, its velocity) is a finite positive number.
 			bool ok = rv == Read::Ok ? valid != 0 : std::isfinite(range) && range > 0;
 			if (beam_velocity_.present) ok = ok && std::isfinite(vel);
 			b.range_m = std::isfinite(range) ? range : 0;
 			b.valid = ok;
-			b.velocity_mps = std::isfinite(vel) ? vel : 0;
+			b.velocity_mps = vel;	// NaN (no radial velocity) stays NaN: 0 would be a measurement
 			b.azimuth_rad = az;
 		}
 		return true;
@@ -472,11 +502,17 @@ class DvlConverter final : public Converter
 				if (res == Read::Bad) return false;
 				ok += res == Read::Ok;
 			}
-			if (ok == 9 && C.allFinite())
+			if (ok == 9)
 			{
+				// A NaN covariance (beam mode, no 3-D velocity) is kept as read, not made 0.
 				const bool rotate = o.frame == auvnav::obs::DvlFrame::Instrument || o.frame == auvnav::obs::DvlFrame::Vehicle;
-				if (rotate) C = axes_ * C * axes_.transpose();
+				if (rotate && C.allFinite()) C = axes_ * C * axes_.transpose();
 				for (int k = 0; k < 9; ++k) o.velocity_cov[static_cast<std::size_t>(k)] = C(k / 3, k % 3);
+			}
+			else if (ok != 0)
+			{
+				why = "velocity_covariance: only " + std::to_string(ok) + " of 9 components present";
+				return false;
 			}
 			return true;
 		}
@@ -495,6 +531,8 @@ class DvlConverter final : public Converter
 		for (const auto& b : o.beams)
 			if (b.valid && b.range_m > 0)
 			{
+				// Slant ranges without an inclination give no altitude (not the slant range).
+				if (!ranges_vertical_ && !inclination_read_) return std::nan("");
 				sum += ranges_vertical_ ? b.range_m : b.range_m * std::cos(o.beam_inclination_rad);
 				++n;
 			}
@@ -508,6 +546,7 @@ class DvlConverter final : public Converter
 	std::vector<ScalarSpec> velocity_, cov_;
 	ScalarSpec sigma_, lock_, altitude_, inclination_, beam_sigma_;
 	bool has_beams_ = false, ranges_vertical_ = false;
+	bool inclination_read_ = false;	// this record's beam_inclination was read
 	CountSpec beam_count_;
 	ScalarSpec range_, valid_, beam_velocity_, azimuth_;
 	Columns cols_;
@@ -712,12 +751,12 @@ class AdcpConverter final : public Converter
 			auto& cell = o->cells[static_cast<std::size_t>(i)];
 			Eigen::Vector3d v;
 			const Read rv = readVec3(velocity_, r, cols_, v, why, "cell velocity", i);
-			if (rv == Read::Bad) return nullptr;
+			if (rv == Read::Bad) return count_.explainMissing(n, why), nullptr;
 			double corr = 1, valid = 1;
 			const Read rc = readScalar(correlation_, r, cols_, corr, why, i);
-			if (rc == Read::Bad) return nullptr;
+			if (rc == Read::Bad) return count_.explainMissing(n, why), nullptr;
 			const Read rb = readScalar(valid_, r, cols_, valid, why, i);
-			if (rb == Read::Bad) return nullptr;
+			if (rb == Read::Bad) return count_.explainMissing(n, why), nullptr;
 			const bool finite = rv == Read::Ok && v.allFinite();
 			const Eigen::Vector3d v_s = finite ? Eigen::Vector3d(axes_ * v) : Eigen::Vector3d::Zero();
 			for (int k = 0; k < 3; ++k) cell.velocity_s_mps[static_cast<std::size_t>(k)] = v_s[k];
@@ -771,6 +810,7 @@ class ThrustersConverter final : public Converter
 			double& x = o->effort[static_cast<std::size_t>(i)];
 			if (readScalar(field_, r, cols_, x, why, i) != Read::Ok || !std::isfinite(x))
 			{
+				count_.explainMissing(n, why);
 				if (why.empty()) why = "effort " + std::to_string(i) + " missing or not finite";
 				return nullptr;
 			}
@@ -816,9 +856,22 @@ class ImageConverter final : public Converter
 		std::string file;
 		if (!readText(file_, r, cols_, file, why)) return nullptr;
 		const std::string path = (!file.empty() && file[0] == '/') ? file : data_dir_ + "/" + file;
-		if (!o->image.loadFromFile(path, 0))
+		// -1: as stored (colour stays colour; 0 would force grayscale). OpenCV may
+		// throw on a damaged or empty file: that is this record's rejection.
+		bool loaded = false;
+		std::string detail;
+		try
 		{
-			why = "cannot read image '" + path + "'";
+			loaded = o->image.loadFromFile(path, -1);
+		}
+		catch (const std::exception& e)
+		{
+			detail = e.what();
+			detail = ": " + detail.substr(0, std::min(detail.find('\n'), std::size_t{200}));
+		}
+		if (!loaded)
+		{
+			why = "cannot read image '" + path + "'" + detail;
 			return nullptr;
 		}
 		if (has_camera_)
@@ -828,6 +881,14 @@ class ImageConverter final : public Converter
 				if (readScalar(camera_[i], r, cols_, v[i], why) != Read::Ok || !std::isfinite(v[i]))
 				{
 					if (why.empty()) why = "camera parameter missing";
+					return nullptr;
+				}
+			// Casting a negative or huge double to uint32 is undefined behaviour.
+			for (int i = 0; i < 2; ++i)
+				if (!(v[i] >= 0 && v[i] <= kMaxImageSide) || std::floor(v[i]) != v[i])
+				{
+					why = std::string("camera ") + (i == 0 ? "ncols" : "nrows") + " " + std::to_string(v[i]) +
+						  " is not an integer in 0.." + std::to_string(static_cast<long>(kMaxImageSide));
 					return nullptr;
 				}
 			auto& cam = o->cameraParams;
@@ -840,7 +901,8 @@ class ImageConverter final : public Converter
 			cam.cy(v[5]);
 			cam.intrinsicParams(2, 2) = 1.0;
 			cam.dist.fill(0);
-			if (camera_name_.present && !readText(camera_name_, r, cols_, cam.cameraName, why)) return nullptr;
+			// An empty name is a name (MRPT's default is ""): the export writes it as an empty cell.
+			if (camera_name_.present && !readText(camera_name_, r, cols_, cam.cameraName, why, true)) return nullptr;
 		}
 		return o;
 	}

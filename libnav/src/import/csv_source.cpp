@@ -63,11 +63,28 @@ CsvSource::CsvSource(const std::string& path, char delimiter)
 
 bool CsvSource::readLine(std::string& line)
 {
-	if (!std::getline(in_, line)) return false;
+	// Bounded while reading: std::getline would first hold the whole "line" (a
+	// binary without line breaks: its whole size) and only then be checked.
+	line.clear();
+	std::streambuf* sb = in_.rdbuf();
+	bool any = false;
+	for (;;)
+	{
+		const int c = sb->sbumpc();
+		if (c == std::char_traits<char>::eof())
+		{
+			in_.setstate(std::ios::eofbit);
+			if (!any) return false;
+			break;
+		}
+		any = true;
+		if (c == '\n') break;
+		if (line.size() >= kMaxLineBytes)
+			throw ImportError(path_ + ":" + std::to_string(line_no_ + 1) + ": line longer than " +
+							  std::to_string(kMaxLineBytes / (1 << 20)) + " MiB (not a CSV file?)");
+		line.push_back(static_cast<char>(c));
+	}
 	++line_no_;
-	if (line.size() > kMaxLineBytes)
-		throw ImportError(path_ + ":" + std::to_string(line_no_) + ": line longer than " +
-						  std::to_string(kMaxLineBytes / (1 << 20)) + " MiB (not a CSV file?)");
 	if (!line.empty() && line.back() == '\r') line.pop_back();
 	return true;
 }

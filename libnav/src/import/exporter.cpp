@@ -11,8 +11,11 @@
 #include <mrpt/obs/CObservationImage.h>
 #include <mrpt/system/filesystem.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -51,6 +54,11 @@ std::string classOf(const mrpt::obs::CObservation& o)
 	return "";
 }
 
+std::string thrusterUnit(const auvnav::obs::CObservationThrusters& t)
+{
+	return t.unit == auvnav::obs::EffortUnit::Speed_rpm ? "rpm" : "N";
+}
+
 const char* kPoseColumns = "pose_x_m,pose_y_m,pose_z_m,pose_qw,pose_qx,pose_qy,pose_qz";
 
 std::string poseCells(const mrpt::poses::CPose3D& p)
@@ -64,9 +72,9 @@ std::string poseCells(const mrpt::poses::CPose3D& p)
 /** One label's CSV file and what its layout needs to know from pass 1. */
 struct LabelOut
 {
-	std::string cls, file_name;
+	std::string cls, file_name, stem;	// stem: file name without .csv (unique per label)
 	std::size_t max_array = 0;	// beams, cells or thrusters
-	std::string thruster_unit = "N";
+	std::string thruster_unit;	// of the label's first row: the spec has one unit per label
 	std::unique_ptr<std::ofstream> out;
 	std::size_t rows = 0;
 };
@@ -189,6 +197,52 @@ std::string csvQuoted(const std::string& s)
 	return q + "\"";
 }
 
+/** `s` as a YAML scalar, single-quoted unless a plain identifier: a label such as `[P1]`, `*P2` or `P3:x`
+ *  unquoted would be a list, an alias or a mapping. */
+std::string yamlQuoted(const std::string& s)
+{
+	// Plain identifiers stay plain (config/import/auvnav_export.yaml is this text).
+	bool plain = !s.empty() && (std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_');
+	for (char c : s)
+		plain = plain && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' || c == '/');
+	std::string lower;
+	for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+	for (const char* word : {"true", "false", "yes", "no", "on", "off", "y", "n", "null", "nan", "inf"})
+		plain = plain && lower != word;
+	if (plain) return s;
+	std::string q = "'";
+	for (char c : s) q += c == '\'' ? std::string("''") : std::string(1, c);
+	return q + "'";
+}
+
+/** The IMU data MRPT can hold that the CSV layout has no column for. */
+std::vector<std::string> imuFieldsWithoutColumn(const mrpt::obs::CObservationIMU& o)
+{
+	using namespace mrpt::obs;
+	static const std::pair<TIMUDataIndex, const char*> extra[] = {
+		{IMU_X_VEL, "IMU_X_VEL"},
+		{IMU_Y_VEL, "IMU_Y_VEL"},
+		{IMU_Z_VEL, "IMU_Z_VEL"},
+		{IMU_YAW, "IMU_YAW"},
+		{IMU_PITCH, "IMU_PITCH"},
+		{IMU_ROLL, "IMU_ROLL"},
+		{IMU_X, "IMU_X"},
+		{IMU_Y, "IMU_Y"},
+		{IMU_Z, "IMU_Z"},
+		{IMU_PRESSURE, "IMU_PRESSURE"},
+		{IMU_ALTITUDE, "IMU_ALTITUDE"},
+		{IMU_YAW_VEL_GLOBAL, "IMU_YAW_VEL_GLOBAL"},
+		{IMU_PITCH_VEL_GLOBAL, "IMU_PITCH_VEL_GLOBAL"},
+		{IMU_ROLL_VEL_GLOBAL, "IMU_ROLL_VEL_GLOBAL"},
+		{IMU_X_ACC_GLOBAL, "IMU_X_ACC_GLOBAL"},
+		{IMU_Y_ACC_GLOBAL, "IMU_Y_ACC_GLOBAL"},
+		{IMU_Z_ACC_GLOBAL, "IMU_Z_ACC_GLOBAL"}};
+	std::vector<std::string> out;
+	for (const auto& [i, name] : extra)
+		if (o.has(i)) out.emplace_back(name);
+	return out;
+}
+
 // ---------------------------------------------------------------- spec text
 
 std::string poseSpec()
@@ -197,12 +251,11 @@ std::string poseSpec()
 		   "row: lever arm [m], unit quaternion (body FRD)\n";
 }
 
-std::string sensorSpec(const std::string& label, const std::string& cls, const std::string& thruster_unit,
-					   bool optional)
+std::string sensorSpec(const std::string& label, const std::string& cls, const std::string& file,
+					   const std::string& thruster_unit, bool optional)
 {
-	const std::string file = fileSafe(label) + ".csv";
 	std::ostringstream s;
-	s << "  - label: " << label << "   # sensorLabel in the rawlog\n    class: " << cls
+	s << "  - label: " << yamlQuoted(label) << "   # sensorLabel in the rawlog\n    class: " << cls
 	  << "   # observation class (docs/import.md)\n";
 	if (optional) s << "    optional: true   # skipped when the export has no " << file << "\n";
 	s << "    source: {csv: " << file << "}   # looked up in the INPUT folder\n"
@@ -281,8 +334,11 @@ std::vector<std::pair<std::string, std::string>> simulatorLabels()
 			{"SONAR", "image"},			{"PRESSURE", "pressure"}, {"GPS", "gps"}};
 }
 
-std::string exportSpecText(const std::vector<std::pair<std::string, std::string>>& labels_and_classes,
-						   const std::map<std::string, std::string>& thruster_units, bool optional_sensors)
+namespace
+{
+std::string specText(const std::vector<std::pair<std::string, std::string>>& labels_and_classes,
+					 const std::map<std::string, std::string>& files,
+					 const std::map<std::string, std::string>& thruster_units, bool optional_sensors)
 {
 	std::ostringstream s;
 	s << "# auvnav-import spec for the CSV layout auvnav-export writes (docs/import.md).\n"
@@ -294,9 +350,18 @@ std::string exportSpecText(const std::vector<std::pair<std::string, std::string>
 	for (const auto& [label, cls] : labels_and_classes)
 	{
 		const auto u = thruster_units.find(label);
-		s << sensorSpec(label, cls, u == thruster_units.end() ? "N" : u->second, optional_sensors);
+		const auto f = files.find(label);
+		s << sensorSpec(label, cls, f == files.end() ? fileSafe(label) + ".csv" : f->second,
+						u == thruster_units.end() ? "N" : u->second, optional_sensors);
 	}
 	return s.str();
+}
+}  // namespace
+
+std::string exportSpecText(const std::vector<std::pair<std::string, std::string>>& labels_and_classes,
+						   const std::map<std::string, std::string>& thruster_units, bool optional_sensors)
+{
+	return specText(labels_and_classes, {}, thruster_units, optional_sensors);
 }
 
 void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportReport& report)
@@ -310,9 +375,10 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 		while (auto o = in.next())
 		{
 			const std::string cls = classOf(*o);
-			if (o->timestamp == INVALID_TIMESTAMP)
+			if (!fromMrptTimeChecked(o->timestamp))
 			{
-				report.skipped_by_reason["observation without a valid timestamp (" + o->sensorLabel + ")"]++;
+				report.skipped_by_reason["observation without a valid timestamp (invalid, or outside 1678..2262) (" +
+										 o->sensorLabel + ")"]++;
 				continue;
 			}
 			if (cls.empty())
@@ -340,39 +406,70 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 			if (const auto* t = dynamic_cast<const auvnav::obs::CObservationThrusters*>(o.get()))
 			{
 				l.max_array = std::max(l.max_array, t->effort.size());
-				l.thruster_unit = t->unit == auvnav::obs::EffortUnit::Speed_rpm ? "rpm" : "N";
+				if (l.thruster_unit.empty()) l.thruster_unit = thrusterUnit(*t);
 			}
 		}
 	}
 	if (!mrpt::system::directoryExists(out_dir) && !mrpt::system::createDirectory(out_dir))
 		throw ImportError(out_dir + ": cannot create the output folder");
-	std::map<std::string, std::string> units;
+	std::map<std::string, std::string> units, files;
 	std::vector<std::pair<std::string, std::string>> spec_labels;
+	std::set<std::string> stems_used;	// lower case: "A B" and "A_B" (or "a_b" on a case-blind disk) share no file
 	for (const auto& label : order)
 	{
 		LabelOut& l = labels[label];
-		l.file_name = fileSafe(label) + ".csv";
+		std::string stem = fileSafe(label);
+		auto lower = [](std::string x) {
+			for (char& c : x) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+			return x;
+		};
+		for (int k = 2; stems_used.count(lower(stem)); ++k)
+			stem = fileSafe(label) + "_" + std::to_string(k);
+		stems_used.insert(lower(stem));
+		l.stem = stem;
+		l.file_name = stem + ".csv";
 		const std::string path = out_dir + "/" + l.file_name;
 		l.out = std::make_unique<std::ofstream>(path);
 		if (!*l.out) throw ImportError(path + ": cannot write");
 		*l.out << header(l.cls, l.max_array) << "\n";
-		if (l.cls == "image" && !mrpt::system::directoryExists(out_dir + "/" + fileSafe(label)))
-			mrpt::system::createDirectory(out_dir + "/" + fileSafe(label));
+		if (l.cls == "image" && !mrpt::system::directoryExists(out_dir + "/" + stem))
+			mrpt::system::createDirectory(out_dir + "/" + stem);
 		spec_labels.emplace_back(label, l.cls);
-		if (l.cls == "thrusters") units[label] = l.thruster_unit;
+		files[label] = l.file_name;
+		if (l.cls == "thrusters") units[label] = l.thruster_unit.empty() ? "N" : l.thruster_unit;
 	}
 	// Pass 2: the rows.
 	io::RawlogReader in(rawlog);
 	while (auto o = in.next())
 	{
 		auto it = labels.find(o->sensorLabel);
-		if (it == labels.end() || classOf(*o) != it->second.cls || o->timestamp == INVALID_TIMESTAMP) continue;
+		const auto t_ns = fromMrptTimeChecked(o->timestamp);
+		if (it == labels.end() || classOf(*o) != it->second.cls || !t_ns) continue;
 		LabelOut& l = it->second;
-		std::string row = formatSeconds7(fromMrptTime(o->timestamp)) + ",";
+		// What the layout has no column for is counted (exporter.h's contract).
+		const auto* th = dynamic_cast<const auvnav::obs::CObservationThrusters*>(o.get());
+		if (th && thrusterUnit(*th) != l.thruster_unit)
+		{
+			// import.yaml has one unit per label: rows in another unit would come back relabelled.
+			report.skipped_by_reason["thrusters " + o->sensorLabel + ": rows in " + thrusterUnit(*th) +
+									 " (the label's first rows are in " + l.thruster_unit + ") not exported"]++;
+			continue;
+		}
+		std::string row = formatSeconds7(*t_ns) + ",";
 		if (const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get()))
+		{
 			row += imuRow(*imu);
+			for (const auto& f : imuFieldsWithoutColumn(*imu))
+				report.skipped_by_reason["imu " + o->sensorLabel + ": " + f + " has no column, not exported"]++;
+		}
 		else if (const auto* g = dynamic_cast<const mrpt::obs::CObservationGPS*>(o.get()))
+		{
 			row += gpsRow(*g);
+			for (const auto& [type, msg] : g->messages)
+				if (type != mrpt::obs::gnss::NMEA_GGA && msg.get())
+					report.skipped_by_reason["gps " + o->sensorLabel + ": message " + msg->getMessageTypeAsString() +
+											 " not exported (only GGA)"]++;
+		}
 		else if (const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(o.get()))
 			row += exact(p->pressure_pa) + "," + exact(p->temperature_c) + "," + poseCells(p->sensorPose);
 		else if (const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(o.get()))
@@ -385,13 +482,15 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 		{
 			char name[32];
 			std::snprintf(name, sizeof name, "%06zu.png", l.rows);
-			const std::string rel = fileSafe(o->sensorLabel) + "/" + name;
+			const std::string rel = l.stem + "/" + name;
 			if (!im->image.saveToFile(out_dir + "/" + rel))
 				throw ImportError(out_dir + "/" + rel + ": cannot write the image");
 			const auto& c = im->cameraParams;
 			row += csvQuoted(rel) + "," + std::to_string(c.ncols) + "," + std::to_string(c.nrows) + "," +
 				   exact(c.fx()) + "," + exact(c.fy()) + "," + exact(c.cx()) + "," + exact(c.cy()) + "," +
 				   csvQuoted(c.cameraName) + "," + poseCells(im->cameraPose);
+			if (std::any_of(c.dist.begin(), c.dist.end(), [](double k) { return k != 0; }))
+				report.skipped_by_reason["image " + o->sensorLabel + ": camera distortion (dist) has no column, not exported"]++;
 		}
 		*l.out << row << "\n";
 		l.rows++;
@@ -405,7 +504,7 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 	}
 	report.spec_file = out_dir + "/import.yaml";
 	std::ofstream spec(report.spec_file);
-	spec << exportSpecText(spec_labels, units);
+	spec << specText(spec_labels, files, units, false);
 	if (!spec) throw ImportError(report.spec_file + ": cannot write");
 }
 

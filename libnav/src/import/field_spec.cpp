@@ -207,7 +207,7 @@ TextSpec parseText(const config::Node& n, const std::string& key)
 	return t;
 }
 
-bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why)
+bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why, bool empty_ok)
 {
 	if (t.is_constant)
 	{
@@ -230,6 +230,11 @@ bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& ou
 		const double x = v.number;
 		raw = (std::floor(x) == x && std::abs(x) < 1e15) ? std::to_string(static_cast<long long>(x))
 														  : std::to_string(x);
+	}
+	else if (empty_ok && t.map.empty())
+	{
+		out.clear();
+		return true;
 	}
 	else
 	{

@@ -74,7 +74,9 @@ struct TextSpec
 	std::string where;
 };
 TextSpec parseText(const config::Node& n, const std::string& key);
-/** The text in `r` (mapped), or the constant; false and `why` if missing or unmapped. */
-bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why);
+/** The text in `r` (mapped), or the constant; false and `why` if missing or
+ *  unmapped. `empty_ok`: an empty cell is the text "" (unmapped). */
+bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why,
+			  bool empty_ok = false);
 
 }  // namespace auvnav::import::detail

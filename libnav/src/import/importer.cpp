@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fnmatch.h>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <sstream>
 
@@ -127,6 +128,20 @@ struct SensorRun
 	TimeNs previous = kNoTime;	// stamp of the previous accepted record
 	std::vector<std::pair<TimeNs, TimeNs>> steps;	// (start, step) of positive steps
 	Record record;
+
+	// A record more than clock_jump_s from the last one placed (or the first
+	// record) waits for the next record of its sensor, which says whether it
+	// was a clock jump (the next one follows it) or one bad stamp (the next one
+	// is back where the sensor's clock was).
+	struct Held
+	{
+		TimeNs t;
+		mrpt::obs::CObservation::Ptr obs;
+		std::string where;
+	};
+	std::optional<Held> suspect;
+	bool has_placed = false, first_rejected = false;
+	TimeNs placed_prev = 0;	// stamp of the last record placed (valid with has_placed)
 };
 
 struct Spec
@@ -223,6 +238,15 @@ Spec parseSpec(const config::Node& root)
 	return spec;
 }
 
+/** Builds the converter of a sensor from its spec alone (units, required
+ *  keys, ...), to check it without its input; a bag topic relying on a preset
+ *  needs the topic's message type, so it is checked only once opened. */
+void checkConverter(const SensorRun& run)
+{
+	if (run.source_kind != "csv" && !hasQuantityKeys(run.node)) return;
+	(void)detail::makeConverter(run.cls, run.node, run.node, run.label, ".");
+}
+
 /** Opens the source and builds the converter; false if an optional sensor has no input. */
 bool openSensor(SensorRun& run, const std::vector<std::string>& inputs)
 {
@@ -233,7 +257,12 @@ bool openSensor(SensorRun& run, const std::vector<std::string>& inputs)
 	}
 	catch (const ImportError&)
 	{
-		if (run.optional) return false;
+		// No input is fine for an optional sensor, a wrong spec is not.
+		if (run.optional)
+		{
+			checkConverter(run);
+			return false;
+		}
 		throw;
 	}
 	if (run.source_kind == "csv")
@@ -298,6 +327,13 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 		}
 		case Value::Kind::Number:
 		{
+			// A bag's numeric time field has no unit of its own: s assumed for a
+			// field in ms or ns would be a silent factor 1e3..1e9.
+			if (!run.time.format_given)
+			{
+				why = "spec: time field '" + run.time.field + "' is a number: give time.format (s, ms, us or ns)";
+				return false;
+			}
 			const double scale = run.time.format == TimeFormat::Seconds		  ? 1e9
 								 : run.time.format == TimeFormat::Milliseconds ? 1e6
 								 : run.time.format == TimeFormat::Microseconds ? 1e3
@@ -374,8 +410,9 @@ void validateSpec(const std::string& spec_path)
 {
 	try
 	{
+		// --check: the converters too (units, frame/sign, ...), not only the common keys.
 		const Spec spec = parseSpec(config::Node::load(spec_path));
-		(void)spec;
+		for (const auto& run : spec.sensors) checkConverter(run);
 	}
 	catch (const config::ConfigError& e)
 	{
@@ -460,6 +497,74 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 		rep.first_rejected_where.emplace(key, where);
 	};
 
+	// Puts an accepted record in the reorder buffer (or counts it behind the window).
+	auto place = [&](SensorRun& run, std::size_t idx, SensorRun::Held h) {
+		SensorReport& rep = report.sensors[run.report_index];
+		const TimeNs t = h.t;
+		if (written_upto != kNoTime && t < written_upto)
+		{
+			// Not fatal in strict mode either: a stamp that went back
+			// is the log's fact, reported, not a conversion error.
+			const std::string reason = "behind the reorder window (older than data already written)";
+			rep.rejected++;
+			rep.rejected_by_reason[reason]++;
+			rep.first_rejected_where.emplace(reason, h.where);
+		}
+		else
+		{
+			if (run.newest != kNoTime && t < run.newest) rep.reordered++;
+			heap.push({t, seq++, idx, std::move(h.obs)});
+			if (!rep.has_span)
+			{
+				rep.has_span = true;
+				rep.first_ns = rep.last_ns = t;
+			}
+			rep.first_ns = std::min(rep.first_ns, t);
+			rep.last_ns = std::max(rep.last_ns, t);
+			run.newest = std::max(run.newest == kNoTime ? t : run.newest, t);
+		}
+		// The read position follows the placed stamps; a jump is placed only once
+		// the next record confirmed it, so one stamp a year ahead cannot hold its
+		// sensor back until every other sensor is read.
+		if (written_upto == kNoTime || t >= written_upto) run.frontier = t;
+		run.has_placed = true;
+		run.placed_prev = t;
+	};
+	auto far = [&](TimeNs a, TimeNs b) {
+		return std::abs(static_cast<long double>(a) - static_cast<long double>(b)) > static_cast<long double>(jump_ns);
+	};
+	// A converted record: placed, or held as a suspect (see SensorRun::Held).
+	auto arrive = [&](SensorRun& run, std::size_t idx, SensorRun::Held h) {
+		if (run.suspect)
+		{
+			SensorRun::Held s = std::move(*run.suspect);
+			run.suspect.reset();
+			// The first record is a bad stamp when the next goes back more than
+			// clock_jump_s (a later one, when its neighbours agree without it).
+			// Only the very first record is judged so: a log stepping back more
+			// than clock_jump_s at every record must not lose all but its last.
+			const bool isolated = !run.has_placed
+									  ? !run.first_rejected && far(h.t, s.t) && h.t < s.t
+									  : far(s.t, run.placed_prev) && far(h.t, s.t) && !far(h.t, run.placed_prev);
+			if (isolated && !run.has_placed) run.first_rejected = true;
+			if (isolated)
+			{
+				// Like "behind the reorder window": the log's fact, counted, not fatal.
+				SensorReport& rep = report.sensors[run.report_index];
+				const std::string reason =
+					"isolated time stamp (more than clock_jump_s from both neighbouring records, which agree)";
+				rep.rejected++;
+				rep.rejected_by_reason[reason]++;
+				rep.first_rejected_where.emplace(reason, s.where);
+			}
+			else
+				place(run, idx, std::move(s));
+		}
+		if (!run.has_placed || far(h.t, run.placed_prev))
+			run.suspect = std::move(h);
+		else
+			place(run, idx, std::move(h));
+	};
 	std::size_t rows_total = 0;
 	try
 	{
@@ -477,6 +582,13 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			if (!run.source->next(run.record))
 			{
 				run.done = true;
+				// The last record has no next one to judge it by: kept.
+				if (run.suspect)
+				{
+					SensorRun::Held h = std::move(*run.suspect);
+					run.suspect.reset();
+					place(run, pick, std::move(h));
+				}
 			}
 			else
 			{
@@ -489,7 +601,7 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 				if (!r.defect.empty())
 					reject(run, r.defect, r.where, false);
 				else if (!stampOf(run, r, time_cols[pick], t, why))
-					reject(run, why, r.where, why.rfind("no field", 0) == 0);
+					reject(run, why, r.where, why.rfind("no field", 0) == 0 || why.rfind("spec: ", 0) == 0);
 				else if (auto obs = run.converter->convert(r, why); !obs)
 					reject(run, why, r.where, why.rfind("no field", 0) == 0);
 				else
@@ -514,37 +626,7 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 							}
 						}
 					}
-					if (written_upto != kNoTime && t < written_upto)
-					{
-						// Not fatal in strict mode either: a stamp that went back
-						// is the log's fact, reported, not a conversion error.
-						SensorReport& rp = report.sensors[run.report_index];
-						const std::string reason = "behind the reorder window (older than data already written)";
-						rp.rejected++;
-						rp.rejected_by_reason[reason]++;
-						rp.first_rejected_where.emplace(reason, r.where);
-					}
-					else
-					{
-						if (run.newest != kNoTime && t < run.newest) rep.reordered++;
-						heap.push({t, seq++, pick, std::move(obs)});
-						if (!rep.has_span)
-						{
-							rep.has_span = true;
-							rep.first_ns = rep.last_ns = t;
-						}
-						rep.first_ns = std::min(rep.first_ns, t);
-						rep.last_ns = std::max(rep.last_ns, t);
-						run.newest = std::max(run.newest == kNoTime ? t : run.newest, t);
-					}
-					// The read position follows the last stamp, but not across a jump:
-					// one stamp a year ahead must not hold its sensor back until every
-					// other sensor is read (its later rows would all be "behind"). A
-					// real clock jump moves it with the next, ordinary, step.
-					const bool ordinary_step = run.previous == kNoTime ||
-											   std::abs(static_cast<long double>(t) - run.previous) <=
-												   static_cast<long double>(jump_ns);
-					if (ordinary_step && (written_upto == kNoTime || t >= written_upto)) run.frontier = t;
+					arrive(run, pick, {t, std::move(obs), r.where});
 					run.previous = t;
 				}
 			}

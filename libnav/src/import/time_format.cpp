@@ -249,13 +249,30 @@ std::string formatSeconds7(TimeNs t)
 
 mrpt::Clock::time_point toMrptTime(TimeNs t)
 {
-	const int64_t ticks = floorDiv(t + 50, 100);
+	// Round to the nearest tick from the floored quotient and its remainder:
+	// t + 50 would overflow for stamps within 50 ns of the int64 limit.
+	int64_t ticks = floorDiv(t, 100);
+	if (t - ticks * 100 >= 50) ++ticks;
 	return mrpt::Clock::time_point(mrpt::Clock::duration(unixEpochTicks() + ticks));
+}
+
+std::optional<TimeNs> fromMrptTimeChecked(mrpt::Clock::time_point t)
+{
+	// INVALID_TIMESTAMP (tick 0, 1601) and any time after 2262 have no int64
+	// nanosecond count: (ticks - epoch) * 100 would overflow.
+	int64_t ticks = 0, ns = 0;
+	if (__builtin_sub_overflow(static_cast<int64_t>(t.time_since_epoch().count()), unixEpochTicks(), &ticks) ||
+		__builtin_mul_overflow(ticks, int64_t{100}, &ns))
+		return std::nullopt;
+	return ns;
 }
 
 TimeNs fromMrptTime(mrpt::Clock::time_point t)
 {
-	return (static_cast<int64_t>(t.time_since_epoch().count()) - unixEpochTicks()) * 100;
+	const auto ns = fromMrptTimeChecked(t);
+	if (!ns) throw ImportError("MRPT time stamp " + std::to_string(t.time_since_epoch().count()) +
+							   " (100 ns ticks) is outside the int64 nanosecond range (1678..2262)");
+	return *ns;
 }
 
 }  // namespace auvnav::import

@@ -37,8 +37,12 @@ std::optional<TimeNs> parseTime(std::string_view text, TimeFormat format, std::s
  *  parseTime(formatSeconds7(t), Seconds) == t for every t on the 100 ns grid. */
 std::string formatSeconds7(TimeNs t);
 
-/** MRPT time point of `t` (rounded to the nearest 100 ns) and back (exact). */
+/** MRPT time point of `t` (rounded to the nearest 100 ns) and back (exact).
+ *  fromMrptTime throws ImportError for a time point without an int64
+ *  nanosecond count (INVALID_TIMESTAMP, after 2262); the checked form gives
+ *  nullopt instead. */
 mrpt::Clock::time_point toMrptTime(TimeNs t);
 TimeNs fromMrptTime(mrpt::Clock::time_point t);
+std::optional<TimeNs> fromMrptTimeChecked(mrpt::Clock::time_point t);
 
 }  // namespace auvnav::import
