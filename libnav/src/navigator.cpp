@@ -1,4 +1,5 @@
 #include <auvnav/navigator.h>
+#include <auvnav/rejection_streak.h>
 #include <auvnav/so3.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -40,6 +41,7 @@ struct Navigator::Slot
 	SensorStats stats;
 	ModelPtr model;
 	double rejecting_since_s = -1;	// start of the current run of rejections
+	RejectionStreak streak;			// its innovations (rejection_streak.h)
 	std::vector<Measurement> buffer;
 };
 
@@ -79,7 +81,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		ut.alpha = u.inRange("alpha", 1e-4, 1.0, ut.alpha);
 		ut.beta = u.nonNegative("beta", ut.beta);
 		ut.kappa = u.number("kappa", ut.kappa);
-		ut.max_attitude_spread_rad = u.inRange("max_attitude_spread_deg", 10, 170, 90) * kDeg;
+		ut.max_attitude_spread_rad = u.inRange("max_attitude_spread_deg", 1, 170, 30) * kDeg;
 	}
 	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
 	earth_rate_ = f.boolean("earth_rate", true);
@@ -112,7 +114,16 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
 
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
-	if (cfg.has("gates")) recovery_after_s_ = cfg.child("gates").positive("recovery_after_s", recovery_after_s_);
+	if (cfg.has("gates"))
+	{
+		const auto g = cfg.child("gates");
+		g.allowOnly({"recovery_after_s", "consistent_rejections", "consistency_probability"});
+		recovery_after_s_ = g.positive("recovery_after_s", recovery_after_s_);
+		consistent_rejections_ = static_cast<int>(g.inRange("consistent_rejections", 0, 8, consistent_rejections_));
+		if (consistent_rejections_ > 0 && consistent_rejections_ < 3)
+			g.fail("consistent_rejections", "needs at least 3 rejections to fit a drift (0 switches it off)");
+		consistency_probability_ = g.inRange("consistency_probability", 0.5, 1.0 - 1e-9, consistency_probability_);
+	}
 	if (cfg.has("denial"))
 		for (const auto& d : cfg.sequence("denial"))
 		{
@@ -358,7 +369,16 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 				continue;
 			}
 			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
-			const UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
+			UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
+			if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
+			{
+				// Rejected but agreeing with the aid's previous rejections: the
+				// state is off, not the aid. Re-acquire now (rejection_streak.h).
+				slot->streak.add(t_obs, r.innovation, m.R);
+				if (slot->streak.consistentBias(consistent_rejections_, consistency_probability_))
+					r = ukf_->update(*slot->model, m, ctx, true);
+			}
+			if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered) slot->streak.clear();
 			if (on_update) on_update(st.label, t_obs, m, r);
 			health_.onUpdate(st.label, t_obs - t0_s_, r);
 			switch (r.status)

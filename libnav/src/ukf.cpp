@@ -288,6 +288,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		return res;
 	}
 	res.nis = nu.dot(llt.solve(nu));
+	res.innovation = nu;
 	const double gate = chiSquareQuantile(m, model.gateProbability());
 	if (res.nis > gate)
 	{

@@ -46,6 +46,10 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 	res.data_s = nav.time() - nav.startTime();
 	res.stats = nav.stats();
 	res.repairs = nav.filter().choleskyRepairs();
+	nav.finish();
+	res.status = nav.health().status();
+	res.worst = nav.health().worst();
+	res.status_reason = nav.health().reason();
 	return res;
 }
 

@@ -35,6 +35,8 @@ struct RunResult
 	std::vector<SensorStats> stats;
 	double wall_s = 0, data_s = 0;
 	std::size_t repairs = 0;
+	NavStatus status = NavStatus::Ok, worst = NavStatus::Ok;	//!< the divergence monitor at the end
+	std::string status_reason;
 };
 
 /** Runs the navigator with config `config_file` plus `overrides` (KEY=VALUE). */

@@ -13,9 +13,11 @@
  *    `east_m` (`position: config`); depth from `depth_m`.
  *  - Every update is counted per sensor: accepted, recovered, rejected by the
  *    gate, invalid, skipped, denied (data denial windows), late. A sensor
- *    rejected continuously for `gates.recovery_after_s` gets its next update
- *    with the innovation covariance inflated onto the gate (it cannot lock
- *    itself out, e.g. the DVL after a long dropout).
+ *    whose last `gates.consistent_rejections` rejections agree with each other
+ *    (a drifting bias of the state, rejection_streak.h) is re-acquired at once:
+ *    that update is applied with the innovation covariance inflated onto the
+ *    gate; as a backstop, so is one rejected for `gates.recovery_after_s` (it
+ *    cannot lock itself out, e.g. the DVL after a long dropout).
  *  - A divergence monitor (health.h) judges every update and, once a second,
  *    the covariance: ok, degraded, diverged, or not_initialized (finish()).
  *  - Bad input never reaches the state: non-finite or absent IMU data,
@@ -114,6 +116,8 @@ class Navigator
 	std::string imu_label_;
 	Eigen::Vector3d imu_position_b_ = Eigen::Vector3d::Zero();
 	double leveling_s_ = 1.0, max_gap_s_ = 0.5, recovery_after_s_ = 30, late_tolerance_s_ = 0.05;
+	int consistent_rejections_ = 5;			// gates.consistent_rejections (0: off)
+	double consistency_probability_ = 0.99;	// gates.consistency_probability
 	bool position_from_gps_ = false;
 	bool earth_rate_ = true;  // filter.earth_rate: false only for studies (no gyrocompassing)
 	std::string gps_label_;
