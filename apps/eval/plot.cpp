@@ -52,6 +52,12 @@ void Plot::yRange(double lo, double hi)
 	y_lo_ = lo;
 	y_hi_ = hi;
 }
+void Plot::xRange(double lo, double hi)
+{
+	fixed_x_ = true;
+	x_lo_ = lo;
+	x_hi_ = hi;
+}
 
 void Plot::save(const std::string& png) const
 {
@@ -67,6 +73,7 @@ void Plot::save(const std::string& png) const
 	if (!std::isfinite(x0)) x0 = 0, x1 = 1;
 	if (!std::isfinite(y0)) y0 = 0, y1 = 1;
 	if (fixed_y_) y0 = y_lo_, y1 = y_hi_;
+	if (fixed_x_) x0 = x_lo_, x1 = x_hi_;
 	if (x1 - x0 < 1e-12) x1 = x0 + 1;
 	if (y1 - y0 < 1e-12) y0 -= 0.5, y1 += 0.5;
 	const double pad = 0.05 * (y1 - y0);

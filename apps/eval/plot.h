@@ -21,6 +21,8 @@ class Plot
 	void hline(double y, const cv::Scalar& bgr, const std::string& label);
 	/** Fixes the y range (otherwise from the data). */
 	void yRange(double lo, double hi);
+	/** Fixes the x range (otherwise from the data). */
+	void xRange(double lo, double hi);
 	/** Renders and writes the PNG; throws std::runtime_error on failure. */
 	void save(const std::string& png) const;
 
@@ -35,7 +37,8 @@ class Plot
 	};
 	std::string title_, x_label_, y_label_;
 	int w_, h_;
-	bool fixed_y_ = false;
+	bool fixed_y_ = false, fixed_x_ = false;
+	double x_lo_ = 0, x_hi_ = 1;
 	double y_lo_ = 0, y_hi_ = 1;
 	std::vector<Series> series_;
 };
