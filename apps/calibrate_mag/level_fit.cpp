@@ -310,6 +310,11 @@ LevelFitResult fitLevel(const std::vector<Eigen::Vector3d>& raw_ut,
 		    num(sv.minCoeff()) + " .. " + num(sv.maxCoeff()) +
 		    ", allowed 0.2 .. 5): are --field-ut/--inclination-deg right, and was the "
 		    "field undisturbed?");
+	if (!(res.rms_residual_deg <= opt.max_rms_residual_deg))
+		throw MagCalibrationError("the readings scatter by " + num(res.rms_residual_deg, 1) +
+		                          " deg of heading (rms) about the fitted ellipse (allowed " +
+		                          num(opt.max_rms_residual_deg, 1) +
+		                          "): the turn is too small to fit or the field was disturbed");
 	if (res.heading_coverage_deg < opt.min_heading_coverage_deg)
 		throw MagCalibrationError("the turn covers only " + num(res.heading_coverage_deg, 0) +
 		                          " deg of heading after calibration (need " +

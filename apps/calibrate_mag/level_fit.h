@@ -22,7 +22,10 @@
  *  Refused (MagCalibrationError): too few readings; the sensor z axis more
  *  than max_tilt_deg from the vertical; no ellipse; the calibrated readings
  *  covering less than min_heading_coverage_deg of heading (360° minus the
- *  largest gap between their azimuths); a soft iron the plugin refuses.
+ *  largest gap between their azimuths); a residual rms over H above
+ *  max_rms_residual_deg (a short, noisy arc can be wrapped by a small wrong
+ *  ellipse whose centre the readings surround: a large coverage with a
+ *  residual comparable to H); a soft iron the plugin refuses.
  *
  *  Units: µT, degrees where named.
  */
@@ -39,7 +42,8 @@ struct LevelFitOptions
 	double horizontal_field_ut = 0;  //!< F·cos(I) [µT]; 0: unknown (det S₂ = 1)
 	double hard_iron_z_ut = 0;       //!< b_z, not determined by a level turn [µT]
 	double min_heading_coverage_deg = 270;
-	double max_tilt_deg = 30;  //!< sensor z axis from the vertical, any reading
+	double max_tilt_deg = 30;          //!< sensor z axis from the vertical, any reading
+	double max_rms_residual_deg = 10;  //!< rms residual / H above this: no ellipse fits
 	std::size_t min_samples = 100;
 };
 

@@ -183,6 +183,11 @@ int main(int argc, char** argv)
 	    "With --level: least heading coverage accepted (360 minus the largest gap between the readings' "
 	    "azimuths) [deg]. Default: 270.",
 	    false, 270.0, "DEG", cmd);
+	TCLAP::ValueArg<double> max_residual_deg(
+	    "", "max-residual-deg",
+	    "With --level: largest rms residual accepted, as heading degrees (rms / horizontal field). "
+	    "Default: 10.",
+	    false, 10.0, "DEG", cmd);
 	TCLAP::UnlabeledValueArg<std::string> rawlog("RAWLOG", "Rawlog with the rotation segment.", true, "",
 	                                             "RAWLOG", cmd);
 	if (!cmd.parse(argc, argv)) return askedForHelpOrVersion(argc, argv) ? kExitOk : kExitUsage;
@@ -204,13 +209,14 @@ int main(int argc, char** argv)
 		return kExitUsage;
 	}
 
-	if (level.getValue() &&
-	    (!(tilt_window.getValue() > 0) || !std::isfinite(hard_iron_z.getValue()) ||
-	     !(min_coverage.getValue() >= 0 && min_coverage.getValue() <= 360) ||
-	     (field.isSet() != inclination.isSet()) || !(std::abs(inclination.getValue()) < 90)))
+	if (level.getValue() && (!(tilt_window.getValue() > 0) || !std::isfinite(hard_iron_z.getValue()) ||
+	                         !(min_coverage.getValue() >= 0 && min_coverage.getValue() <= 360) ||
+	                         !(max_residual_deg.getValue() > 0) || (field.isSet() != inclination.isSet()) ||
+	                         !(std::abs(inclination.getValue()) < 90)))
 	{
 		std::cerr << "auvnav-calibrate-mag: error: --level needs --tilt-window-s > 0, "
-		             "--min-heading-coverage-deg in [0, 360], and --field-ut with --inclination-deg "
+		             "--min-heading-coverage-deg in [0, 360], --max-residual-deg > 0, and --field-ut with "
+		             "--inclination-deg "
 		             "(|dip| < 90) or neither\n";
 		return kExitUsage;
 	}
@@ -265,6 +271,7 @@ int main(int argc, char** argv)
 		    field.isSet() ? field.getValue() * std::cos(inclination.getValue() * M_PI / 180) : 0.0;
 		lopt.hard_iron_z_ut = hard_iron_z.getValue();
 		lopt.min_heading_coverage_deg = min_coverage.getValue();
+		lopt.max_rms_residual_deg = max_residual_deg.getValue();
 		lopt.min_samples = static_cast<std::size_t>(min_samples.getValue());
 		auvnav::magcal::LevelFitResult r;
 		try

@@ -505,6 +505,25 @@ TEST(CalibrateMagLevel, RefusesAPartialTurn)
 	EXPECT_LT(maxAbs((r.hard_iron_ut - kHard).head<2>()), 0.1);
 	opt.min_heading_coverage_deg = 320;
 	EXPECT_THROW(magcal::fitLevel(most.raw_ut, downOf(most), opt), magcal::MagCalibrationError);
+	// A short arc wandering by a few µT (as SONIA run 1: 56° of heading,
+	// 2-3 µT): the ellipse wrapped around it is small and wrong, and the
+	// readings surround its centre, so the coverage alone passes it
+	// (measured 358°, H 5.2 µT); the residual, 26° of heading, refuses it.
+	const TurnLog arc = levelTurnLog(2000, 60, 2.5, noTilt);
+	try
+	{
+		magcal::fitLevel(arc.raw_ut, downOf(arc), levelOptions(0));
+		ADD_FAILURE() << "a 60 deg arc was accepted";
+	}
+	catch (const magcal::MagCalibrationError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("scatter by 2"), std::string::npos) << e.what();
+	}
+	magcal::LevelFitOptions no_residual_check = levelOptions(0);
+	no_residual_check.max_rms_residual_deg = 1e9;
+	const auto wrong = magcal::fitLevel(arc.raw_ut, downOf(arc), no_residual_check);
+	EXPECT_GT(wrong.heading_coverage_deg, 270);
+	EXPECT_LT(wrong.horizontal_field_ut, 10);
 	// A sensor mounted on its side is not levelled.
 	std::vector<Eigen::Vector3d> side(most.raw_ut.size(), Eigen::Vector3d::UnitX());
 	EXPECT_THROW(magcal::fitLevel(most.raw_ut, side, levelOptions(kHorizontal)), magcal::MagCalibrationError);
