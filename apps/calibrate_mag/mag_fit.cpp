@@ -1,6 +1,7 @@
 #include "mag_fit.h"
 
 #include <auvnav/io/rawlog.h>
+#include <auvnav/obs/register.h>
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <Eigen/Cholesky>
@@ -249,16 +250,46 @@ FitResult fit(const std::vector<Eigen::Vector3d>& raw_ut, const FitOptions& opt)
 	return res;
 }
 
-Samples readSamples(const std::string& rawlog, const std::string& label, double from_s, double to_s)
+namespace
+{
+bool hasAccel(const mrpt::obs::CObservationIMU& imu)
 {
 	using namespace mrpt::obs;
+	return imu.has(IMU_X_ACC) && imu.has(IMU_Y_ACC) && imu.has(IMU_Z_ACC);
+}
+
+/** Specific force in the body frame, or NaN when the fields are missing. */
+Eigen::Vector3d accelBody(const mrpt::obs::CObservationIMU& imu)
+{
+	using namespace mrpt::obs;
+	if (!hasAccel(imu)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+	const Eigen::Vector3d f_s(imu.get(IMU_X_ACC), imu.get(IMU_Y_ACC), imu.get(IMU_Z_ACC));
+	return imu.sensorPose.getRotationMatrix().asEigen() * f_s;
+}
+}  // namespace
+
+Samples readSamples(const std::string& rawlog, const std::string& label, double from_s, double to_s,
+                    const std::string& accel_label)
+{
+	using namespace mrpt::obs;
+	// Imported logs hold auvnav's own classes (DVL, pressure...) besides the
+	// IMU records; MRPT cannot deserialize a log with an unregistered class.
+	obs::registerAllClasses();
 	Samples s;
 	io::RawlogReader reader(rawlog);
 	std::map<std::string, int> labels;
+	std::vector<std::pair<double, Eigen::Vector3d>> accel_abs;  // absolute time: t_first_s may come later
 	bool first = true;
 	while (auto o = reader.next())
 	{
 		++labels[o->sensorLabel];
+		if (!accel_label.empty() && o->sensorLabel == accel_label)
+			if (const auto* a = dynamic_cast<const CObservationIMU*>(o.get()))
+			{
+				const Eigen::Vector3d f_b = accelBody(*a);
+				const double t = mrpt::Clock::toDouble(o->timestamp);
+				if (f_b.allFinite() && std::isfinite(t)) accel_abs.emplace_back(t, f_b);
+			}
 		if (o->sensorLabel != label) continue;
 		const auto* imu = dynamic_cast<const CObservationIMU*>(o.get());
 		if (!imu || !imu->has(IMU_MAG_X) || !imu->has(IMU_MAG_Y) || !imu->has(IMU_MAG_Z))
@@ -280,11 +311,19 @@ Samples readSamples(const std::string& rawlog, const std::string& label, double 
 		}
 		const double rel = t - s.t_first_s;
 		if (rel < from_s || rel > to_s) continue;
-		if (s.raw_ut.empty()) s.t_from_s = rel;
+		if (s.raw_ut.empty())
+		{
+			s.t_from_s = rel;
+			s.R_b_mag = imu->sensorPose.getRotationMatrix().asEigen();
+		}
 		s.t_to_s = rel;
 		s.raw_ut.push_back(100.0 * m);  // gauss → µT
+		s.t_s.push_back(rel);
 	}
 	for (const auto& [l, count] : labels) s.labels.push_back(l);
+	std::stable_sort(accel_abs.begin(), accel_abs.end(),
+	                 [](const auto& a, const auto& b) { return a.first < b.first; });
+	for (const auto& [t, f_b] : accel_abs) s.accel.push_back({t - s.t_first_s, f_b});
 	return s;
 }
 

@@ -66,20 +66,33 @@ struct FitResult
 /** Fits b and S to `raw_ut`; throws MagCalibrationError when refused. */
 FitResult fit(const std::vector<Eigen::Vector3d>& raw_ut, const FitOptions& options);
 
+/** An accelerometer reading (specific force) in the body frame. */
+struct TimedAccel
+{
+	double t_s;                //!< relative to Samples::t_first_s
+	Eigen::Vector3d f_b_mps2;  //!< IMU_X/Y/Z_ACC rotated by the observation's sensorPose
+};
+
 /** Readings of one sensor label from a rawlog. */
 struct Samples
 {
 	std::vector<Eigen::Vector3d> raw_ut;  //!< IMU_MAG_X/Y/Z × 100 (gauss → µT)
-	double t_first_s = 0;                 //!< time of the label's first reading [s, Unix]
-	double t_from_s = 0, t_to_s = 0;      //!< span of the readings kept, relative to t_first_s
-	std::size_t unusable = 0;             //!< with the label but missing or non-finite fields
-	std::vector<std::string> labels;      //!< every label in the log (for error messages)
+	std::vector<double> t_s;              //!< time of each kept reading, relative to t_first_s
+	Eigen::Matrix3d R_b_mag = Eigen::Matrix3d::Identity();  //!< magnetometer mounting (first kept reading)
+	std::vector<TimedAccel> accel;    //!< readings of the accelerometer label, in time order
+	double t_first_s = 0;             //!< time of the label's first reading [s, Unix]
+	double t_from_s = 0, t_to_s = 0;  //!< span of the readings kept, relative to t_first_s
+	std::size_t unusable = 0;         //!< with the label but missing or non-finite fields
+	std::vector<std::string> labels;  //!< every label in the log (for error messages)
 };
 
 /** Reads the CObservationIMU readings labelled `label` whose time, relative
- *  to the label's first reading, lies in [from_s, to_s]. Throws
+ *  to the label's first reading, lies in [from_s, to_s], and every
+ *  accelerometer reading labelled `accel_label` (none if empty). Any
+ *  observation class auvnav registers may be in the log. Throws
  *  io::RawlogError for an unreadable log. */
-Samples readSamples(const std::string& rawlog, const std::string& label, double from_s, double to_s);
+Samples readSamples(const std::string& rawlog, const std::string& label, double from_s, double to_s,
+                    const std::string& accel_label = "");
 
 /** The magnetometer plugin's keys (hard_iron_ut, soft_iron) with comments
  *  on where they came from and how good the fit is. */

@@ -2,6 +2,8 @@
 // known distortion and noise, its refusals, and the command line.
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
+#include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/obs/CObservationPressure.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <sys/wait.h>
@@ -16,6 +18,7 @@
 #include <random>
 #include <string>
 
+#include "level_fit.h"
 #include "mag_fit.h"
 #include "magnetometer.h"
 
@@ -135,6 +138,115 @@ CliRun runCli(const std::string& args)
 double maxAbs(const Eigen::MatrixXd& m)
 {
 	return m.cwiseAbs().maxCoeff();
+}
+
+// --- Level turns (level_fit.h) ---------------------------------------------
+// The level-turn model's soft iron is block-diagonal (a z coupling would be
+// absorbed in b_xy); b_z = 12 µT is passed as known.
+constexpr double kG = 9.80665;
+const double kHorizontal = kF * std::cos(68 * kDeg);  // F cos I = 18.58 µT
+Eigen::Matrix3d softLevelTrue()
+{
+	Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+	S.topLeftCorner<2, 2>() << 1.06, 0.05, 0.05, 0.96;
+	return S;
+}
+
+struct TurnLog
+{
+	std::vector<double> t_s;
+	std::vector<Eigen::Vector3d> raw_ut;
+	std::vector<magcal::TimedAccel> accel;  //!< one per reading, same time
+};
+
+/** A turn through `turn_deg` of yaw at 10 Hz, roll/pitch from `tilt_rp_rad(k)`;
+ *  magnetometer noise σ per axis, accelerometer noise 0.05 m/s² per axis
+ *  (none when the magnetometer has none). */
+TurnLog levelTurnLog(int n, double turn_deg, double noise_ut,
+                     const std::function<Eigen::Vector2d(int)>& tilt_rp_rad, uint32_t seed = 11)
+{
+	const double accel_noise_mps2 = noise_ut > 0 ? 0.05 : 0.0;
+	std::mt19937 rng(seed);
+	std::normal_distribution<double> n01;
+	TurnLog log;
+	for (int k = 0; k < n; ++k)
+	{
+		const double yaw = turn_deg * kDeg * k / n;
+		const Eigen::Vector2d rp = tilt_rp_rad(k);
+		const Eigen::Matrix3d R_nb = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+		                              Eigen::AngleAxisd(rp[1], Eigen::Vector3d::UnitY()) *
+		                              Eigen::AngleAxisd(rp[0], Eigen::Vector3d::UnitX()))
+		                                 .toRotationMatrix();
+		log.t_s.push_back(0.1 * k);
+		log.raw_ut.push_back(kHard + softLevelTrue() * (R_nb.transpose() * kFieldN) +
+		                     noise_ut * Eigen::Vector3d(n01(rng), n01(rng), n01(rng)));
+		log.accel.push_back({0.1 * k, R_nb.transpose() * Eigen::Vector3d(0, 0, -kG) +
+		                                  accel_noise_mps2 * Eigen::Vector3d(n01(rng), n01(rng), n01(rng))});
+	}
+	return log;
+}
+Eigen::Vector2d noTilt(int)
+{
+	return Eigen::Vector2d::Zero();
+}
+/** Pitched 4° ± 3°, rolled ± 3°, slowly (periods 23 s and 31 s at 10 Hz). */
+Eigen::Vector2d pitchedFewDegrees(int k)
+{
+	return {3 * kDeg * std::cos(2 * M_PI * k / 310.0), (4 + 3 * std::sin(2 * M_PI * k / 230.0)) * kDeg};
+}
+
+std::vector<Eigen::Vector3d> downOf(const TurnLog& log)
+{
+	return magcal::downFromAccel(log.t_s, log.accel, Eigen::Matrix3d::Identity(), 1.0);
+}
+
+magcal::LevelFitOptions levelOptions(double horizontal_ut)
+{
+	magcal::LevelFitOptions opt;
+	opt.horizontal_field_ut = horizontal_ut;
+	opt.hard_iron_z_ut = kHard.z();
+	return opt;
+}
+
+/** MAG (+ IMU accelerometer when asked) at 10 Hz, with auvnav's DVL and
+ *  pressure observations in between, as an imported vehicle log has. */
+void writeVehicleRawlog(const std::string& path, const TurnLog& log, bool with_accel)
+{
+	io::RawlogWriter w(path);
+	for (std::size_t k = 0; k < log.raw_ut.size(); ++k)
+	{
+		const double t = 1.7e9 + log.t_s[k];
+		if (with_accel)
+		{
+			auto imu = mrpt::obs::CObservationIMU::Create();
+			imu->sensorLabel = "IMU";
+			imu->timestamp = mrpt::Clock::fromDouble(t);
+			imu->set(mrpt::obs::IMU_X_ACC, log.accel[k].f_b_mps2.x());
+			imu->set(mrpt::obs::IMU_Y_ACC, log.accel[k].f_b_mps2.y());
+			imu->set(mrpt::obs::IMU_Z_ACC, log.accel[k].f_b_mps2.z());
+			w.write(*imu);
+		}
+		if (k % 3 == 0)
+		{
+			auto dvl = obs::CObservationDVL::Create();
+			dvl->sensorLabel = "DVL";
+			dvl->timestamp = mrpt::Clock::fromDouble(t + 0.005);
+			dvl->bottom_lock = true;
+			w.write(*dvl);
+			auto p = obs::CObservationPressure::Create();
+			p->sensorLabel = "PRESSURE";
+			p->timestamp = mrpt::Clock::fromDouble(t + 0.006);
+			p->pressure_pa = 1.2e5;
+			w.write(*p);
+		}
+		auto m = mrpt::obs::CObservationIMU::Create();
+		m->sensorLabel = "MAG";
+		m->timestamp = mrpt::Clock::fromDouble(t + 0.01);
+		m->set(mrpt::obs::IMU_MAG_X, log.raw_ut[k].x() / 100);
+		m->set(mrpt::obs::IMU_MAG_Y, log.raw_ut[k].y() / 100);
+		m->set(mrpt::obs::IMU_MAG_Z, log.raw_ut[k].z() / 100);
+		w.write(*m);
+	}
 }
 }  // namespace
 
@@ -324,4 +436,203 @@ TEST(CalibrateMag, CommandLine)
 	const CliRun help = runCli("--help");
 	EXPECT_EQ(help.exit_code, 0);
 	EXPECT_NE(help.output.find("hard-iron"), std::string::npos) << help.output;
+}
+
+TEST(CalibrateMagLevel, RecoversHorizontalHardAndSoftIronFromALevelTurn)
+{
+	// 2000 readings over one full turn, 0.3 µT per axis. Expected errors: a
+	// circle fit's centre has σ ≈ σ_r √(2/N) = 0.0095 µT; the soft-iron
+	// terms ≈ (σ_r / H) √(2/N) ≈ 5e-4. Tolerances: 5 of those σ.
+	const TurnLog log = levelTurnLog(2000, 360, 0.3, noTilt);
+	const auto r = magcal::fitLevel(log.raw_ut, downOf(log), levelOptions(kHorizontal));
+	EXPECT_LT(maxAbs((r.hard_iron_ut - kHard).head<2>()), 0.05) << r.hard_iron_ut.transpose();
+	EXPECT_DOUBLE_EQ(r.hard_iron_ut.z(), kHard.z());  // given, not fitted
+	EXPECT_LT(maxAbs(r.soft_iron - softLevelTrue()), 0.0025) << r.soft_iron;
+	EXPECT_TRUE(r.soft_iron.isApprox(r.soft_iron.transpose(), 1e-12));
+	EXPECT_GT(r.hard_iron_sigma_ut.minCoeff(), 0.005);
+	EXPECT_LT(r.hard_iron_sigma_ut.maxCoeff(), 0.02);
+	EXPECT_DOUBLE_EQ(r.horizontal_field_ut, kHorizontal);
+	// The residual: the noise along the horizontal field, ≈ 0.3 µT.
+	EXPECT_GT(r.rms_residual_ut, 0.25);
+	EXPECT_LT(r.rms_residual_ut, 0.35);
+	EXPECT_NEAR(r.rms_residual_deg, r.rms_residual_ut / kHorizontal / kDeg, 1e-9);
+	EXPECT_GT(r.heading_coverage_deg, 355);
+	EXPECT_NEAR(r.vertical_field_ut, kF * std::sin(68 * kDeg), 0.05);
+	// Noise-free (and pitched): exact to rounding.
+	const TurnLog exact = levelTurnLog(500, 360, 0.0, pitchedFewDegrees);
+	// Per-reading down (a 10 ms window): the 1 s mean of a changing tilt is
+	// itself off by ~0.01°.
+	const auto down = magcal::downFromAccel(exact.t_s, exact.accel, Eigen::Matrix3d::Identity(), 0.01);
+	const auto e = magcal::fitLevel(exact.raw_ut, down, levelOptions(kHorizontal));
+	EXPECT_LT(maxAbs(e.hard_iron_ut - kHard), 1e-6) << e.hard_iron_ut.transpose();
+	EXPECT_LT(maxAbs(e.soft_iron - softLevelTrue()), 1e-8) << e.soft_iron;
+	EXPECT_LT(e.rms_residual_ut, 1e-6);
+}
+
+TEST(CalibrateMagLevel, WithoutTheFieldTheTwoByTwoSoftIronHasDeterminantOne)
+{
+	const TurnLog log = levelTurnLog(2000, 360, 0.3, noTilt);
+	const auto r = magcal::fitLevel(log.raw_ut, downOf(log), levelOptions(0));
+	const Eigen::Matrix2d S2 = r.soft_iron.topLeftCorner<2, 2>();
+	EXPECT_NEAR(S2.determinant(), 1.0, 1e-9);
+	EXPECT_LT(maxAbs((r.hard_iron_ut - kHard).head<2>()), 0.05);
+	// Only the scale is free: H·S₂ is what the readings fix.
+	const double det = softLevelTrue().topLeftCorner<2, 2>().determinant();
+	EXPECT_NEAR(r.horizontal_field_ut, kHorizontal * std::sqrt(det), 0.02);
+	EXPECT_LT(maxAbs(S2 * r.horizontal_field_ut - softLevelTrue().topLeftCorner<2, 2>() * kHorizontal), 0.05);
+	EXPECT_EQ(r.soft_iron(2, 2), 1.0);
+	EXPECT_EQ(r.soft_iron(0, 2), 0.0);
+}
+
+TEST(CalibrateMagLevel, RefusesAPartialTurn)
+{
+	magcal::LevelFitOptions opt = levelOptions(kHorizontal);
+	const TurnLog half = levelTurnLog(2000, 200, 0.3, noTilt);
+	try
+	{
+		magcal::fitLevel(half.raw_ut, downOf(half), opt);
+		ADD_FAILURE() << "a 200 deg turn was accepted";
+	}
+	catch (const magcal::MagCalibrationError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("covers only 20"), std::string::npos) << e.what();
+	}
+	// Noise widens the azimuth span by ~1° at each end (0.3 µT over 18.6 µT).
+	// 300°: accepted and reported as such; refused when asking for 320°.
+	const TurnLog most = levelTurnLog(2000, 300, 0.3, noTilt);
+	const auto r = magcal::fitLevel(most.raw_ut, downOf(most), opt);
+	EXPECT_NEAR(r.heading_coverage_deg, 300, 2);
+	EXPECT_LT(maxAbs((r.hard_iron_ut - kHard).head<2>()), 0.1);
+	opt.min_heading_coverage_deg = 320;
+	EXPECT_THROW(magcal::fitLevel(most.raw_ut, downOf(most), opt), magcal::MagCalibrationError);
+	// A short arc wandering by a few µT (as SONIA run 1: 56° of heading,
+	// 2-3 µT): the ellipse wrapped around it is small and wrong, and the
+	// readings surround its centre, so the coverage alone passes it
+	// (measured 358°, H 5.2 µT); the residual, 26° of heading, refuses it.
+	const TurnLog arc = levelTurnLog(2000, 60, 2.5, noTilt);
+	try
+	{
+		magcal::fitLevel(arc.raw_ut, downOf(arc), levelOptions(0));
+		ADD_FAILURE() << "a 60 deg arc was accepted";
+	}
+	catch (const magcal::MagCalibrationError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("scatter by 2"), std::string::npos) << e.what();
+	}
+	magcal::LevelFitOptions no_residual_check = levelOptions(0);
+	no_residual_check.max_rms_residual_deg = 1e9;
+	const auto wrong = magcal::fitLevel(arc.raw_ut, downOf(arc), no_residual_check);
+	EXPECT_GT(wrong.heading_coverage_deg, 270);
+	EXPECT_LT(wrong.horizontal_field_ut, 10);
+	// A sensor mounted on its side is not levelled.
+	std::vector<Eigen::Vector3d> side(most.raw_ut.size(), Eigen::Vector3d::UnitX());
+	EXPECT_THROW(magcal::fitLevel(most.raw_ut, side, levelOptions(kHorizontal)), magcal::MagCalibrationError);
+}
+
+TEST(CalibrateMagLevel, LevellingWithTheAccelerometerHandlesAPitchedVehicle)
+{
+	// Pitched 4 ± 3°, rolled ± 3° during the turn: the 46 µT vertical field
+	// leaks ≈ 46 sin 4° = 3.2 µT into the sensor's x axis.
+	const TurnLog log = levelTurnLog(2000, 360, 0.3, pitchedFewDegrees);
+	const auto with = magcal::fitLevel(log.raw_ut, downOf(log), levelOptions(kHorizontal));
+	EXPECT_LT(maxAbs((with.hard_iron_ut - kHard).head<2>()), 0.05) << with.hard_iron_ut.transpose();
+	EXPECT_LT(maxAbs(with.soft_iron - softLevelTrue()), 0.0025) << with.soft_iron;
+	EXPECT_LT(with.rms_residual_ut, 0.35);
+	EXPECT_GT(with.max_tilt_deg, 6);
+	EXPECT_LT(with.max_tilt_deg, 8);
+	const auto without = magcal::fitLevel(log.raw_ut, {}, levelOptions(kHorizontal));
+	EXPECT_GT(maxAbs((without.hard_iron_ut - kHard).head<2>()), 1.0) << without.hard_iron_ut.transpose();
+	EXPECT_GT(without.rms_residual_ut, 2 * with.rms_residual_ut);
+	EXPECT_EQ(without.max_tilt_deg, 0.0);
+}
+
+TEST(CalibrateMagLevel, DownFromTheAccelerometerIsAWindowedMean)
+{
+	// Two readings 1 s apart, tilted 45° forward and back: a time midway
+	// averages both (level), a window holding one takes it, a time far
+	// outside takes the nearest.
+	std::vector<magcal::TimedAccel> acc{{0.0, {-kG, 0, -kG}}, {1.0, {kG, 0, -kG}}};
+	const auto d = magcal::downFromAccel({0.5, 0.0, 10.0}, acc, Eigen::Matrix3d::Identity(), 1.2);
+	ASSERT_EQ(d.size(), 3u);
+	EXPECT_LT((d[0] - Eigen::Vector3d::UnitZ()).norm(), 1e-12);
+	EXPECT_LT((d[1] - Eigen::Vector3d(1, 0, 1).normalized()).norm(), 1e-12);
+	EXPECT_LT((d[2] - Eigen::Vector3d(-1, 0, 1).normalized()).norm(), 1e-12);
+	// The magnetometer's mounting: mounted yawed 90°, body x is sensor −y.
+	const Eigen::Matrix3d R_b_mag = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+	const auto ds = magcal::downFromAccel({10.0}, acc, R_b_mag, 1.0);
+	EXPECT_LT((ds[0] - Eigen::Vector3d(0, 1, 1).normalized()).norm(), 1e-12);
+	EXPECT_TRUE(magcal::downFromAccel({0.0}, {}, Eigen::Matrix3d::Identity(), 1.0).empty());
+}
+
+TEST(CalibrateMagLevel, CommandLineOnAVehicleLogWithAuvnavClasses)
+{
+	// Regression: a rawlog that also holds auvnav's CObservationDVL and
+	// CObservationPressure was refused with "not registered" (exit 2).
+	TempDir dir;
+	const TurnLog turn = levelTurnLog(2000, 360, 0.3, pitchedFewDegrees);
+	const std::string log = dir.file("vehicle.rawlog");
+	writeVehicleRawlog(log, turn, true);
+	const auto s = magcal::readSamples(log, "MAG", 0, 1e9, "IMU");
+	EXPECT_EQ(s.raw_ut.size(), 2000u);
+	EXPECT_EQ(s.accel.size(), 2000u);
+	EXPECT_EQ(s.labels, (std::vector<std::string>{"DVL", "IMU", "MAG", "PRESSURE"}));
+
+	// The 3-D fit reads it, and refuses the level turn, pointing at --level.
+	const std::string yaml = dir.file("mag.yaml");
+	const CliRun flat = runCli(log + " --out " + yaml);
+	EXPECT_EQ(flat.exit_code, 3) << flat.output;
+	EXPECT_NE(flat.output.find("does not rotate enough"), std::string::npos) << flat.output;
+	EXPECT_NE(flat.output.find("--level"), std::string::npos) << flat.output;
+
+	const CliRun ok =
+	    runCli(log + " --level --hard-iron-z 12 --field-ut 49.6 --inclination-deg 68 --out " + yaml);
+	ASSERT_EQ(ok.exit_code, 0) << ok.output;
+	EXPECT_NE(ok.output.find("levelled with the accelerometer of 'IMU'"), std::string::npos) << ok.output;
+	EXPECT_NE(ok.output.find("NOT DETERMINED"), std::string::npos) << ok.output;
+	EXPECT_NE(ok.output.find("deg of heading"), std::string::npos) << ok.output;
+	EXPECT_NE(ok.output.find("heading coverage 3"), std::string::npos) << ok.output;
+	const auto cfg = config::Node::load(yaml);
+	EXPECT_EQ(cfg.keys(), (std::vector<std::string>{"hard_iron_ut", "soft_iron"}));
+	EXPECT_LT(maxAbs(cfg.vector3("hard_iron_ut") - kHard), 0.06);
+	const std::vector<double> S = cfg.numbers("soft_iron");
+	ASSERT_EQ(S.size(), 9u);
+	for (int i = 0; i < 9; ++i)
+		EXPECT_NEAR(S[static_cast<std::size_t>(i)], softLevelTrue()(i / 3, i % 3), 0.003) << i;
+	// The plugin takes the file, and its heading from a distorted reading of
+	// the pitched vehicle comes out right.
+	plugins::MagnetometerModel calibrated(cfg, "MAG");
+	NavState truth;
+	truth.R_nb = (Eigen::AngleAxisd(-77 * kDeg, Eigen::Vector3d::UnitZ()) *
+	              Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d::UnitY()))
+	                 .toRotationMatrix();
+	FilterContext ctx;
+	ctx.mean = &truth;
+	auto obs = mrpt::obs::CObservationIMU::Create();
+	const Eigen::Vector3d raw_ut = kHard + softLevelTrue() * (truth.R_nb.transpose() * kFieldN);
+	obs->set(mrpt::obs::IMU_MAG_X, raw_ut.x() / 100);
+	obs->set(mrpt::obs::IMU_MAG_Y, raw_ut.y() / 100);
+	obs->set(mrpt::obs::IMU_MAG_Z, raw_ut.z() / 100);
+	std::vector<Measurement> m;
+	std::string why;
+	ASSERT_EQ(calibrated.prepare(*obs, ctx, m, why), PrepareStatus::Ok) << why;
+	EXPECT_NEAR(m[0].z[0], -77 * kDeg, 0.3 * kDeg);
+
+	// Without accelerometer records: assumed level, and said so.
+	const std::string bare = dir.file("bare.rawlog");
+	writeVehicleRawlog(bare, levelTurnLog(2000, 360, 0.3, noTilt), false);
+	const CliRun assumed = runCli(bare + " --level --out " + yaml);
+	ASSERT_EQ(assumed.exit_code, 0) << assumed.output;
+	EXPECT_NE(assumed.output.find("ASSUMED LEVEL"), std::string::npos) << assumed.output;
+	EXPECT_NE(assumed.output.find("determinant 1"), std::string::npos) << assumed.output;
+
+	// A partial turn: exit 3 with the coverage, nothing written.
+	const std::string yaml2 = dir.file("mag2.yaml");
+	const CliRun part = runCli(bare + " --level --to 110 --out " + yaml2);
+	EXPECT_EQ(part.exit_code, 3) << part.output;
+	EXPECT_NE(part.output.find("covers only"), std::string::npos) << part.output;
+	EXPECT_FALSE(fs::exists(yaml2));
+	// Usage: --field-ut without --inclination-deg under --level.
+	EXPECT_EQ(runCli(bare + " --level --field-ut 49.6 --out " + yaml2).exit_code, 1);
+	const CliRun help = runCli("--help");
+	EXPECT_NE(help.output.find("--level"), std::string::npos) << help.output;
 }
