@@ -369,14 +369,25 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 				continue;
 			}
 			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
-			UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery);
+			UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
 			if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
 			{
 				// Rejected but agreeing with the aid's previous rejections: the
 				// state is off, not the aid. Re-acquire now (rejection_streak.h).
+				// An absolute reference of what the filter integrates without
+				// bound (attitude, position, depth: magnetometer, AHRS, GPS,
+				// pressure) pulls the state back by widening its covariance; a
+				// velocity aid only on the gate boundary, since a consistent
+				// velocity disagreement is as often the aid's (a wrong mounting
+				// or scale), and widening let a DVL mounted 157° off turn the
+				// heading 52° and end 400 m off as 'degraded'.
 				slot->streak.add(t_obs, r.innovation, m.R);
 				if (slot->streak.consistentBias(consistent_rejections_, consistency_probability_))
-					r = ukf_->update(*slot->model, m, ctx, true);
+				{
+					constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity;
+					const bool absolute = (slot->model->uses() & ~kAbsolute) == 0;
+					r = ukf_->update(*slot->model, m, ctx, absolute ? Recovery::State : Recovery::Noise);
+				}
 			}
 			if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered) slot->streak.clear();
 			if (on_update) on_update(st.label, t_obs, m, r);

@@ -1,11 +1,14 @@
 #include <auvnav/so3.h>
 #include <auvnav/ukf.h>
+
+#include <limits>
 #include <boost/math/distributions/chi_squared.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <mutex>
 
@@ -179,8 +182,29 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	x_ = mean;
 }
 
+namespace
+{
+/** Variance β ≥ 0 to add along the normal correction dx = K ν so that the
+ *  innovation lands on the gate, or a negative value if no β can (the state
+ *  cannot explain ν: blame the aid). With u = H dx = S_x S⁻¹ ν, the innovation
+ *  covariance becomes S + β u uᵀ, and by Sherman–Morrison its NIS is
+ *  q − β a²/(1 + β b) with q = νᵀS⁻¹ν, a = νᵀS⁻¹u, b = uᵀS⁻¹u. Only S⁻¹ is
+ *  needed (never S_x⁻¹, which is near singular when the state hardly moves
+ *  the measurement), and the added covariance is bounded by the innovation. */
+double inflationAlongCorrection(const Eigen::LLT<Eigen::MatrixXd>& llt_S, const Eigen::VectorXd& nu,
+								const Eigen::VectorXd& u, double gate)
+{
+	const Eigen::VectorXd Si_nu = llt_S.solve(nu), Si_u = llt_S.solve(u);
+	const double q = nu.dot(Si_nu), a = nu.dot(Si_u), b = u.dot(Si_u);
+	const double excess = q - gate;	 // > 0: the update failed the gate
+	const double denom = a * a - excess * b;
+	if (!(b > 0) || !(denom > 1e-12 * a * a)) return -1;  // q − a²/b ≥ gate: out of reach
+	return excess / denom;
+}
+}  // namespace
+
 UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
-								 bool recovery)
+								 Recovery recovery)
 {
 	UpdateResult res;
 	const int m = static_cast<int>(meas.z.size());
@@ -292,16 +316,39 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	const double gate = chiSquareQuantile(m, model.gateProbability());
 	if (res.nis > gate)
 	{
-		if (!recovery)
+		if (recovery == Recovery::None)
 		{
 			res.status = UpdateStatus::Rejected;
 			res.why = "chi-square gate";
 			return res;
 		}
-		// Re-acquire: treat the innovation as if it were on the gate boundary.
-		S *= res.nis / gate;
-		llt.compute(S);
 		res.status = UpdateStatus::Recovered;
+		bool widened = false;
+		if (recovery == Recovery::State)
+		{
+			// The normal correction dx = Pxz S⁻¹ ν and what it does to z,
+			// u = H dx = S_x S⁻¹ ν (S_x = S − R, the state's share of S).
+			const Eigen::VectorXd Si_nu = llt.solve(nu);
+			const TangentVector dx0 = Pxz * Si_nu;
+			const Eigen::VectorXd u = (S - meas.R) * Si_nu;
+			const double beta = inflationAlongCorrection(llt, nu, u, gate);
+			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
+			{
+				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
+				P_.noalias() += beta * dx0 * dx0.transpose();
+				Pxz.noalias() += beta * dx0 * u.transpose();
+				S.noalias() += beta * u * u.transpose();
+				widened = true;
+			}
+		}
+		if (!widened) S *= res.nis / gate;	// the aid blamed: the innovation on the gate boundary
+		llt.compute(S);
+		if (llt.info() != Eigen::Success)
+		{
+			res.status = UpdateStatus::Invalid;
+			res.why = "innovation covariance not positive definite";
+			return res;
+		}
 	}
 	else
 		res.status = UpdateStatus::Accepted;

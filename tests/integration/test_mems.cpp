@@ -11,7 +11,8 @@
 //    below 90°, the position σ covers the displacement from the start, status
 //    'degraded'.
 // Pool square, one seed by default, three seeds labelled slow; the 20-minute
-// lawnmower at 10 m is open (disabled, figures below).
+// lawnmower at 10 m (slow): within 1 %, inside 2σ open (disabled). The noise
+// sweep of the profile: each figure alone and all together ×0.3 and ×3.
 #include <auvnav/so3.h>
 #include <gtest/gtest.h>
 
@@ -93,7 +94,7 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 }
 
 void memsSeeds(const std::string& mission, const std::string& name, const std::vector<unsigned>& seeds,
-			   bool check_attitude = false)
+			   bool check_attitude = false, bool check_sigma = true)
 {
 	std::printf("%s, config/bluerov2.yaml: seed | end error [m] | distance [m] | %% | 2 sigma [m] | worst |heading "
 				"err|/sigma | NEES pos / att inside 95%% | status\n",
@@ -106,8 +107,11 @@ void memsSeeds(const std::string& mission, const std::string& name, const std::v
 					o.distance_m, 100 * o.end_error_m / o.distance_m, o.end_two_sigma_m, o.worst_heading_ratio,
 					100 * o.nees_pos_inside, 100 * o.nees_att_inside, navStatusName(o.status), o.reason.c_str());
 		EXPECT_LE(o.end_error_m, 0.01 * o.distance_m) << name << " seed " << s;
-		EXPECT_LE(o.end_error_m, o.end_two_sigma_m) << name << " seed " << s;
-		EXPECT_GE(o.nees_pos_inside, 0.9) << name << " seed " << s;
+		if (check_sigma)
+		{
+			EXPECT_LE(o.end_error_m, o.end_two_sigma_m) << name << " seed " << s;
+			EXPECT_GE(o.nees_pos_inside, 0.9) << name << " seed " << s;
+		}
 		EXPECT_EQ(o.status, NavStatus::Ok) << name << " seed " << s << ": " << o.reason;
 		if (check_attitude)
 		{
@@ -149,11 +153,15 @@ TEST(MemsVehicle, DISABLED_NoHeadingSourcePositionSigmaCoversTheDisplacement)
 	fs::remove_all(dir);
 }
 
-// OPEN (issue 13): the magnetometer's constant heading error (the simulated
-// unit's misalignment, ~1.4°) is averaged down to a 0.2° sigma (worst
-// |err|/σ 16.9, attitude NEES inside 2 %, seed 1): needs a heading-bias state
-// (plugin-owned states, issue 14). A σ floor in R was tried and is worse: the
-// magnetometer then stops teaching the gyro bias and the heading drifts 6°.
+// OPEN (issue 13): the magnetometer's correlated heading errors (the
+// simulated unit's misalignment, ~1.4°, and thruster currents, several
+// degrees) are averaged down to a sub-degree sigma (worst |err|/σ 6.9,
+// attitude NEES inside 11 %, seed 1, at 1 Hz with σ 6°): needs a heading-bias
+// state (plugin-owned states, issue 14). A floor on the heading σ (R grown so
+// that an update never takes the heading variance below the bias's) was
+// tried and is worse: at the floor the readings carry no information, the
+// gyro bias is no longer learned and the heading drifts (RMS 3.9° against
+// 1.8°, end error 0.66 m against 0.15 m, seed 1).
 TEST(MemsVehicle, DISABLED_PoolSquareHeadingConsistentWithItsSigma)
 {
 	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1}, true);
@@ -164,12 +172,20 @@ TEST(MemsVehicleSlow, ThreeSeedsPoolSquare)
 	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1, 2, 3});
 }
 
-// OPEN (issue 13): the 20-minute lawnmower at 10 m. Measured (seeds 1-3): end
-// error 4.08 / 5.37 / 4.84 m of 520 m (0.79 / 1.03 / 0.93 %) against a 2σ of
-// 1.1 m; the over-confident heading (the magnetometer's constant error
-// averaged down) makes the magnetometer fail its gate for good after
-// 245-367 s (status 'degraded', "diverged at ... consistent since").
-TEST(MemsVehicleSlow, DISABLED_ThreeSeedsLawnmower)
+// The 20-minute lawnmower at 10 m. Measured (seeds 1-3): end error 1.78 /
+// 2.16 / 1.76 m of 520 m (0.34 / 0.42 / 0.34 %), status ok.
+TEST(MemsVehicleSlow, ThreeSeedsLawnmowerWithinOnePercent)
+{
+	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, false, false);
+}
+
+// OPEN (issue 13): the same end errors against a 2σ of 1.18-1.21 m, position
+// NEES inside 33-46 % of the time: the heading σ ends below the
+// magnetometer's thruster-current errors (up to 9°, correlated over a leg),
+// which need a heading-bias state (plugin-owned states, issue 14) or a
+// thruster-current compensation (a magnetometer model that reads the
+// thruster stream).
+TEST(MemsVehicleSlow, DISABLED_ThreeSeedsLawnmowerInsideTwoSigma)
 {
 	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3});
 }
@@ -196,7 +212,7 @@ const std::vector<NoiseKey> kMemsNoise = {
 	{"sensors.IMU.config.extra_sigma_mps2", 0.05, false},
 	{"sensors.DVL.config.sigma_mps", 0.01, false},
 	{"sensors.PRESSURE.config.sigma_pa", 30, false},
-	{"sensors.MAG.config.heading_sigma_deg", 3.0, false},
+	{"sensors.MAG.config.heading_sigma_deg", 6.0, false},
 };
 
 Overrides scaled(const std::vector<NoiseKey>& keys, double k)
@@ -233,9 +249,9 @@ std::vector<std::vector<NoiseKey>> eachKey()
 }
 }  // namespace
 
-// Measured (seed 1): every figure alone x0.3 and x3 converges, 0.05-0.31 m of
+// Measured (seed 1): every figure alone x0.3 and x3 converges, 0.18-0.41 m of
 // 82 m; status ok except gyro bias x0.3 and magnetometer sigma x0.3
-// ('degraded': windowed NIS 1.7 / 3.6).
+// ('degraded': windowed NIS 1.75 / 2.44).
 TEST(MemsVehicleSlow, NoiseSweepEachFigureAlone)
 {
 	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
@@ -243,7 +259,7 @@ TEST(MemsVehicleSlow, NoiseSweepEachFigureAlone)
 	fs::remove_all(dir);
 }
 
-// All figures x3 together: 0.15 m of 82 m, status ok (seed 1).
+// All figures x3 together: 0.34 m of 82 m, status ok (seed 1).
 TEST(MemsVehicle, NoiseSweepAllTimesThree)
 {
 	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
@@ -251,14 +267,11 @@ TEST(MemsVehicle, NoiseSweepAllTimesThree)
 	fs::remove_all(dir);
 }
 
-// OPEN (issue 13): all figures x0.3 together ends 0.75 m off (0.91 % of 82 m,
-// so it converges), but the filter, told its magnetometer is good to 0.9 deg,
-// rejects it for the last 110 s and the monitor says 'diverged' (exit 4)
-// with a good position. Re-acquiring an aid whose rejections show the state
-// is off needs the state's covariance inflated along the measured directions,
-// not the innovation's (ukf.cpp, recovery), which a DVL with a wrong mounting
-// would then pull along: open.
-TEST(MemsVehicle, DISABLED_NoiseSweepAllTimesZeroPointThree)
+// All figures x0.3 together: 0.18 m of 82 m, 'degraded' (DVL NIS 2.05 per
+// dimension over 30 s: the filter told its sensors are better than they
+// are). Before aids were re-acquired by widening the state's covariance
+// (Recovery::State) it ended 'diverged': the magnetometer rejected for good.
+TEST(MemsVehicle, NoiseSweepAllTimesZeroPointThree)
 {
 	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
 	noiseSweep(dir, {kMemsNoise}, {0.3});

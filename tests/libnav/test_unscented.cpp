@@ -334,3 +334,82 @@ TEST(Unscented, UnknownHeadingKeepsItsSigmaThroughPrediction)
 	EXPECT_NEAR(kept, 180.0, 1.0);
 	EXPECT_LT(collapsed, 20.0);	 // the failure the limit removes (the test can fail)
 }
+
+namespace
+{
+/** h(x) = the azimuth of the body x axis [rad], wrapped residual. */
+class Heading : public MeasurementModel
+{
+   public:
+	uint32_t uses() const noexcept override { return kAttitude; }
+	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
+						  std::string&) noexcept override
+	{
+		out.clear();
+		return PrepareStatus::Skip;
+	}
+	bool predict(const NavState& x, const Measurement&, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
+		return true;
+	}
+	void residual(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
+				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	{
+		r[0] = std::remainder(a[0] - b[0], 2 * M_PI);
+	}
+};
+
+struct RecoveryOutcome
+{
+	UpdateStatus status;
+	double moved_rad, sigma_rad, nis_after;
+};
+
+/** An over-confident heading (σ 0.1°) 10° off a heading aid of σ 2°: one
+ *  update with `how`. */
+RecoveryOutcome recoverOnce(Recovery how)
+{
+	const NavState x = test::makeState(0.3);
+	Covariance P = Covariance::Zero();
+	const TangentVector sig = test::makeSigmas(Eigen::Vector3d(0.5, 0.5, 0.1) * test::kDeg);
+	P.diagonal() = sig.cwiseProduct(sig);
+	ManifoldUkf f(test::makeProcessModel(), UtParams{});
+	f.initialize(x, P);
+	Heading h;
+	Measurement m;
+	m.z = Eigen::VectorXd::Constant(1, 0.3 + 10 * test::kDeg);
+	m.R = Eigen::MatrixXd::Constant(1, 1, std::pow(2 * test::kDeg, 2));
+	FilterContext ctx;
+	const UpdateResult r = f.update(h, m, ctx, how);
+	const double after = std::atan2(f.state().R_nb(1, 0), f.state().R_nb(0, 0));
+	const double sigma = std::sqrt(f.covariance()(2, 2));
+	const double nu_after = m.z[0] - after;
+	return {r.status, after - 0.3, sigma, nu_after * nu_after / (sigma * sigma + m.R(0, 0))};
+}
+}  // namespace
+
+TEST(Recovery, StateBlamedPullsAnOverconfidentHeadingToTheGate)
+{
+	const RecoveryOutcome none = recoverOnce(Recovery::None), noise = recoverOnce(Recovery::Noise),
+						  state = recoverOnce(Recovery::State);
+	std::printf("10 deg off, sigma 0.1 deg, aid 2 deg: noise recovery moves %.3f deg (sigma %.3f), state recovery "
+				"%.3f deg (sigma %.3f, NIS after %.2f)\n",
+				noise.moved_rad / test::kDeg, noise.sigma_rad / test::kDeg, state.moved_rad / test::kDeg,
+				state.sigma_rad / test::kDeg, state.nis_after);
+	EXPECT_EQ(none.status, UpdateStatus::Rejected);
+	EXPECT_EQ(noise.status, UpdateStatus::Recovered);
+	EXPECT_EQ(state.status, UpdateStatus::Recovered);
+	// Blaming the aid: the state's σ of 0.1° lets it move by ~σ²·gate/ν only.
+	EXPECT_LT(std::abs(noise.moved_rad), 0.05 * test::kDeg);
+	// Blaming the state: the prior is widened until 10° lies on the gate
+	// (S' = ν²/gate), so the heading moves (1 − R·gate/ν²)·ν = 5.67° and its
+	// σ grows to what that move needs.
+	const double gate = ManifoldUkf::chiSquareQuantile(1, 0.999);
+	const double expected = (1 - 4 * gate / 100) * 10 * test::kDeg;
+	EXPECT_NEAR(state.moved_rad, expected, 0.02 * expected);
+	EXPECT_GT(state.sigma_rad, 1 * test::kDeg);
+	// The next reading like it now passes the gate (≈ 3.0 < 10.8).
+	EXPECT_LT(state.nis_after, 0.5 * gate);
+}

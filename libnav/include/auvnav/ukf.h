@@ -72,9 +72,29 @@ struct UtWeights
 enum class UpdateStatus
 {
 	Accepted,
-	Recovered,	//!< accepted with inflated noise after a long run of rejections
+	Recovered,	//!< accepted on the gate boundary after a run of rejections (see Recovery)
 	Rejected,	//!< failed the χ² gate
 	Invalid		//!< non-finite z/R/h, wrong size, or singular innovation covariance
+};
+
+/** How an update that fails the χ² gate is applied anyway (re-acquisition).
+ *  Both put the innovation on the gate boundary; they differ in whom they
+ *  blame. */
+enum class Recovery
+{
+	None,	//!< gate as usual
+	//! The aid may be off: the whole innovation covariance is scaled up, so
+	//! the state moves by at most what the gate allows (a small step when the
+	//! state's σ is small). For a long run of rejections of unknown cause.
+	Noise,
+	//! The state is off: its covariance is widened along the normal
+	//! correction dx = K ν (P += β dx dxᵀ, β the smallest that puts the
+	//! innovation on the gate; closed form, ukf.cpp), then a normal update.
+	//! For rejections of an absolute attitude/position aid that agree with
+	//! each other (rejection_streak.h, navigator.cpp): an over-confident
+	//! heading is pulled to the magnetometer however small its σ had become. Falls back to Noise when no β can (the state cannot
+	//! explain the innovation).
+	State
 };
 
 struct UpdateResult
@@ -98,10 +118,15 @@ class ManifoldUkf
 	/** Propagates by dt_s with the raw gyro sample (IMU axes) and the Earth rate. */
 	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
 
-	/** One measurement update. `recovery` inflates the innovation covariance
-	 *  so that a measurement failing the gate lands on the gate boundary. */
+	/** One measurement update; `recovery` says how one failing the gate is
+	 *  applied anyway (see Recovery). */
 	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
-						bool recovery = false);
+						Recovery recovery = Recovery::None);
+	//! `true`: Recovery::Noise (the older form).
+	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx, bool recovery)
+	{
+		return update(model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
+	}
 
 	std::size_t choleskyRepairs() const { return repairs_; }
 	const UtWeights& weights() const { return w_; }
