@@ -140,8 +140,17 @@ TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
 	fs::remove_all(dir);
 }
 
-// OPEN (issue 13): the position sigma with an unknown heading covers only ~1/4
-// of the displacement from the start (measured 3.76, seed 1).
+// OPEN (issue 13): with the heading unknown the position σ grows as about
+// 3 × the filter's own displacement from the start (σψ·d̂, the linearised
+// value; the true spread of a uniform heading is d/√2) and shrinks when the
+// vehicle comes back, but near those returns the error exceeds it (worst
+// displacement / σ 3.76; horizontal NEES inside its 95 % bound 54 % of the
+// time after 60 s, worst √NEES 5.3, seed 1). Partly the gyro's turn-on bias,
+// never learned without a heading source, bending the path (without it in
+// the simulator: 80 %, worst 4.4); the rest is a Gaussian standing for a
+// ring-shaped distribution. Needs a heading-free representation until
+// aligned (position relative to the start in a frame that turns with the
+// unknown heading) — a design change, open.
 TEST(MemsVehicle, DISABLED_NoHeadingSourcePositionSigmaCoversTheDisplacement)
 {
 	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
