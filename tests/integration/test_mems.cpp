@@ -5,8 +5,8 @@
 // config/bluerov2.yaml (heading unknown at start: σ 180°).
 //  - with the magnetometer: horizontal error at the end ≤ 1 % of the distance
 //    travelled and inside 2σ; position NEES inside its 95 % bound ≥ 90 % of
-//    the time after alignment (the first 60 s); status ok. Heading inside 3σ
-//    and attitude NEES: open (a disabled test below);
+//    the time after alignment (the first 60 s); heading inside 3σ; status
+//    ok. Attitude NEES: open (a disabled test below);
 //  - without any heading source (MAG withheld): the heading σ never drops
 //    below 90°, the position σ covers the displacement from the start, status
 //    'degraded'.
@@ -94,7 +94,7 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 }
 
 void memsSeeds(const std::string& mission, const std::string& name, const std::vector<unsigned>& seeds,
-			   bool check_attitude = false, bool check_sigma = true)
+			   bool check_heading, bool check_attitude_nees = false, bool check_sigma = true)
 {
 	std::printf("%s, config/bluerov2.yaml: seed | end error [m] | distance [m] | %% | 2 sigma [m] | worst |heading "
 				"err|/sigma | NEES pos / att inside 95%% | status\n",
@@ -113,11 +113,8 @@ void memsSeeds(const std::string& mission, const std::string& name, const std::v
 			EXPECT_GE(o.nees_pos_inside, 0.9) << name << " seed " << s;
 		}
 		EXPECT_EQ(o.status, NavStatus::Ok) << name << " seed " << s << ": " << o.reason;
-		if (check_attitude)
-		{
-			EXPECT_LE(o.worst_heading_ratio, 3.0) << name << " seed " << s;
-			EXPECT_GE(o.nees_att_inside, 0.9) << name << " seed " << s;
-		}
+		if (check_heading) EXPECT_LE(o.worst_heading_ratio, 3.0) << name << " seed " << s;
+		if (check_attitude_nees) EXPECT_GE(o.nees_att_inside, 0.9) << name << " seed " << s;
 		fs::remove_all(dir);
 	}
 }
@@ -125,7 +122,7 @@ void memsSeeds(const std::string& mission, const std::string& name, const std::v
 
 TEST(MemsVehicle, PoolSquareWithMagnetometerDvlDepth)
 {
-	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1});
+	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1}, true);
 }
 
 TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
@@ -140,18 +137,10 @@ TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
 	fs::remove_all(dir);
 }
 
-// OPEN (issue 13): with the heading unknown the position σ grows as about
-// 3 × the filter's own displacement from the start (σψ·d̂, the linearised
-// value; the true spread of a uniform heading is d/√2) and shrinks when the
-// vehicle comes back, but near those returns the error exceeds it (worst
-// displacement / σ 3.76; horizontal NEES inside its 95 % bound 54 % of the
-// time after 60 s, worst √NEES 5.3, seed 1). Partly the gyro's turn-on bias,
-// never learned without a heading source, bending the path (without it in
-// the simulator: 80 %, worst 4.4); the rest is a Gaussian standing for a
-// ring-shaped distribution. Needs a heading-free representation until
-// aligned (position relative to the start in a frame that turns with the
-// unknown heading) — a design change, open.
-TEST(MemsVehicle, DISABLED_NoHeadingSourcePositionSigmaCoversTheDisplacement)
+// Worst displacement / position σ 0.59 (seed 1). It was 3.76 while the gyro
+// bias state decayed to zero (σ 15°/h, τ 300 s): the unlearnt turn-on bias
+// (~0.1°/s) bent the path beyond the σ; config/bluerov2.yaml now keeps it.
+TEST(MemsVehicle, NoHeadingSourcePositionSigmaCoversTheDisplacement)
 {
 	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
 	const MemsOutcome o = runMems(dir, "bluerov2_pool_square", false);
@@ -164,8 +153,9 @@ TEST(MemsVehicle, DISABLED_NoHeadingSourcePositionSigmaCoversTheDisplacement)
 
 // OPEN (issue 13): the magnetometer's correlated heading errors (the
 // simulated unit's misalignment, ~1.4°, and thruster currents, several
-// degrees) are averaged down to a sub-degree sigma (worst |err|/σ 6.9,
-// attitude NEES inside 11 %, seed 1, at 1 Hz with σ 6°): needs a heading-bias
+// degrees) are averaged down to a sub-degree sigma: the heading stays inside
+// 3σ (worst 2.44 / 1.94 / 2.07, seeds 1-3) but the attitude NEES is inside
+// its bound only 43 / 35 / 17 % of the time: needs a heading-bias
 // state (plugin-owned states, issue 14). A floor on the heading σ (R grown so
 // that an update never takes the heading variance below the bias's) was
 // tried and is worse: at the floor the readings carry no information, the
@@ -173,30 +163,30 @@ TEST(MemsVehicle, DISABLED_NoHeadingSourcePositionSigmaCoversTheDisplacement)
 // 1.8°, end error 0.66 m against 0.15 m, seed 1).
 TEST(MemsVehicle, DISABLED_PoolSquareHeadingConsistentWithItsSigma)
 {
-	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1}, true);
+	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1}, true, true);
 }
 
 TEST(MemsVehicleSlow, ThreeSeedsPoolSquare)
 {
-	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1, 2, 3});
+	memsSeeds("config/missions/bluerov2_pool_square.yaml", "bluerov2_pool_square", {1, 2, 3}, true);
 }
 
-// The 20-minute lawnmower at 10 m. Measured (seeds 1-3): end error 1.78 /
-// 2.16 / 1.76 m of 520 m (0.34 / 0.42 / 0.34 %), status ok.
+// The 20-minute lawnmower at 10 m. Measured (seeds 1-3): end error 1.26 /
+// 1.67 / 1.40 m of 520 m (0.24 / 0.32 / 0.27 %), status ok.
 TEST(MemsVehicleSlow, ThreeSeedsLawnmowerWithinOnePercent)
 {
-	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, false, false);
+	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, false, false, false);
 }
 
-// OPEN (issue 13): the same end errors against a 2σ of 1.18-1.21 m, position
-// NEES inside 33-46 % of the time: the heading σ ends below the
+// OPEN (issue 13): the same end errors against a 2σ of 1.19-1.20 m, position
+// NEES inside 65-75 % of the time, worst heading error 8.6-8.8σ: the heading σ ends below the
 // magnetometer's thruster-current errors (up to 9°, correlated over a leg),
 // which need a heading-bias state (plugin-owned states, issue 14) or a
 // thruster-current compensation (a magnetometer model that reads the
 // thruster stream).
 TEST(MemsVehicleSlow, DISABLED_ThreeSeedsLawnmowerInsideTwoSigma)
 {
-	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3});
+	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, true, true);
 }
 
 namespace
@@ -213,7 +203,7 @@ struct NoiseKey
 // Every noise figure the MEMS profile tunes (values as in config/bluerov2.yaml).
 const std::vector<NoiseKey> kMemsNoise = {
 	{"filter.process_noise.gyro_arw_deg_per_sqrt_h", 0.5, false},
-	{"filter.process_noise.gyro_bias_deg_per_h.sigma", 15, false},
+	{"filter.process_noise.gyro_bias_deg_per_h.sigma", 500, false},
 	{"filter.process_noise.accel_bias_mg.sigma", 0.5, false},
 	{"filter.process_noise.jerk_psd", 1.0e-2, true},
 	{"filter.process_noise.velocity_psd", 1.0e-4, true},
