@@ -135,12 +135,9 @@ struct Problem
 void algebraicEllipse(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& c, Eigen::Matrix2d& A)
 {
 	// Centred and scaled, as in the 3-D fit: raw µT squared swamp the constant term.
-	Eigen::Vector2d c0 = Eigen::Vector2d::Zero();
-	for (const auto& p : pts) c0 += p;
-	c0 /= static_cast<double>(pts.size());
+	Eigen::Vector2d c0;
 	double s0 = 0;
-	for (const auto& p : pts) s0 += (p - c0).squaredNorm();
-	s0 = std::sqrt(s0 / static_cast<double>(pts.size()));
+	centreAndScale(pts, c0, s0);
 	Eigen::Matrix<double, 6, 6> DtD = Eigen::Matrix<double, 6, 6>::Zero();
 	for (const auto& p : pts)
 	{

@@ -48,12 +48,9 @@ void algebraicEllipsoid(const std::vector<Eigen::Vector3d>& x, Eigen::Vector3d& 
 {
 	// Centre and scale the data: the 10 × 10 scatter matrix of raw µT values
 	// mixes entries of order 1e8 and 1, which loses the small eigenvalue.
-	Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
-	for (const auto& p : x) c0 += p;
-	c0 /= static_cast<double>(x.size());
+	Eigen::Vector3d c0;
 	double s0 = 0;
-	for (const auto& p : x) s0 += (p - c0).squaredNorm();
-	s0 = std::sqrt(s0 / static_cast<double>(x.size()));
+	centreAndScale(x, c0, s0);
 	// Quadric yᵀ M y + 2 nᵀ y + k = 0 with q = (M00, M11, M22, M01, M02, M12, n0, n1, n2, k).
 	Eigen::Matrix<double, 10, 10> DtD = Eigen::Matrix<double, 10, 10>::Zero();
 	for (const auto& p : x)

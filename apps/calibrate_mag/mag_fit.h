@@ -28,6 +28,7 @@
  *  Units: µT throughout.
  */
 #include <Eigen/Core>
+#include <cmath>
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -97,5 +98,18 @@ Samples readSamples(const std::string& rawlog, const std::string& label, double 
 /** The magnetometer plugin's keys (hard_iron_ut, soft_iron) with comments
  *  on where they came from and how good the fit is. */
 std::string pluginYaml(const FitResult& r, const std::string& source_comment);
+
+/** Centroid c and RMS distance s of `pts` from it: the algebraic fits work
+ *  on (p − c)/s, since raw µT squared swamp the constant term. */
+template <int N>
+void centreAndScale(const std::vector<Eigen::Matrix<double, N, 1>>& pts, Eigen::Matrix<double, N, 1>& c, double& s)
+{
+	c.setZero();
+	for (const auto& p : pts) c += p;
+	c /= static_cast<double>(pts.size());
+	s = 0;
+	for (const auto& p : pts) s += (p - c).squaredNorm();
+	s = std::sqrt(s / static_cast<double>(pts.size()));
+}
 
 }  // namespace auvnav::magcal

@@ -192,9 +192,9 @@ namespace
  *  needed (never S_x⁻¹, which is near singular when the state hardly moves
  *  the measurement), and the added covariance is bounded by the innovation. */
 double inflationAlongCorrection(const Eigen::LLT<Eigen::MatrixXd>& llt_S, const Eigen::VectorXd& nu,
-								const Eigen::VectorXd& u, double gate)
+								const Eigen::VectorXd& Si_nu, const Eigen::VectorXd& u, double gate)
 {
-	const Eigen::VectorXd Si_nu = llt_S.solve(nu), Si_u = llt_S.solve(u);
+	const Eigen::VectorXd Si_u = llt_S.solve(u);
 	const double q = nu.dot(Si_nu), a = nu.dot(Si_u), b = u.dot(Si_u);
 	const double excess = q - gate;	 // > 0: the update failed the gate
 	const double denom = a * a - excess * b;
@@ -331,7 +331,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			const Eigen::VectorXd Si_nu = llt.solve(nu);
 			const TangentVector dx0 = Pxz * Si_nu;
 			const Eigen::VectorXd u = (S - meas.R) * Si_nu;
-			const double beta = inflationAlongCorrection(llt, nu, u, gate);
+			const double beta = inflationAlongCorrection(llt, nu, Si_nu, u, gate);
 			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
 			{
 				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
