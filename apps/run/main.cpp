@@ -91,7 +91,8 @@ int main(int argc, char** argv)
 			nav->addDenial(w);
 		}
 		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
-		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate);
+		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
+															   nav->storedStateNames());
 	}
 	catch (const std::exception& e)
 	{

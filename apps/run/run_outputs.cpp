@@ -41,7 +41,9 @@ std::string num(double v)
 }
 }  // namespace
 
-RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), period_s_(1.0 / rate_hz)
+RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
+					   std::vector<std::string> stored_names)
+	: dir_(dir), names_(std::move(tangent_names)), stored_names_(std::move(stored_names)), period_s_(1.0 / rate_hz)
 {
 	fs::create_directories(dir);
 	tum_.open(fs::path(dir) / "trajectory.tum");
@@ -50,8 +52,8 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz) : dir_(dir), peri
 	if (!tum_ || !csv_ || !fixes_) throw std::runtime_error("cannot write outputs in " + dir);
 	fixes_ << "time_s,label,north_m,east_m,status\n";
 	tum_ << "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)\n";
-	const auto& names = tangentNames();
-	const auto& stored = storedNames();
+	const auto& names = names_;
+	const auto& stored = stored_names_;
 	csv_ << "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
 	for (std::size_t i = 3; i < stored.size(); ++i) csv_ << ',' << stored[i];
 	csv_ << ",body_n_m,body_e_m,body_d_m";
@@ -103,10 +105,10 @@ void RunOutputs::onState(const Navigator& nav)
 	s.unsetf(std::ios::fixed);
 	s << ',' << q.w() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << roll << ',' << pitch << ',' << yaw;
 	const TangentVector e = x.euclidean();
-	for (int i = 3; i < idx::dim; ++i) s << ',' << e[i];
+	for (int i = 3; i < e.size(); ++i) s << ',' << e[i];
 	s << ',' << p.x() << ',' << p.y() << ',' << p.z();
 	const auto& P = nav.filter().covariance();
-	for (int i = 0; i < idx::dim; ++i) s << ',' << std::sqrt(std::max(P(i, i), 0.0));
+	for (int i = 0; i < P.rows(); ++i) s << ',' << std::sqrt(std::max(P(i, i), 0.0));
 	for (int b : {idx::pos, idx::att}) s << ',' << P(b, b + 1) << ',' << P(b, b + 2) << ',' << P(b + 1, b + 2);
 	csv_ << s.str() << '\n';
 	if (++rows_ % 50 == 0) flush();
@@ -180,9 +182,9 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 		  << "\n";
 	}
 	j << "  ],\n  \"final_sigma\": {";
-	const auto& names = tangentNames();
+	const auto& names = names_;
 	const auto& P = nav.filter().covariance();
-	for (int i = 0; i < idx::dim; ++i)
+	for (int i = 0; i < static_cast<int>(names.size()) && i < P.rows(); ++i)
 		j << (i ? ", " : "") << "\"" << names[i] << "\": " << num(nav.initialized() ? std::sqrt(std::max(P(i, i), 0.0)) : NAN);
 	j << "}\n}\n";
 	const fs::path tmp = fs::path(dir_) / "summary.json.tmp";

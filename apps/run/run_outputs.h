@@ -25,13 +25,17 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace auvnav::run
 {
 class RunOutputs
 {
    public:
-	RunOutputs(const std::string& dir, double rate_hz);
+	/** `tangent_names` / `stored_names`: Navigator::stateNames() and
+	 *  storedStateNames() (the 43 and the plugin states), for the headers. */
+	RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
+			   std::vector<std::string> stored_names);
 	/** Appends a row if at least 1/rate since the last one. */
 	void onState(const Navigator& nav);
 	/** Appends a GPS-like 2-D position update (label "…GPS…" or any update
@@ -49,6 +53,7 @@ class RunOutputs
 
    private:
 	std::string dir_;
+	std::vector<std::string> names_, stored_names_;
 	double period_s_;
 	double last_t_ = -1e300;
 	std::ofstream tum_, csv_, fixes_, nis_, health_;

@@ -73,7 +73,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
 	put23(prior_mean_, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));
-	const ProcessModel pm = ProcessModel::fromConfig(f.child("process_noise"), prior_mean_);
+	ProcessModel pm = ProcessModel::fromConfig(f.child("process_noise"), prior_mean_);
 	UtParams ut;
 	if (f.has("unscented"))
 	{
@@ -83,11 +83,11 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		ut.kappa = u.number("kappa", ut.kappa);
 		ut.max_attitude_spread_rad = u.inRange("max_attitude_spread_deg", 1, 170, 30) * kDeg;
 	}
-	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
 	earth_rate_ = f.boolean("earth_rate", true);
 
 	// Initial covariance (diagonal, tangent order).
 	const auto& in = initial_;
+	P0_.setZero(idx::core_dim, idx::core_dim);
 	auto set3 = [&](int at, double sigma) { P0_.block<3, 3>(at, at).diagonal().setConstant(sigma * sigma); };
 	const double rp = in.positive("roll_pitch_sigma_deg") * kDeg;
 	P0_(0, 0) = P0_(1, 1) = rp * rp;
@@ -142,6 +142,55 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		slot->stats.plugin = s.string("plugin");
 		slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
 		slots_.push_back(std::move(slot));
+	}
+	appendPluginStates(pm);
+	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
+}
+
+void Navigator::appendPluginStates(ProcessModel& pm)
+{
+	state_names_ = tangentNames();
+	stored_names_ = storedNames();
+	for (auto& slot : slots_)
+	{
+		const std::string& label = slot->stats.label;
+		std::vector<StateBlockSpec> blocks;
+		try
+		{
+			blocks = slot->model->stateBlocks();
+		}
+		catch (const std::exception& e)
+		{
+			throw PluginError("sensor '" + label + "' (plugin " + slot->stats.plugin +
+							  "): stateBlocks() failed: " + e.what());
+		}
+		if (blocks.empty()) continue;
+		const int first_extra = pm.dim() - idx::core_dim;
+		for (const StateBlockSpec& b : blocks)
+		{
+			const int at = pm.dim();
+			try
+			{
+				pm.appendBlock(b);
+			}
+			catch (const std::exception& e)
+			{
+				throw PluginError("sensor '" + label + "' (plugin " + slot->stats.plugin + "): " + e.what());
+			}
+			P0_.conservativeResize(pm.dim(), pm.dim());
+			P0_.rightCols(b.dimension()).setZero();
+			P0_.bottomRows(b.dimension()).setZero();
+			for (int i = 0; i < b.dimension(); ++i)
+			{
+				const double sigma = b.sigma.size() == 1 ? b.sigma[0] : b.sigma[i];
+				P0_(at + i, at + i) = sigma * sigma;
+				const std::string name = label + "." + b.name + (b.components[i].empty() ? "" : "_" + b.components[i]);
+				state_names_.push_back(name);
+				stored_names_.push_back(name);
+			}
+			plugin_blocks_.push_back({label, b.name, at, b.dimension()});
+		}
+		slot->model->bindStates(first_extra);
 	}
 }
 
@@ -289,6 +338,9 @@ void Navigator::initialize()
 	if (position_from_gps_ && gps_fix_n_) p_body = *gps_fix_n_;
 	p_body.z() = initial_.number("depth_m", 0.0);
 	x0.p_n = p_body + x0.R_nb * imu_position_b_;
+	// Plugin states start at their declared means (the process model's prior).
+	const TangentVector& prior = ukf_->processModel().prior_mean;
+	x0.extra = prior.tail(prior.size() - idx::core_dim);
 	TangentVector e = x0.euclidean();
 	e.segment<18>(idx::inertia) = prior_mean_.segment<18>(idx::inertia);
 	x0.setEuclidean(e);
@@ -319,6 +371,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 {
 	FilterContext ctx;
 	ctx.t_s = t_s_;
+	ctx.t_measurement_s = t_obs;
 	ctx.omega_ib_b = omega_ib_b_;
 	ctx.omega_ie_n = frame_->earthRate();
 	ctx.imu_position_b = imu_position_b_;

@@ -2,6 +2,8 @@
 #include <auvnav/so3.h>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace auvnav
 {
@@ -12,26 +14,66 @@ double GaussMarkov::variance(double dt_s) const
 	return sigma * sigma * (1 - p * p);
 }
 
+double ExtraStateProcess::variance(double dt_s) const
+{
+	switch (kind)
+	{
+		case StateProcess::RandomConstant:
+			return 0;
+		case StateProcess::RandomWalk:
+			return sigma * sigma * dt_s;
+		case StateProcess::GaussMarkov:
+		{
+			const double p = phi(dt_s);
+			return sigma * sigma * (1 - p * p);
+		}
+	}
+	return 0;
+}
+
+void ProcessModel::appendBlock(const StateBlockSpec& b)
+{
+	const std::string why = b.problem();
+	if (!why.empty()) throw std::invalid_argument(why);
+	const int d = b.dimension();
+	if (dim() + d > idx::max_dim)
+		throw std::invalid_argument("state block '" + b.name + "': no room (" + std::to_string(dim() - idx::core_dim) +
+									" plugin states already, at most " + std::to_string(idx::max_extra) + ")");
+	const int at = dim();
+	TangentVector mean = prior_mean;
+	mean.conservativeResize(at + d);
+	for (int i = 0; i < d; ++i)
+	{
+		extra.push_back({b.process, b.process_sigma, b.tau_s});
+		mean[at + i] = b.mean.empty() ? 0.0 : b.mean[i];
+	}
+	prior_mean = mean;
+}
+
 NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
 								 const Eigen::Vector3d& omega_ie_n, double dt) const
 {
+	if (x.dim() != dim())
+		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
+									std::to_string(dim()) + " coordinates");
 	NavState y = x;
 	// Body rotation relative to inertial space, then undo the turn of the
 	// Earth-fixed navigation frame.
 	y.R_nb = so3::Exp(-omega_ie_n * dt) * x.R_nb * so3::Exp((omega_ib_b - x.b_w) * dt);
 	TangentVector e = x.euclidean();
 	const TangentVector e0 = e;
-	Eigen::Map<TangentVector> em(e.data());
-	applyLinearRows(em, dt);
+	applyLinearRows(e, dt);
 	// Gauss–Markov states relax to their prior mean: x' = φ(x − μ) + μ; the
 	// rows above applied φx, add (1 − φ)μ.
-	TangentVector mu_term = TangentVector::Zero();
+	TangentVector mu_term = TangentVector::Zero(e.size());
 	const double phi_ba = noise.accel_bias.phi(dt), phi_c = noise.current.phi(dt),
 				 phi_b = noise.adcp_bias.phi(dt), phi_p = std::exp(-dt / noise.parameter_tau_s);
 	mu_term.segment<3>(idx::acc_bias) = (1 - phi_ba) * prior_mean.segment<3>(idx::acc_bias);
 	mu_term.segment<4>(idx::current_vehicle) = (1 - phi_c) * prior_mean.segment<4>(idx::current_vehicle);
 	mu_term.segment<2>(idx::adcp_bias) = (1 - phi_b) * prior_mean.segment<2>(idx::adcp_bias);
 	mu_term.segment<18>(idx::inertia) = (1 - phi_p) * prior_mean.segment<18>(idx::inertia);
+	for (int i = 0; i < static_cast<int>(e.size()) - idx::core_dim; ++i)
+		mu_term[idx::extra + i] = (1 - extra[i].phi(dt)) * prior_mean[idx::extra + i];
 	e += mu_term;
 	if (current_far_distance_m > 0)
 	{
@@ -53,7 +95,7 @@ NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega
 
 Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps, double vertical_speed_mps) const
 {
-	Covariance Q = Covariance::Zero();
+	Covariance Q = Covariance::Zero(dim(), dim());
 	Q.block<3, 3>(idx::att, idx::att).diagonal().setConstant(noise.gyro_arw * noise.gyro_arw * dt);
 	Q.block<3, 3>(idx::gyro_bias, idx::gyro_bias).diagonal().setConstant(noise.gyro_bias.variance(dt));
 	// White jerk integrated exactly into (p, v, a), per axis.
@@ -81,6 +123,7 @@ Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_m
 	for (int i = 0; i < 18; ++i)
 		Q(idx::inertia + i, idx::inertia + i) =
 			noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p);
+	for (std::size_t i = 0; i < extra.size(); ++i) Q(idx::extra + i, idx::extra + i) = extra[i].variance(dt);
 	return Q;
 }
 

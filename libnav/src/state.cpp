@@ -2,6 +2,7 @@
 #include <auvnav/state.h>
 
 #include <cmath>
+#include <stdexcept>
 
 namespace auvnav
 {
@@ -34,8 +35,9 @@ void get23(const Eigen::Ref<const TangentVector>& t, int at, Eigen::Matrix<doubl
 }
 }  // namespace
 
-int tangentPrefix(uint32_t mask)
+int tangentPrefix(uint32_t mask, int dim)
 {
+	if (mask & kPluginStates) return dim;
 	int end = 0;
 	for (const auto& b : kBlocks)
 		if (mask & b.bit) end = std::max(end, b.begin + b.size);
@@ -44,7 +46,7 @@ int tangentPrefix(uint32_t mask)
 
 TangentVector NavState::euclidean() const
 {
-	TangentVector t = TangentVector::Zero();
+	TangentVector t = TangentVector::Zero(dim());
 	t.segment<3>(idx::gyro_bias) = b_w;
 	t.segment<3>(idx::acc) = a_n;
 	t[idx::gravity] = g;
@@ -57,11 +59,14 @@ TangentVector NavState::euclidean() const
 	put23(t, idx::inertia, M_sub);
 	put23(t, idx::damping_lin, Dl_sub);
 	put23(t, idx::damping_quad, Dq_sub);
+	t.tail(extra.size()) = extra;
 	return t;
 }
 
 void NavState::setEuclidean(const Eigen::Ref<const TangentVector>& t)
 {
+	if (t.size() < idx::core_dim || t.size() > idx::max_dim)
+		throw std::invalid_argument("NavState::setEuclidean: " + std::to_string(t.size()) + " coordinates");
 	b_w = t.segment<3>(idx::gyro_bias);
 	a_n = t.segment<3>(idx::acc);
 	g = t[idx::gravity];
@@ -74,10 +79,14 @@ void NavState::setEuclidean(const Eigen::Ref<const TangentVector>& t)
 	get23(t, idx::inertia, M_sub);
 	get23(t, idx::damping_lin, Dl_sub);
 	get23(t, idx::damping_quad, Dq_sub);
+	extra = t.tail(t.size() - idx::core_dim);
 }
 
 NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 {
+	if (delta.size() != dim())
+		throw std::invalid_argument("NavState::boxplus: a " + std::to_string(delta.size()) + "-vector on a " +
+									std::to_string(dim()) + "-state");
 	NavState y;
 	y.setEuclidean(euclidean() + delta);
 	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
@@ -99,6 +108,9 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 
 TangentVector NavState::boxminus(const NavState& y) const
 {
+	if (y.dim() != dim())
+		throw std::invalid_argument("NavState::boxminus: states of " + std::to_string(dim()) + " and " +
+									std::to_string(y.dim()) + " coordinates");
 	TangentVector d = euclidean() - y.euclidean();
 	const Eigen::Vector3d dtheta = so3::Log(R_nb * y.R_nb.transpose());
 	const Eigen::Matrix3d dR = so3::Exp(dtheta);
@@ -129,6 +141,24 @@ Eigen::Matrix<double, 2, 3> storedSub(const Eigen::Matrix<double, 2, 3>& physica
 	m(0, 0) = std::log(physical(0, 0));
 	m(1, 1) = std::log(physical(1, 1));
 	return m;
+}
+
+std::string StateBlockSpec::problem() const
+{
+	auto finite = [](double v) { return std::isfinite(v); };
+	if (name.empty()) return "a state block without a name";
+	if (components.empty()) return "state block '" + name + "' has no components";
+	const std::size_t d = components.size();
+	if (!mean.empty() && mean.size() != d) return "state block '" + name + "': mean has the wrong size";
+	if (sigma.size() != d && sigma.size() != 1) return "state block '" + name + "': sigma has the wrong size";
+	for (double v : mean)
+		if (!finite(v)) return "state block '" + name + "': non-finite mean";
+	for (double v : sigma)
+		if (!finite(v) || !(v > 0)) return "state block '" + name + "': initial sigma must be positive";
+	if (!finite(process_sigma) || process_sigma < 0) return "state block '" + name + "': negative process sigma";
+	if (process == StateProcess::GaussMarkov && !(tau_s > 0 && std::isfinite(tau_s)))
+		return "state block '" + name + "': Gauss-Markov needs tau_s > 0";
+	return "";
 }
 
 const std::vector<std::string>& tangentNames()

@@ -11,12 +11,13 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <stdexcept>
+#include <string>
 
 namespace auvnav
 {
 namespace
 {
-constexpr int n = idx::dim;
 // The inertial block and the currents (attitude … position, the two currents)
 // predict nonlinearly under the retraction of state.h; the ADCP bias and the
 // model parameters are affine and independent of them.
@@ -56,12 +57,19 @@ double ManifoldUkf::chiSquareQuantile(int dof, double p)
 }
 
 ManifoldUkf::ManifoldUkf(const ProcessModel& model, const UtParams& ut)
-	: model_(model), ut_(ut), w_(UtWeights::make(n, ut))
+	: model_(model), ut_(ut), w_(UtWeights::make(model.dim(), ut)), n_(model.dim())
 {
 }
 
 void ManifoldUkf::initialize(const NavState& x0, const Covariance& P0)
 {
+	if (P0.rows() != x0.dim() || P0.cols() != x0.dim() || x0.dim() != model_.dim())
+		throw std::invalid_argument("ManifoldUkf::initialize: state of " + std::to_string(x0.dim()) +
+									" coordinates, covariance " + std::to_string(P0.rows()) + "x" +
+									std::to_string(P0.cols()) + ", process model " + std::to_string(model_.dim()));
+	n_ = x0.dim();
+	w_ = UtWeights::make(n_, ut_);
+	L_.setZero(n_, n_);
 	x_ = x0;
 	P_ = P0;
 	symmetrize(P_);
@@ -72,7 +80,7 @@ void ManifoldUkf::repairCovariance()
 	// Nearest symmetric positive-definite matrix by eigenvalue clipping.
 	symmetrize(P_);
 	Eigen::SelfAdjointEigenSolver<Covariance> es(P_);
-	Eigen::Matrix<double, n, 1> ev = es.eigenvalues();
+	TangentVector ev = es.eigenvalues();
 	const double floor = std::max(1e-15, 1e-12 * ev.cwiseAbs().maxCoeff());
 	ev = ev.cwiseMax(floor);
 	P_ = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
@@ -82,6 +90,8 @@ void ManifoldUkf::repairCovariance()
 
 void ManifoldUkf::leadingCholeskyColumns(int k)
 {
+	const int n = n_;
+	if (L_.rows() != n) L_.setZero(n, n);
 	for (int attempt = 0; attempt < 2; ++attempt)
 	{
 		Eigen::LLT<Eigen::MatrixXd> llt(P_.topLeftCorner(k, k));
@@ -105,6 +115,7 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
 {
 	constexpr int k = kNonlinear;
+	const int n = n_;
 	leadingCholeskyColumns(k);
 	const double g = w_.gamma;
 	// Only sigma points along the first k Cholesky columns move the inertial
@@ -153,7 +164,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	for (int iter = 0; iter < 10; ++iter)
 	{
 		deviations(mean, d);
-		TangentVector step = TangentVector::Zero();
+		TangentVector step = TangentVector::Zero(n);
 		for (int i = 0; i < 2 * k + 1; ++i) step.head<k>() += wm[i] * d[i];
 		if (step.squaredNorm() < 1e-26) break;
 		mean = mean.boxplus(step);
@@ -162,9 +173,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	Eigen::Matrix<double, k, k> P_NN = (w_.wc0 + 2 * (n - k) * w_.wi) * d[0] * d[0].transpose();
 	for (int i = 1; i < 2 * k + 1; ++i) P_NN.noalias() += w_.wi * d[i] * d[i].transpose();
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
-	Eigen::Matrix<double, n, k> Ac = L_.leftCols(k);
+	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim, k> Ac = L_.leftCols(k);
 	model_.applyLinearRows(Ac, dt);
-	Eigen::Matrix<double, k, n - k> P_NL = Eigen::Matrix<double, k, n - k>::Zero();
+	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL =
+		Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim>::Zero(k, n - k);
 	for (int j = 0; j < k; ++j)
 		P_NL.noalias() += (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]) * Ac.col(j).tail(n - k).transpose();
 	// Affine part: A P Aᵀ exactly (rows, then columns).
@@ -174,8 +186,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	model_.applyLinearRows(Pt, dt);
 	P_ = Pt;
 	P_.topLeftCorner<k, k>() = P_NN;
-	P_.topRightCorner<k, n - k>() = P_NL;
-	P_.bottomLeftCorner<n - k, k>() = P_NL.transpose();
+	P_.topRightCorner(k, n - k) = P_NL;
+	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
 	P_ += model_.noiseCovariance(dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
 	mean.R_nb = so3::normalized(mean.R_nb);
@@ -219,7 +231,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		res.why = "non-finite measurement or noise";
 		return res;
 	}
-	const int k = tangentPrefix(model.uses());
+	const int n = n_;
+	const int k = tangentPrefix(model.uses(), n);
 	if (k == 0)
 	{
 		res.why = "model declares no state dependence";
@@ -299,7 +312,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	Eigen::MatrixXd S = w_center_c * E.col(0) * E.col(0).transpose() + meas.R;
 	for (int i = 1; i < count; ++i) S.noalias() += w_.wi * E.col(i) * E.col(i).transpose();
-	Eigen::Matrix<double, n, Eigen::Dynamic> Pxz = Eigen::Matrix<double, n, Eigen::Dynamic>::Zero(n, m);
+	Eigen::MatrixXd Pxz = Eigen::MatrixXd::Zero(n, m);
 	for (int j = 0; j < k; ++j)
 		Pxz.noalias() += (w_.wi * g) * L_.col(j) * (E.col(1 + 2 * j) - E.col(2 + 2 * j)).transpose();
 
@@ -353,7 +366,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	else
 		res.status = UpdateStatus::Accepted;
 	// K = Pxz S⁻¹ via the factorisation; P −= K S Kᵀ = Pxz S⁻¹ Pxzᵀ.
-	const Eigen::Matrix<double, Eigen::Dynamic, n> KT = llt.solve(Pxz.transpose());	 // S⁻¹ Pxzᵀ
+	const Eigen::MatrixXd KT = llt.solve(Pxz.transpose());	// S⁻¹ Pxzᵀ
 	const TangentVector dx = KT.transpose() * nu;
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);

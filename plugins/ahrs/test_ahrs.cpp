@@ -220,7 +220,7 @@ TEST(Ahrs, ResidualIsTheSo3LogAndItsJacobianIsTheIdentity)
 	Eigen::Matrix3d H;
 	for (int j = 0; j < 3; ++j)
 	{
-		TangentVector d = TangentVector::Zero();
+		TangentVector d = TangentVector::Zero(idx::core_dim);
 		d[idx::att + j] = eps;
 		H.col(j) =
 		    (at::Predict(model, m, tc.ctx(), x.boxplus(d)) - at::Predict(model, m, tc.ctx(), x.boxplus(-d))) /
@@ -306,7 +306,7 @@ TEST(Ahrs, HeadingOnlyCarriesNoTiltInformationAndWraps)
 	const Measurement m = prepareOne(model, *quatObs(x.R_nb), tc.ctx());
 	for (int j = 0; j < 3; ++j)
 	{
-		TangentVector d = TangentVector::Zero();
+		TangentVector d = TangentVector::Zero(idx::core_dim);
 		d[idx::att + j] = 1e-6;
 		const double dh = plugins::wrapPi(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
 		                                  at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /

@@ -153,7 +153,7 @@ TEST(ModelChecks, StateComparisonsAndRoundTrip)
 {
 	const NavState x = at::RandomNavState(9);
 	for (uint32_t seed = 1; seed <= 20; ++seed) EXPECT_TRUE(at::BoxplusRoundTrip(x, seed));
-	TangentVector d = TangentVector::Zero();
+	TangentVector d = TangentVector::Zero(idx::core_dim);
 	d[idx::vel + 1] = 1e-3;
 	const NavState y = x.boxplus(d);
 	EXPECT_TRUE(at::NavStateNear(y, x, 1.1e-3));

@@ -2,6 +2,7 @@
 
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/so3.h>
+#include <auvnav/state_block_config.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -63,6 +64,33 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 	  gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
+	if (cfg.has("states"))
+	{
+		const auto st = cfg.child("states");
+		st.allowOnly({"scale_factor", "misalignment"});
+		if (st.has("scale_factor"))
+		{
+			blocks_.push_back(stateBlockFromConfig(st.child("scale_factor"), "scale_factor", {""}));
+			has_scale_ = true;
+		}
+		if (st.has("misalignment"))
+		{
+			blocks_.push_back(stateBlockFromConfig(st.child("misalignment"), "misalignment", {"x", "y", "z"}, "_deg", kDeg));
+			has_misalignment_ = true;
+		}
+	}
+}
+
+void DvlModel::bindStates(int first) noexcept
+{
+	int at = first;
+	if (has_scale_) scale_at_ = at++;
+	if (has_misalignment_)
+	{
+		misalignment_at_ = at;
+		at += 3;
+	}
+	extra_needed_ = at;
 }
 
 PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& /*ctx*/,
@@ -214,9 +242,15 @@ bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterCo
 	const Eigen::Vector3d r_s(m.aux[0], m.aux[1], m.aux[2]);
 	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
 	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
-	const Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
-	const double sign = m.aux[6];
+	Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
+	if (x.extra.size() < extra_needed_) return false;  // states declared but not in this state
+	double sign = m.aux[6];
+	if (scale_at_ >= 0) sign *= 1 + x.extra[scale_at_];
 	const Eigen::Vector3d a(m.aux[3], m.aux[4], m.aux[5]);
+	// The true mounting is Exp(δ) R_bs: the sensor sees Exp(δ)ᵀ v in body axes.
+	const bool misaligned = misalignment_at_ >= 0 && static_cast<DvlFrame>(m.tag) != DvlFrame::EarthNed &&
+							static_cast<DvlFrame>(m.tag) != DvlFrame::EarthEnu;
+	if (misaligned) v_s_b = so3::Exp(x.extra.segment<3>(misalignment_at_)).transpose() * v_s_b;
 	switch (static_cast<DvlFrame>(m.tag))
 	{
 		case DvlFrame::Instrument:

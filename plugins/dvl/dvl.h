@@ -41,6 +41,17 @@
  *    correlated between beams). Invalid beams are not used; fewer than 3
  *    valid beams skip the ping.
  *
+ *  Optional plugin-owned states (`states:` in the config; state_block_config.h):
+ *  - `scale_factor` s (1): every frame's h is multiplied by (1 + s), the
+ *    error of the sound speed or of the beam angles;
+ *  - `misalignment` δ (3, rad, body axes): the true mounting is
+ *    Exp(δ) R_bs, so Instrument h = R_bsᵀ Exp(δ)ᵀ v_s_b, Vehicle
+ *    h = Exp(δ)ᵀ v_s_b, Beam h = (Exp(δ) R_bs u_i)ᵀ v_s_b. Earth frames were
+ *    rotated with the DVL's own attitude, so a mounting error does not reach
+ *    them: δ keeps its prior there (it is not observable).
+ *  Both are observable only through motion the IMU sees independently
+ *  (turns, speed changes, a position reference); the filter reports their σ.
+ *
  *  The mounting comes from the configuration (default: the FlatFish nominal
  *  mounting) or, with `use_observation_pose: true`, from each observation's
  *  sensorPose. It travels to h in Measurement::aux, with tag = the frame code
@@ -69,8 +80,13 @@ class DvlModel final : public SafeMeasurementModel
    public:
 	DvlModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kGyroBias | kVelocity; }
+	uint32_t uses() const noexcept override
+	{
+		return kAttitude | kGyroBias | kVelocity | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
+	}
 	double gateProbability() const noexcept override { return gate_probability_; }
+	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
+	void bindStates(int first_extra_index) noexcept override;
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }
@@ -106,5 +122,9 @@ class DvlModel final : public SafeMeasurementModel
 	double earth_heading_sigma_rad_ = 0;
 	double earth_tilt_sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
+	std::vector<StateBlockSpec> blocks_;
+	bool has_scale_ = false, has_misalignment_ = false;
+	int scale_at_ = -1, misalignment_at_ = -1;	// in NavState::extra, after bindStates
+	int extra_needed_ = 0;						// extra.size() h needs
 };
 }  // namespace auvnav::plugins

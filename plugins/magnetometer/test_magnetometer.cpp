@@ -236,7 +236,7 @@ TEST(Magnetometer, VectorJacobianMatchesFiniteDifferences)
 		const double eps = 1e-6;
 		for (int j = 0; j < 3; ++j)
 		{
-			TangentVector d = TangentVector::Zero();
+			TangentVector d = TangentVector::Zero(idx::core_dim);
 			d[idx::att + j] = eps;
 			H_fd.col(j) = (at::Predict(model, m, tc.ctx(), x.boxplus(d)) -
 			               at::Predict(model, m, tc.ctx(), x.boxplus(-d))) /
@@ -260,7 +260,7 @@ TEST(Magnetometer, HeadingCarriesNoTiltInformation)
 		const double eps = 1e-6;
 		for (int j = 0; j < 3; ++j)
 		{
-			TangentVector d = TangentVector::Zero();
+			TangentVector d = TangentVector::Zero(idx::core_dim);
 			d[idx::att + j] = eps;
 			const double dh = plugins::wrapPi(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
 			                                  at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /

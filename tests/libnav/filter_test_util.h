@@ -46,7 +46,7 @@ inline NavState makeState(double yaw_rad)
 /** Per-coordinate standard deviations (tangent order). */
 inline TangentVector makeSigmas(const Eigen::Vector3d& att_sigma_rad)
 {
-	TangentVector s;
+	TangentVector s(idx::core_dim);
 	s.segment<3>(idx::att) = att_sigma_rad;
 	s.segment<3>(idx::gyro_bias).setConstant(0.01);
 	s.segment<3>(idx::acc).setConstant(0.05);
@@ -58,7 +58,7 @@ inline TangentVector makeSigmas(const Eigen::Vector3d& att_sigma_rad)
 	s.segment<2>(idx::adcp_bias).setConstant(0.02);
 	const NavState x = makeState(0);
 	const TangentVector e = x.euclidean();
-	for (int i = idx::inertia; i < idx::dim; ++i) s[i] = 0.1 * std::abs(e[i]);
+	for (int i = idx::inertia; i < idx::core_dim; ++i) s[i] = 0.1 * std::abs(e[i]);
 	return s;
 }
 
@@ -68,7 +68,7 @@ inline Covariance correlatedCovariance(const TangentVector& sigma, unsigned seed
 {
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> nd;
-	Eigen::Matrix<double, idx::dim, 8> A;
+	Eigen::MatrixXd A(sigma.size(), 8);
 	for (int i = 0; i < A.size(); ++i) A.data()[i] = nd(rng);
 	Covariance C = A * A.transpose();
 	C.diagonal().array() += 0.2 * C.diagonal().mean();
@@ -95,7 +95,7 @@ inline ProcessModel makeProcessModel()
 	n.adcp_bias = {0.01, 1000};
 	n.parameter_tau_s = 3600;
 	const NavState x = makeState(0);
-	TangentVector mu = TangentVector::Zero();
+	TangentVector mu = TangentVector::Zero(idx::core_dim);
 	mu.segment<3>(idx::gyro_bias) << 1e-3, 0, -1e-3;
 	mu.segment<3>(idx::acc_bias) << 0.01, 0.01, -0.01;
 	mu.segment<4>(idx::current_vehicle) << 0.1, 0.05, 0.12, 0.0;
@@ -104,6 +104,18 @@ inline ProcessModel makeProcessModel()
 	m.prior_mean = mu;
 	for (int i = 0; i < 18; ++i) n.parameter_sigma[i] = 0.05 * std::max(std::abs(mu[idx::inertia + i]), 1e-3);
 	return m;
+}
+
+/** Appends three plugin-owned blocks of every process kind to `m` and returns
+ *  their initial means: scale (1, random constant), misalignment (3, random
+ *  walk), bias (2, Gauss–Markov with a non-zero mean). */
+inline TangentVector appendTestPluginStates(ProcessModel& m)
+{
+	StateBlockSpec scale{"scale", {""}, {0.01}, {0.02}, StateProcess::RandomConstant, 0, 0};
+	StateBlockSpec mis{"misalignment", {"x", "y", "z"}, {0.01, -0.02, 0.03}, {0.02}, StateProcess::RandomWalk, 1e-3, 0};
+	StateBlockSpec bias{"bias", {"n", "e"}, {0.5, -0.2}, {0.3, 0.2}, StateProcess::GaussMarkov, 0.4, 50};
+	for (const auto& b : {scale, mis, bias}) m.appendBlock(b);
+	return m.prior_mean.tail(m.dim() - idx::core_dim);
 }
 
 /** max_i |(a ⊟ b)_i| / √P_ii: the mean difference in standard deviations. */

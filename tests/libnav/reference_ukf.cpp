@@ -29,8 +29,8 @@ SigmaWeights SigmaWeights::uniform(double gamma, int n)
 std::vector<double> spreadScales(const Covariance& P, double gamma, double max_rad)
 {
 	const Covariance L = Eigen::LLT<Covariance>(P).matrixL();
-	std::vector<double> s(idx::dim);
-	for (int j = 0; j < idx::dim; ++j) s[j] = attitudeSpreadScale(gamma * L.col(j), max_rad);
+	std::vector<double> s(P.rows());
+	for (int j = 0; j < P.rows(); ++j) s[j] = attitudeSpreadScale(gamma * L.col(j), max_rad);
 	return s;
 }
 
@@ -40,9 +40,9 @@ std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double
 	if (llt.info() != Eigen::Success) throw std::runtime_error("reference UKF: P is not positive definite");
 	const Covariance L = llt.matrixL();
 	std::vector<NavState> X;
-	X.reserve(2 * idx::dim + 1);
+	X.reserve(2 * P.rows() + 1);
 	X.push_back(x);
-	for (int j = 0; j < idx::dim; ++j)
+	for (int j = 0; j < P.rows(); ++j)
 	{
 		const TangentVector c = gamma * (scale.empty() ? 1.0 : scale[j]) * L.col(j);
 		X.push_back(x.boxplus(c));
@@ -56,7 +56,7 @@ NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>&
 	NavState mean = start;
 	for (int iter = 0; iter < 50; ++iter)
 	{
-		TangentVector d = TangentVector::Zero();
+		TangentVector d = TangentVector::Zero(start.dim());
 		for (std::size_t i = 0; i < X.size(); ++i) d += w[i] * X[i].boxminus(mean);
 		mean = mean.boxplus(d);
 		if (iter > 0 && d.head<3>().norm() < 1e-15) break;
@@ -73,8 +73,9 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 	for (auto& y : Y) y = model.propagate(y, omega_ib_b, omega_ie_n, dt);
 	// A scaled pair (ukf.h) has no point of its own: its deviations from Y_0
 	// are ŷ± = ±a/s + m, and from a mean x̄ they are ŷ± − (x̄ ⊟ Y_0).
-	std::vector<TangentVector> D(Y.size(), TangentVector::Zero());
-	for (int j = 0; j < idx::dim; ++j)
+	const int n = static_cast<int>(P.rows());
+	std::vector<TangentVector> D(Y.size(), TangentVector::Zero(n));
+	for (int j = 0; j < n; ++j)
 		if (scale[j] < 1.0)
 		{
 			const TangentVector yp = Y[1 + 2 * j].boxminus(Y[0]), ym = Y[2 + 2 * j].boxminus(Y[0]);
@@ -89,12 +90,12 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 	NavState mean = Y[0];
 	for (int iter = 0; iter < 50; ++iter)
 	{
-		TangentVector d = TangentVector::Zero();
+		TangentVector d = TangentVector::Zero(n);
 		for (std::size_t i = 0; i < Y.size(); ++i) d += w.wm[i] * deviation(i, mean);
 		mean = mean.boxplus(d);
 		if (iter > 0 && d.head<3>().norm() < 1e-15) break;
 	}
-	Covariance Pn = Covariance::Zero();
+	Covariance Pn = Covariance::Zero(n, n);
 	for (std::size_t i = 0; i < Y.size(); ++i)
 	{
 		const TangentVector d = deviation(i, mean);
@@ -121,7 +122,7 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 	auto scaled = [&](int i) { return i > 0 && scale[(i - 1) / 2] < 1.0; };
 	Eigen::MatrixXd Dz = Eigen::MatrixXd::Zero(dim_z, count);
 	Eigen::VectorXd r(dim_z), rm(dim_z);
-	for (int j = 0; j < idx::dim; ++j)
+	for (int j = 0; j < P.rows(); ++j)
 		if (scale[j] < 1.0)
 		{
 			h.residual(Z.col(1 + 2 * j), Z.col(0), r);
@@ -155,13 +156,13 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 	}
 	out.z_mean = z_mean;
 	out.Pzz = Eigen::MatrixXd::Zero(dim_z, dim_z);
-	out.Pxz = Eigen::MatrixXd::Zero(idx::dim, dim_z);
+	out.Pxz = Eigen::MatrixXd::Zero(P.rows(), dim_z);
 	const Covariance L = Eigen::LLT<Covariance>(P).matrixL();
 	for (int i = 0; i < count; ++i)
 	{
 		zdev(i, z_mean, r);
 		out.Pzz += w.wc[i] * r * r.transpose();
-		const TangentVector dx = i == 0 ? TangentVector::Zero().eval()
+		const TangentVector dx = i == 0 ? TangentVector::Zero(P.rows()).eval()
 							   : scaled(i) ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col((i - 1) / 2))
 										   : X[i].boxminus(x);
 		out.Pxz += w.wc[i] * dx * r.transpose();
@@ -170,12 +171,18 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 }
 
 ReferenceUkf::ReferenceUkf(const ProcessModel& model, const UtParams& ut)
-	: model_(model), w_(SigmaWeights::fromUt(UtWeights::make(idx::dim, ut))), max_spread_rad_(ut.max_attitude_spread_rad)
+	: model_(model),
+	  ut_(ut),
+	  w_(SigmaWeights::fromUt(UtWeights::make(model.dim(), ut), model.dim())),
+	  max_spread_rad_(ut.max_attitude_spread_rad)
 {
 }
 
 void ReferenceUkf::initialize(const NavState& x0, const Covariance& P0)
 {
+	if (P0.rows() != x0.dim() || x0.dim() != model_.dim())
+		throw std::invalid_argument("reference UKF: state, covariance and process model disagree in size");
+	w_ = SigmaWeights::fromUt(UtWeights::make(x0.dim(), ut_), x0.dim());
 	x_ = x0;
 	P_ = 0.5 * (P0 + P0.transpose());
 }

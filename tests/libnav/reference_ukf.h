@@ -1,6 +1,7 @@
 #pragma once
 /** @file reference_ukf.h
- *  The test oracle: a PLAIN dense scaled UKF on the 43-dim manifold state.
+ *  The test oracle: a PLAIN dense scaled UKF on the manifold state (43 + any
+ *  plugin-owned states).
  *
  *  Written independently of ukf.cpp and on purpose without any of its
  *  shortcuts: full Cholesky factor of P, all 2n+1 = 87 sigma points, the full
@@ -23,10 +24,10 @@ struct SigmaWeights
 {
 	double gamma = 0;
 	std::vector<double> wm, wc;	 // 2n+1 each; point 0 is the centre
-	static SigmaWeights fromUt(const UtWeights& w, int n = idx::dim);
+	static SigmaWeights fromUt(const UtWeights& w, int n);
 	/** A deliberately WRONG weighting for the "the test can fail" checks:
 	 *  the same sigma points, all weights 1/(2n+1). */
-	static SigmaWeights uniform(double gamma, int n = idx::dim);
+	static SigmaWeights uniform(double gamma, int n);
 };
 
 /** X_0 = x, X_{2j+1} = x ⊞ γ s_j L_j, X_{2j+2} = x ⊞ −γ s_j L_j, L = chol(P)
@@ -70,10 +71,11 @@ class ReferenceUkf
 
    private:
 	ProcessModel model_;
+	UtParams ut_;
 	SigmaWeights w_;
 	double max_spread_rad_;
 	NavState x_;
-	Covariance P_ = Covariance::Identity();
+	Covariance P_ = Covariance::Identity(idx::core_dim, idx::core_dim);
 };
 
 }  // namespace auvnav::reference

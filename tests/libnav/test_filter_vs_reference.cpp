@@ -120,6 +120,41 @@ class HydroModel : public TestModel
 	Eigen::MatrixXd noise() const override { return Eigen::Vector3d(0.5, 0.5, 0.01).asDiagonal(); }
 };
 
+/** A DVL with the plugin states of test::appendTestPluginStates: scale s
+ *  (extra 0) and misalignment δ (extra 1..3): (1 + s) Exp(δ)ᵀ (R_nbᵀ v_n + …). */
+class PluginStateDvlModel : public TestModel
+{
+   public:
+	PluginStateDvlModel() : TestModel(kAttitude | kGyroBias | kVelocity | kPluginStates) {}
+	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		if (x.extra.size() < 6) return false;
+		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
+		const Eigen::Vector3d v = x.R_nb.transpose() * x.v_n + (ctx.omega_ib_b - x.b_w).cross(r);
+		z = (1 + x.extra[0]) * (so3::Exp(x.extra.segment<3>(1)).transpose() * v);
+		return true;
+	}
+	std::string name() const override { return "dvl_plugin_states"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Matrix3d::Identity() * 0.01 * 0.01; }
+};
+
+/** A position fix with a plugin-owned bias (extra 4..5): p_ne + b. */
+class BiasedFixModel : public TestModel
+{
+   public:
+	BiasedFixModel() : TestModel(kPosition | kPluginStates) {}
+	bool predict(const NavState& x, const Measurement&, const FilterContext&,
+				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	{
+		if (x.extra.size() < 6) return false;
+		z = x.p_n.head<2>() + x.extra.segment<2>(4);
+		return true;
+	}
+	std::string name() const override { return "fix_plugin_bias"; }
+	Eigen::MatrixXd noise() const override { return Eigen::Matrix2d::Identity() * 0.5 * 0.5; }
+};
+
 /** Scalar heading angle with a wrapped residual. */
 class HeadingModel : public TestModel
 {
@@ -159,6 +194,7 @@ struct Case
 	double dt = 0.01;
 	int steps = 200, update_every = 5;
 	double gyro_bias_sigma = 0.01, rate_scale = 1;
+	bool plugin_states = false;	 //!< append test::appendTestPluginStates
 };
 
 struct MaxDiffs
@@ -192,10 +228,16 @@ Measurement makeMeasurement(const TestModel& model, const NavState& truth, const
 MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestModel>>& models,
 					   UtParams ut_fast = {}, UtParams ut_ref = {})
 {
-	const ProcessModel pm = test::makeProcessModel();
-	const NavState x0 = test::makeState(c.yaw);
+	ProcessModel pm = test::makeProcessModel();
+	NavState x0 = test::makeState(c.yaw);
 	TangentVector sigma = test::makeSigmas(c.att_sigma);
 	sigma.segment<3>(idx::gyro_bias).setConstant(c.gyro_bias_sigma);
+	if (c.plugin_states)
+	{
+		x0.extra = test::appendTestPluginStates(pm);
+		sigma.conservativeResize(pm.dim());
+		sigma.tail(pm.dim() - idx::core_dim) << 0.02, 0.02, 0.02, 0.02, 0.3, 0.2;
+	}
 	const Covariance P0 = test::correlatedCovariance(sigma, c.seed);
 
 	ManifoldUkf fast(pm, ut_fast);
@@ -206,8 +248,8 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 	// Truth: an offset of ~0.7σ from the initial mean, propagated noise-free.
 	std::mt19937 rng(c.seed + 1000);
 	std::normal_distribution<double> nd;
-	TangentVector xi;
-	for (int i = 0; i < idx::dim; ++i) xi[i] = 0.7 * nd(rng);
+	TangentVector xi(x0.dim());
+	for (int i = 0; i < x0.dim(); ++i) xi[i] = 0.7 * nd(rng);
 	NavState truth = x0.boxplus(Covariance(P0.llt().matrixL()) * xi);
 
 	MaxDiffs md;
@@ -316,6 +358,40 @@ TEST(FilterVsReference, StronglyNonlinearLargeStepsAgreeWithDenseUkf)
 	const MaxDiffs md = runSideBySide(c, allModels());
 	report("0.5 s steps, 4 rad/s, gyro bias sigma 0.2 rad/s", md);
 	expectAgreement(md);
+}
+
+TEST(FilterVsReference, PluginOwnedStatesAgreeWithDenseUkf)
+{
+	// 43 + 6 plugin states (random constant, random walk, Gauss–Markov with a
+	// mean), read by two models; the paper's models alongside still use
+	// their short prefixes of the now 49-dimensional state.
+	Case c{Eigen::Vector3d(4, 3, 20) * kDeg, 60 * kDeg, 37};
+	c.plugin_states = true;
+	auto models = allModels();
+	models.emplace_back(std::make_unique<PluginStateDvlModel>());
+	models.emplace_back(std::make_unique<BiasedFixModel>());
+	const MaxDiffs md = runSideBySide(c, models);
+	report("43 + 6 plugin-owned states", md);
+	expectAgreement(md);
+	EXPECT_EQ(md.updates, 40);
+}
+
+TEST(FilterVsReference, PluginStateWithAWrongMaskDisagrees)
+{
+	// A model that reads its plugin states without declaring kPluginStates
+	// is evaluated on too few sigma points: the comparison must see it.
+	class Undeclared : public PluginStateDvlModel
+	{
+	   public:
+		uint32_t uses() const noexcept override { return kAttitude | kGyroBias | kVelocity; }
+	};
+	Case c{Eigen::Vector3d(4, 3, 20) * kDeg, 60 * kDeg, 37};
+	c.plugin_states = true;
+	std::vector<std::unique_ptr<TestModel>> wrong;
+	wrong.emplace_back(std::make_unique<Undeclared>());
+	const MaxDiffs md = runSideBySide(c, wrong);
+	report("plugin states read but not declared (sanity: must disagree)", md);
+	EXPECT_GT(std::max(md.upd_mean[0], md.upd_cov[0]), 1e-2);
 }
 
 TEST(FilterVsReference, TheComparisonCanFail)

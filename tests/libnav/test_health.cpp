@@ -20,7 +20,7 @@ UpdateResult result(UpdateStatus s, double nis, int dim = 3)
 
 Covariance alignedCovariance()
 {
-	Covariance P = Covariance::Identity() * 1e-4;
+	Covariance P = Covariance::Identity(idx::core_dim, idx::core_dim) * 1e-4;
 	P(2, 2) = std::pow(0.5 * M_PI / 180, 2);  // heading σ 0.5°
 	P(idx::pos, idx::pos) = P(idx::pos + 1, idx::pos + 1) = 1.0;
 	return P;

@@ -121,7 +121,7 @@ TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
 	// unscented mean by a genuine second-order amount (3e-11 for σ_b = 1e-6 rad/s).
 	pm.noise.gyro_arw = 0;
 	pm.noise.gyro_bias.sigma = 0;
-	Covariance P0 = Covariance::Identity() * 1e-12;
+	Covariance P0 = Covariance::Identity(idx::core_dim, idx::core_dim) * 1e-12;
 	P0.block<3, 3>(idx::gyro_bias, idx::gyro_bias) *= 1e-18;
 	ManifoldUkf ukf(pm, UtParams{});
 	ukf.initialize(x, P0);
@@ -172,7 +172,7 @@ TEST(ProcessModel, GaussMarkovVarianceIsExactForAnyStepThroughTheUkf)
 	const ProcessModel pm = fastGaussMarkovModel();
 	const NavState x = test::makeState(0.3);
 	const double T = 50, p0 = 1e-10;
-	Covariance P0 = Covariance::Identity() * p0;
+	Covariance P0 = Covariance::Identity(idx::core_dim, idx::core_dim) * p0;
 	ManifoldUkf one(pm, UtParams{}), many(pm, UtParams{});
 	one.initialize(x, P0);
 	many.initialize(x, P0);
@@ -287,7 +287,7 @@ TEST(ProcessModel, DiscretisedNoiseComposesOverSubsteps)
 	const double T = 2.0;
 	for (int N : {2, 10, 200})
 	{
-		Covariance P = Covariance::Zero();
+		Covariance P = Covariance::Zero(idx::core_dim, idx::core_dim);
 		for (int i = 0; i < N; ++i)
 		{
 			pm.applyLinearRows(P, T / N);
@@ -297,8 +297,8 @@ TEST(ProcessModel, DiscretisedNoiseComposesOverSubsteps)
 		}
 		const Covariance QT = pm.noiseCovariance(T, 0.8);
 		// Rows 6.. are the linear part; the attitude/bias block has its own test.
-		const Eigen::MatrixXd d = (P - QT).bottomRightCorner(idx::dim - 6, idx::dim - 6);
-		const Eigen::VectorXd s = QT.diagonal().tail(idx::dim - 6).cwiseSqrt().cwiseMax(1e-30);
+		const Eigen::MatrixXd d = (P - QT).bottomRightCorner(idx::core_dim - 6, idx::core_dim - 6);
+		const Eigen::VectorXd s = QT.diagonal().tail(idx::core_dim - 6).cwiseSqrt().cwiseMax(1e-30);
 		const double rel = (d.array() / (s * s.transpose()).array()).abs().maxCoeff();
 		EXPECT_LT(rel, 1e-10) << N;
 	}
@@ -310,7 +310,7 @@ TEST(ProcessModel, AttitudeRandomWalkIsIndependentOfTheStepSize)
 	ProcessModel pm = test::makeProcessModel();
 	pm.noise.gyro_bias.sigma = 0;  // bias noise would integrate into attitude differently per step
 	const NavState x = test::makeState(0.3);
-	Covariance P0 = Covariance::Identity() * 1e-8;
+	Covariance P0 = Covariance::Identity(idx::core_dim, idx::core_dim) * 1e-8;
 	P0.block<3, 3>(idx::gyro_bias, idx::gyro_bias) = Eigen::Matrix3d::Identity() * 1e-20;
 	ManifoldUkf one(pm, UtParams{}), many(pm, UtParams{});
 	one.initialize(x, P0);

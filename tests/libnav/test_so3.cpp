@@ -44,7 +44,7 @@ NavState randomState(std::mt19937& rng, const Eigen::Vector3d& att)
 	std::normal_distribution<double> nd;
 	NavState x = test::makeState(0.3);
 	TangentVector e = x.euclidean();
-	for (int i = 3; i < idx::dim; ++i) e[i] += nd(rng);
+	for (int i = 3; i < idx::core_dim; ++i) e[i] += nd(rng);
 	x.setEuclidean(e);
 	x.R_nb = so3::Exp(att);
 	return x;
@@ -53,8 +53,8 @@ NavState randomState(std::mt19937& rng, const Eigen::Vector3d& att)
 TangentVector randomDelta(std::mt19937& rng, const Eigen::Vector3d& att)
 {
 	std::normal_distribution<double> nd;
-	TangentVector d;
-	for (int i = 0; i < idx::dim; ++i) d[i] = 3 * nd(rng);
+	TangentVector d(idx::core_dim);
+	for (int i = 0; i < idx::core_dim; ++i) d[i] = 3 * nd(rng);
 	d.head<3>() = att;
 	return d;
 }
@@ -170,7 +170,7 @@ TEST(NavStateManifold, BoxplusZeroIsIdentity)
 	for (int k = 0; k < 50; ++k)
 	{
 		const NavState x = randomState(rng, 3.0 * randomAxis(rng));
-		const NavState y = x.boxplus(TangentVector::Zero());
+		const NavState y = x.boxplus(TangentVector::Zero(idx::core_dim));
 		EXPECT_EQ(y.R_nb, x.R_nb);
 		EXPECT_EQ(y.euclidean(), x.euclidean());
 		EXPECT_LT(x.boxminus(x).cwiseAbs().maxCoeff(), 1e-15);  // R Rᵀ is I up to rounding
@@ -214,7 +214,7 @@ TEST(NavStateManifold, BoxplusOfBoxminusReachesTheOtherState)
 TEST(NavStateManifold, AttitudeErrorIsALeftPerturbationInTheNavigationFrame)
 {
 	NavState x = test::makeState(0.7);
-	TangentVector d = TangentVector::Zero();
+	TangentVector d = TangentVector::Zero(idx::core_dim);
 	d[idx::att + 2] = 0.1;	// heading error
 	const NavState y = x.boxplus(d);
 	EXPECT_LT((y.R_nb - so3::Exp(Eigen::Vector3d(0, 0, 0.1)) * x.R_nb).cwiseAbs().maxCoeff(), 1e-15);
@@ -245,18 +245,20 @@ TEST(NavStateManifold, EuclideanRoundTripAndLayout)
 	EXPECT_EQ(tangentPrefix(kAllBlocks), 43);
 
 	const auto& names = tangentNames();
-	ASSERT_EQ(names.size(), std::size_t(idx::dim));
+	ASSERT_EQ(names.size(), std::size_t(idx::core_dim));
 	EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size());
 	EXPECT_EQ(names[idx::att + 2], "att_d");
 	EXPECT_EQ(names[idx::gravity], "gravity");
-	EXPECT_EQ(names[idx::dim - 1], "Dq_ypsi");
+	EXPECT_EQ(names[idx::core_dim - 1], "Dq_ypsi");
 
 	// The stored values differ from the tangent coordinates only in the
 	// accelerometer bias's axes.
 	const auto& stored = storedNames();
 	ASSERT_EQ(stored.size(), names.size());
-	for (int i = 0; i < idx::dim; ++i)
+	for (int i = 0; i < idx::core_dim; ++i)
+	{
 		if (i < idx::acc_bias || i >= idx::acc_bias + 3) EXPECT_EQ(stored[i], names[i]) << i;
+	}
 	EXPECT_EQ(names[idx::acc_bias], "acc_bias_n");
 	EXPECT_EQ(stored[idx::acc_bias], "acc_bias_x");
 	EXPECT_EQ(stored[idx::acc_bias + 2], "acc_bias_z");
@@ -267,7 +269,7 @@ TEST(NavStateManifold, AccelerometerBiasIsPerturbedInNedAxes)
 	// Body yawed 90°: x forward points east, y right points south, z down.
 	NavState x = test::makeState(0.3);
 	x.R_nb = so3::Exp(Eigen::Vector3d(0, 0, M_PI / 2));
-	TangentVector d = TangentVector::Zero();
+	TangentVector d = TangentVector::Zero(idx::core_dim);
 	d[idx::acc_bias + 1] = 1e-3;  // east
 	const NavState y = x.boxplus(d);
 	EXPECT_NEAR(y.b_a.x() - x.b_a.x(), 1e-3, 1e-15);  // along body x
@@ -275,7 +277,7 @@ TEST(NavStateManifold, AccelerometerBiasIsPerturbedInNedAxes)
 	EXPECT_NEAR(y.b_a.z() - x.b_a.z(), 0, 1e-15);
 	EXPECT_NEAR(y.boxminus(x)[idx::acc_bias + 1], 1e-3, 1e-15);
 	// A heading change alone leaves the bias (a body-fixed vector) as it is.
-	TangentVector h = TangentVector::Zero();
+	TangentVector h = TangentVector::Zero(idx::core_dim);
 	h[idx::att + 2] = 0.5;
 	EXPECT_EQ(x.boxplus(h).b_a, x.b_a);
 }

@@ -49,7 +49,7 @@ struct MonteCarloMoments
 {
 	Eigen::Vector3d z_mean;
 	Eigen::Matrix3d Pzz;
-	Eigen::Matrix<double, idx::dim, 3> Pxz;
+	Eigen::Matrix<double, idx::core_dim, 3> Pxz;
 };
 
 MonteCarloMoments monteCarloMeasurement(const NavState& x, const Covariance& P, unsigned seed)
@@ -62,12 +62,12 @@ MonteCarloMoments monteCarloMeasurement(const NavState& x, const Covariance& P, 
 	FilterContext ctx;
 	Eigen::Vector3d s1 = Eigen::Vector3d::Zero();
 	Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
-	Eigen::Matrix<double, idx::dim, 3> sdz = Eigen::Matrix<double, idx::dim, 3>::Zero();
-	TangentVector sd = TangentVector::Zero(), xi;
+	Eigen::Matrix<double, idx::core_dim, 3> sdz = Eigen::Matrix<double, idx::core_dim, 3>::Zero();
+	TangentVector sd = TangentVector::Zero(idx::core_dim), xi(idx::core_dim);
 	Eigen::VectorXd z(3);
 	for (int s = 0; s < kSamples; ++s)
 	{
-		for (int i = 0; i < idx::dim; ++i) xi[i] = nd(rng);
+		for (int i = 0; i < idx::core_dim; ++i) xi[i] = nd(rng);
 		const TangentVector d = L * xi;
 		h.predict(x.boxplus(d), m, ctx, z);
 		s1 += z;
@@ -90,11 +90,11 @@ void monteCarloPredict(const ProcessModel& pm, const NavState& x, const Covarian
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> nd;
 	const NavState centre = pm.propagate(x, w, Eigen::Vector3d::Zero(), dt);
-	Eigen::MatrixXd D(idx::dim, kSamples);	// deviations from the propagated centre
-	TangentVector xi;
+	Eigen::MatrixXd D(idx::core_dim, kSamples);	// deviations from the propagated centre
+	TangentVector xi(idx::core_dim);
 	for (int s = 0; s < kSamples; ++s)
 	{
-		for (int i = 0; i < idx::dim; ++i) xi[i] = nd(rng);
+		for (int i = 0; i < idx::core_dim; ++i) xi[i] = nd(rng);
 		D.col(s) = pm.propagate(x.boxplus(L * xi), w, Eigen::Vector3d::Zero(), dt).boxminus(centre);
 	}
 	// Manifold mean with the state's own ⊞/⊟ (attitude, velocity and
@@ -102,7 +102,7 @@ void monteCarloPredict(const ProcessModel& pm, const NavState& x, const Covarian
 	mean = centre;
 	for (int iter = 0; iter < 20; ++iter)
 	{
-		TangentVector step = TangentVector::Zero();
+		TangentVector step = TangentVector::Zero(idx::core_dim);
 		for (int s = 0; s < kSamples; ++s) step += centre.boxplus(D.col(s)).boxminus(mean);
 		step /= kSamples;
 		mean = mean.boxplus(step);
@@ -153,11 +153,11 @@ TEST(UtWeights, SigmaPointsReproduceMeanAndCovariance)
 {
 	const NavState x = test::makeState(0.4);
 	const Covariance P = test::correlatedCovariance(test::makeSigmas(Eigen::Vector3d(5, 5, 20) * kDeg), 5);
-	const auto w = reference::SigmaWeights::fromUt(UtWeights::make(idx::dim, UtParams{}));
+	const auto w = reference::SigmaWeights::fromUt(UtWeights::make(idx::core_dim, UtParams{}), idx::core_dim);
 	const std::vector<NavState> X = reference::sigmaPoints(x, P, w.gamma);
-	ASSERT_EQ(X.size(), std::size_t(2 * idx::dim + 1));
-	TangentVector mean = TangentVector::Zero();
-	Covariance cov = Covariance::Zero();
+	ASSERT_EQ(X.size(), std::size_t(2 * idx::core_dim + 1));
+	TangentVector mean = TangentVector::Zero(idx::core_dim);
+	Covariance cov = Covariance::Zero(idx::core_dim, idx::core_dim);
 	for (std::size_t i = 0; i < X.size(); ++i)
 	{
 		const TangentVector d = X[i].boxminus(x);
@@ -188,9 +188,9 @@ UtVsMc bodyVelocityUtVsMonteCarlo(double att_deg)
 	m.z = Eigen::VectorXd::Zero(3);
 	FilterContext ctx;
 	reference::UtResult ut, bad;
-	const UtWeights uw = UtWeights::make(idx::dim, UtParams{});
-	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::fromUt(uw), ut));
-	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::uniform(uw.gamma), bad));
+	const UtWeights uw = UtWeights::make(idx::core_dim, UtParams{});
+	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::fromUt(uw, idx::core_dim), ut));
+	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::uniform(uw.gamma, idx::core_dim), bad));
 	Eigen::VectorXd z0(3);
 	h.predict(x, m, ctx, z0);
 
@@ -264,8 +264,8 @@ TEST(Unscented, PredictionStepMatchesMonteCarlo)
 	NavState mc_mean, bad_mean;
 	Covariance mc_cov, bad_cov;
 	monteCarloPredict(pm, x, P, w, dt, 7, mc_mean, mc_cov);
-	const double gamma = UtWeights::make(idx::dim, UtParams{}).gamma;
-	reference::unscentedPredict(pm, x, P, w, Eigen::Vector3d::Zero(), dt, reference::SigmaWeights::uniform(gamma),
+	const double gamma = UtWeights::make(idx::core_dim, UtParams{}).gamma;
+	reference::unscentedPredict(pm, x, P, w, Eigen::Vector3d::Zero(), dt, reference::SigmaWeights::uniform(gamma, idx::core_dim),
 								bad_mean, bad_cov);
 
 	const NavState centre = pm.propagate(x, w, Eigen::Vector3d::Zero(), dt);
@@ -316,7 +316,7 @@ TEST(Unscented, UnknownHeadingKeepsItsSigmaThroughPrediction)
 {
 	const ProcessModel pm = test::makeProcessModel();
 	NavState x = test::makeState(0.3);
-	Covariance P = Covariance::Zero();
+	Covariance P = Covariance::Zero(idx::core_dim, idx::core_dim);
 	const TangentVector sig = test::makeSigmas(Eigen::Vector3d(0.5, 0.5, 180) * test::kDeg);
 	P.diagonal() = sig.cwiseProduct(sig);
 	auto headingSigmaAfter = [&](const UtParams& ut) {
@@ -372,7 +372,7 @@ struct RecoveryOutcome
 RecoveryOutcome recoverOnce(Recovery how)
 {
 	const NavState x = test::makeState(0.3);
-	Covariance P = Covariance::Zero();
+	Covariance P = Covariance::Zero(idx::core_dim, idx::core_dim);
 	const TangentVector sig = test::makeSigmas(Eigen::Vector3d(0.5, 0.5, 0.1) * test::kDeg);
 	P.diagonal() = sig.cwiseProduct(sig);
 	ManifoldUkf f(test::makeProcessModel(), UtParams{});

@@ -18,6 +18,15 @@
  *    (wrap angles there).
  *  - No exception may leave a plugin: derive from SafeMeasurementModel, which
  *    turns exceptions into `Invalid`.
+ *
+ *  Plugin-owned states (ABI 4): a model may declare blocks of extra states
+ *  (`stateBlocks()`: a DVL scale factor, a USBL bias, a magnetometer's hard
+ *  iron). The host appends them after the paper's 43 in the order of the
+ *  `sensors:` list, tells the model where its first block starts in
+ *  NavState::extra (`bindStates`; its blocks follow each other in declaration
+ *  order), and propagates them with their declared process. A model that
+ *  reads them declares kPluginStates in uses() and reads
+ *  `x.extra[first + i]` in h. Models without states change nothing.
  */
 #include <auvnav/earth.h>
 #include <auvnav/state.h>
@@ -34,6 +43,9 @@ namespace auvnav
 struct FilterContext
 {
 	double t_s = 0;	 //!< filter time [s, Unix epoch]
+	//! When the measurement was taken [s, Unix epoch]: the observation's
+	//! timestamp (the navigator applies it at t_s, within its late tolerance).
+	double t_measurement_s = 0;
 	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  //!< latest raw gyro sample [rad/s], IMU axes
 	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();  //!< Earth rate in the navigation frame
 	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< IMU lever arm in the body frame [m]
@@ -95,6 +107,11 @@ class MeasurementModel
 	/** Gate probability; the filter gates at the χ² quantile of the
 	 *  measurement's own dimension. 1.0 disables the gate. */
 	virtual double gateProbability() const noexcept { return 0.999; }
+	/** The state blocks this model owns (called once, after construction). */
+	virtual std::vector<StateBlockSpec> stateBlocks() const { return {}; }
+	/** Where the model's first block starts in NavState::extra (called once,
+	 *  before any update, if stateBlocks() is not empty). */
+	virtual void bindStates(int first_extra_index) noexcept { (void)first_extra_index; }
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

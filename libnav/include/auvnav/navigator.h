@@ -48,6 +48,13 @@ struct SensorStats
 	std::string last_problem;
 };
 
+/** A block of plugin-owned states in the filter's state (tangent index). */
+struct PluginStateBlock
+{
+	std::string sensor, name;
+	int offset = 0, dim = 0;
+};
+
 struct DenialWindow
 {
 	std::vector<std::string> labels;
@@ -89,6 +96,13 @@ class Navigator
 	std::string waitingFor() const;
 	std::size_t imuGaps() const { return imu_gaps_; }
 
+	/** Names of the state's tangent coordinates: the paper's 43
+	 *  (tangentNames) and "<label>.<block>_<component>" per plugin state. */
+	const std::vector<std::string>& stateNames() const { return state_names_; }
+	/** The same for NavState::euclidean()'s stored values (storedNames). */
+	const std::vector<std::string>& storedStateNames() const { return stored_names_; }
+	const std::vector<PluginStateBlock>& pluginStates() const { return plugin_blocks_; }
+
 	/** Position of the body origin (CG) and attitude, from the IMU state. */
 	Eigen::Vector3d bodyPosition_n() const;
 
@@ -107,6 +121,8 @@ class Navigator
 	void initialize();
 	void dispatch(const mrpt::obs::CObservation& obs, double t_obs);
 	bool denied(const std::string& label, double t_obs) const;
+	/** Appends the plugins' state blocks to `pm` and P0 (plugin SDK v2). */
+	void appendPluginStates(ProcessModel& pm);
 
 	std::unique_ptr<earth::TangentFrame> frame_;
 	std::unique_ptr<ManifoldUkf> ukf_;
@@ -121,8 +137,10 @@ class Navigator
 	bool position_from_gps_ = false;
 	bool earth_rate_ = true;  // filter.earth_rate: false only for studies (no gyrocompassing)
 	std::string gps_label_;
-	TangentVector prior_mean_ = TangentVector::Zero();
-	Covariance P0_ = Covariance::Zero();
+	TangentVector prior_mean_ = TangentVector::Zero(idx::core_dim);
+	Covariance P0_;
+	std::vector<std::string> state_names_, stored_names_;
+	std::vector<PluginStateBlock> plugin_blocks_;
 
 	bool initialized_ = false;
 	double t_s_ = 0, t0_s_ = -1;

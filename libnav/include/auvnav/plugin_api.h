@@ -26,17 +26,35 @@
 #include <cstdio>
 #include <cstring>
 
-#define AUVNAV_PLUGIN_ABI_VERSION 3u  // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance
+// 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance;
+// 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
+// state dimension), FilterContext::t_measurement_s
+#define AUVNAV_PLUGIN_ABI_VERSION 4u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 
 #define AUVNAV_STR2(x) #x
 #define AUVNAV_STR(x) AUVNAV_STR2(x)
-/** Everything that must agree between host and plugin for C++ objects to cross. */
-#define AUVNAV_BUILD_FINGERPRINT                                                               \
-	"gcc-" AUVNAV_STR(__GNUC__) "." AUVNAV_STR(__GNUC_MINOR__) " eigen-" AUVNAV_STR(               \
-		EIGEN_WORLD_VERSION) "." AUVNAV_STR(EIGEN_MAJOR_VERSION) "." AUVNAV_STR(EIGEN_MINOR_VERSION) \
-		" align-" AUVNAV_STR(EIGEN_MAX_ALIGN_BYTES) " mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43"
+#if defined(__clang__)
+#define AUVNAV_COMPILER_ID "clang-" AUVNAV_STR(__clang_major__) "." AUVNAV_STR(__clang_minor__)
+#elif defined(__GNUC__)
+#define AUVNAV_COMPILER_ID "gcc-" AUVNAV_STR(__GNUC__) "." AUVNAV_STR(__GNUC_MINOR__)
+#else
+#define AUVNAV_COMPILER_ID "unknown-compiler"
+#endif
+#ifdef _GLIBCXX_USE_CXX11_ABI
+#define AUVNAV_STDLIB_ID " libstdc++-cxx11abi-" AUVNAV_STR(_GLIBCXX_USE_CXX11_ABI)
+#else
+#define AUVNAV_STDLIB_ID " other-stdlib"
+#endif
+/** Everything that must agree between host and plugin for C++ objects to
+ *  cross: compiler (clang and gcc mangle and lay out alike only in part),
+ *  the std::string ABI, Eigen's version and alignment, MRPT, and the state's
+ *  storage (43 + room for plugin states). */
+#define AUVNAV_BUILD_FINGERPRINT                                                                       \
+	AUVNAV_COMPILER_ID AUVNAV_STDLIB_ID " eigen-" AUVNAV_STR(EIGEN_WORLD_VERSION) "." AUVNAV_STR(          \
+		EIGEN_MAJOR_VERSION) "." AUVNAV_STR(EIGEN_MINOR_VERSION) " align-" AUVNAV_STR(EIGEN_MAX_ALIGN_BYTES) \
+		" mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43+" AUVNAV_STR(AUVNAV_MAX_EXTRA_STATES)
 
 extern "C"
 {

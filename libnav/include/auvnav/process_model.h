@@ -10,6 +10,9 @@
 #include <auvnav/state.h>
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <vector>
 
 namespace auvnav
 {
@@ -43,9 +46,20 @@ struct ProcessNoise
 	Eigen::Matrix<double, 18, 1> parameter_sigma = Eigen::Matrix<double, 18, 1>::Zero();
 };
 
+/** The process of one plugin-owned coordinate (state.h StateProcess). */
+struct ExtraStateProcess
+{
+	StateProcess kind = StateProcess::RandomConstant;
+	double sigma = 0, tau_s = 0;
+	double phi(double dt_s) const { return kind == StateProcess::GaussMarkov ? std::exp(-dt_s / tau_s) : 1.0; }
+	double variance(double dt_s) const;
+};
+
 struct ProcessModel
 {
 	ProcessNoise noise;
+	//! Plugin-owned coordinates 43…, in order (all linear and independent).
+	std::vector<ExtraStateProcess> extra;
 	/** Distance below the vehicle [m] the far-current state refers to: the
 	 *  current profile is c(d) = c_vehicle + (d / D)(c_far − c_vehicle) for a
 	 *  point d metres below the vehicle (ADCP plugin, Arnold & Medagoda II-C).
@@ -55,21 +69,26 @@ struct ProcessModel
 	double current_far_distance_m = 0;
 	/** Means the Gauss–Markov states relax to (tangent order, Euclidean part):
 	 *  zero biases and currents, the system-identification parameter prior. */
-	TangentVector prior_mean = TangentVector::Zero();
+	TangentVector prior_mean = TangentVector::Zero(idx::core_dim);
 
+	/** State dimension: 43 + plugin-owned coordinates. */
+	int dim() const { return idx::core_dim + static_cast<int>(extra.size()); }
+	/** Appends a plugin's block (its mean becomes the prior mean). Throws
+	 *  std::invalid_argument if the block is unusable or there is no room. */
+	void appendBlock(const StateBlockSpec& block);
 	/** Mean propagation of one state by `dt_s` with raw gyro `omega_ib_b` and
 	 *  Earth rate `omega_ie_n` (a pure function: used per sigma point). */
 	NavState propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
 					   double dt_s) const;
 
-	/** Process noise covariance over `dt_s` (tangent space). `speed_through_water_mps`
+	/** Process noise covariance over `dt_s` (tangent space, dim() × dim()). `speed_through_water_mps`
 	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
 	 *  magnitude) the vertical part. */
 	Covariance noiseCovariance(double dt_s, double speed_through_water_mps, double vertical_speed_mps = 0) const;
 
 	/** The linear part (everything but attitude and gyro bias) as the map
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
-	 *  (tangent rows 6..42; rows 0..5 untouched). */
+	 *  (tangent rows 6…; rows 0..5 untouched; rows past 43 only if M has them). */
 	template <typename Derived>
 	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const;
 
@@ -89,6 +108,9 @@ void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) c
 	M.template middleRows<4>(idx::current_vehicle) *= phi_c;  // both current states
 	M.template middleRows<2>(idx::adcp_bias) *= noise.adcp_bias.phi(dt_s);
 	M.template middleRows<18>(idx::inertia) *= std::exp(-dt_s / noise.parameter_tau_s);
+	const int extra_rows = std::min<int>(static_cast<int>(M.rows()) - idx::core_dim, static_cast<int>(extra.size()));
+	for (int i = 0; i < extra_rows; ++i)
+		if (extra[i].kind == StateProcess::GaussMarkov) M.row(idx::extra + i) *= extra[i].phi(dt_s);
 }
 
 }  // namespace auvnav

@@ -24,6 +24,11 @@
  *   31  linear damping sub-matrix D_l,sub (2x3)
  *   37  quadratic damping sub-matrix D_q,sub (2x3)
  *
+ *  43… plugin-owned states (plugin SDK v2): blocks a sensor plugin declares
+ *     (MeasurementModel::stateBlocks), appended in the order of the
+ *     navigator's `sensors:` list, at most idx::max_extra coordinates in
+ *     all; Euclidean, additive, in NavState::extra.
+ *
  *  Model parameters: the diagonal entries of each sub-matrix (xx and yy) are
  *  stored as natural logarithms, so that the physical values, exp(·), stay
  *  positive under any update without a non-smooth abs(); the off-diagonal
@@ -35,6 +40,9 @@
 #include <string>
 #include <vector>
 
+//! Room for plugin-owned states (part of the plugin build fingerprint).
+#define AUVNAV_MAX_EXTRA_STATES 21
+
 namespace auvnav
 {
 namespace idx
@@ -42,7 +50,10 @@ namespace idx
 constexpr int att = 0, gyro_bias = 3, acc = 6, gravity = 9, acc_bias = 10, vel = 13, pos = 16,
 			  current_vehicle = 19, current_far = 21, adcp_bias = 23, inertia = 25, damping_lin = 31,
 			  damping_quad = 37;
-constexpr int dim = 43;
+constexpr int core_dim = 43;	//!< the paper's state (Table I)
+constexpr int extra = core_dim;	//!< first plugin-owned coordinate
+constexpr int max_extra = AUVNAV_MAX_EXTRA_STATES;	//!< room for plugin-owned states
+constexpr int max_dim = core_dim + max_extra;
 }  // namespace idx
 
 /** One bit per state block, for a measurement model to declare what h reads. */
@@ -61,14 +72,21 @@ enum StateBlock : uint32_t
 	kInertia = 1u << 10,
 	kDampingLinear = 1u << 11,
 	kDampingQuadratic = 1u << 12,
-	kAllBlocks = (1u << 13) - 1
+	//! Plugin-owned states (any of them: they come after the paper's 43, so a
+	//! model reading them spans the whole state in the filter's update).
+	kPluginStates = 1u << 13,
+	kAllBlocks = (1u << 14) - 1
 };
 
-/** Number of leading tangent coordinates that cover every block in `mask`. */
-int tangentPrefix(uint32_t mask);
+/** Number of leading tangent coordinates that cover every block in `mask`,
+ *  for a state of `dim` coordinates (kPluginStates covers all of them). */
+int tangentPrefix(uint32_t mask, int dim = idx::core_dim);
 
-using TangentVector = Eigen::Matrix<double, idx::dim, 1>;
-using Covariance = Eigen::Matrix<double, idx::dim, idx::dim>;
+//! Tangent vectors and covariances have the state's run-time dimension
+//! (43 + plugin states) with fixed storage, so they never touch the heap.
+using TangentVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, idx::max_dim, 1>;
+using Covariance = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, idx::max_dim>;
+using ExtraVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, idx::max_extra, 1>;
 
 struct NavState
 {
@@ -85,6 +103,10 @@ struct NavState
 	Eigen::Matrix<double, 2, 3> M_sub = Eigen::Matrix<double, 2, 3>::Zero();
 	Eigen::Matrix<double, 2, 3> Dl_sub = Eigen::Matrix<double, 2, 3>::Zero();
 	Eigen::Matrix<double, 2, 3> Dq_sub = Eigen::Matrix<double, 2, 3>::Zero();
+	ExtraVector extra;	//!< plugin-owned states (tangent 43…), empty by default
+
+	/** Tangent dimension: 43 + extra.size(). */
+	int dim() const { return idx::core_dim + static_cast<int>(extra.size()); }
 
 	/** x ⊞ δ: R ← Exp(δ_att)·R; velocity and acceleration rotate with it,
 	 *  v ← Exp(δ_att)·v + δ_v, a ← Exp(δ_att)·a + δ_a (as in invariant filters
@@ -98,15 +120,43 @@ struct NavState
 	 *  changing heading estimate looked like such a turn, so roll and bias
 	 *  separated spuriously while the heading converged. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
-	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. */
+	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. Both states have the
+	 *  same dimension (std::invalid_argument otherwise, as for ⊞). */
 	TangentVector boxminus(const NavState& y) const;
 
 	/** Flat copy of the Euclidean part (everything but the attitude), in
-	 *  tangent order (entries 0..2 are zero). */
+	 *  tangent order (entries 0..2 are zero), dim() entries. */
 	TangentVector euclidean() const;
+	/** Sets everything but the attitude; e.size() − 43 plugin states. */
 	void setEuclidean(const Eigen::Ref<const TangentVector>& e);
 
 	bool allFinite() const;
+};
+
+/** How a plugin-owned state evolves between updates (exact for any dt). */
+enum class StateProcess
+{
+	RandomConstant,	 //!< x' = x, no process noise (a fixed unknown: a mounting angle)
+	RandomWalk,		 //!< x' = x + w, Var w = process_sigma² · dt  (σ per √s)
+	GaussMarkov		 //!< x' = μ + φ (x − μ), φ = e^{−dt/τ}, Var = process_sigma² (1 − φ²)
+};
+
+/** A block of states a plugin owns (plugin SDK v2, measurement_model.h):
+ *  declared by the plugin, appended by the host after the paper's 43 and
+ *  named "<sensor label>.<name>_<component>" in outputs. */
+struct StateBlockSpec
+{
+	std::string name;					  //!< e.g. "dvl_scale"
+	std::vector<std::string> components;  //!< one name per coordinate (dimension); "" for a scalar
+	std::vector<double> mean;			  //!< initial value and Gauss–Markov mean; empty: zeros
+	std::vector<double> sigma;			  //!< initial σ per coordinate (> 0), or one for all
+	StateProcess process = StateProcess::RandomConstant;
+	double process_sigma = 0;  //!< RandomWalk: σ per √s; GaussMarkov: stationary σ
+	double tau_s = 0;		   //!< GaussMarkov correlation time [s]
+
+	int dimension() const { return static_cast<int>(components.size()); }
+	/** Empty if usable, else what is wrong (for the host's refusal message). */
+	std::string problem() const;
 };
 
 /** A parameter sub-matrix in SI units from its stored form (exp of the
@@ -114,7 +164,8 @@ struct NavState
 Eigen::Matrix<double, 2, 3> physicalSub(const Eigen::Matrix<double, 2, 3>& stored);
 Eigen::Matrix<double, 2, 3> storedSub(const Eigen::Matrix<double, 2, 3>& physical);
 
-/** Names of the 43 tangent coordinates, for CSV headers ("att_n", "vel_e", …). */
+/** Names of the paper's 43 tangent coordinates, for CSV headers ("att_n",
+ *  "vel_e", …); the navigator appends its plugin states' names. */
 const std::vector<std::string>& tangentNames();
 /** Names of euclidean()'s entries (the stored values): tangentNames() except
  *  the accelerometer bias, stored in IMU axes ("acc_bias_x" …) but perturbed

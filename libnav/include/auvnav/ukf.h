@@ -1,6 +1,7 @@
 #pragma once
 /** @file ukf.h
- *  The manifold Unscented Kalman Filter on SO(3) × R⁴⁰ (state.h).
+ *  The manifold Unscented Kalman Filter on SO(3) × R⁴⁰ × R^e (state.h; e
+ *  plugin-owned states, fixed at initialize()).
  *
  *  Scaled unscented transform (Wan & van der Merwe): λ = α²(n+κ) − n, sigma
  *  points x̄ ⊞ ±√(n+λ)·L_j with L the lower Cholesky factor of P (state order
@@ -111,7 +112,10 @@ class ManifoldUkf
    public:
 	ManifoldUkf(const ProcessModel& model, const UtParams& ut);
 
+	/** Sets the state; P0 is x0.dim() square (std::invalid_argument
+	 *  otherwise), and the process model has the same dimension. */
 	void initialize(const NavState& x0, const Covariance& P0);
+	int dim() const { return n_; }
 	const NavState& state() const { return x_; }
 	const Covariance& covariance() const { return P_; }
 
@@ -145,8 +149,9 @@ class ManifoldUkf
 	UtParams ut_;
 	UtWeights w_;
 	NavState x_;
-	Covariance P_ = Covariance::Identity();
-	Eigen::Matrix<double, idx::dim, idx::dim> L_;  // scratch: leading Cholesky columns
+	int n_ = idx::core_dim;	 // state dimension (43 + plugin states)
+	Covariance P_ = Covariance::Identity(idx::core_dim, idx::core_dim);
+	Covariance L_;	// scratch: leading Cholesky columns
 	// Scratch buffers for updates (sized once per measurement dimension).
 	Eigen::MatrixXd z_sigma_;
 	std::array<NavState, 2 * idx::adcp_bias + 1> sigma_scratch_;	 // prediction sigma points

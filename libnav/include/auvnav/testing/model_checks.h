@@ -74,6 +74,7 @@ inline std::string blockNames(uint32_t mask)
 	std::string s;
 	for (const auto& b : stateBlocks())
 		if (mask & b.bit) s += (s.empty() ? "" : "|") + std::string(b.name);
+	if (mask & kPluginStates) s += (s.empty() ? "" : "|") + std::string("plugin_states");
 	return s.empty() ? "none" : s;
 }
 
@@ -87,15 +88,17 @@ inline Eigen::Matrix3d rotationYpr(double yaw, double pitch, double roll)
 		.toRotationMatrix();
 }
 
-/** A random tangent vector with independent N(0, scale²) entries, except the
- *  attitude part, whose rotation angle is kept below `max_angle_rad` (so that
- *  ⊞/⊟ stay inside the injectivity radius of Log). */
-inline TangentVector RandomTangent(uint32_t seed, double scale = 1.0, double max_angle_rad = 3.0)
+/** A random tangent vector of `dim` coordinates with independent
+ *  N(0, scale²) entries, except the attitude part, whose rotation angle is
+ *  kept below `max_angle_rad` (so that ⊞/⊟ stay inside the injectivity
+ *  radius of Log). */
+inline TangentVector RandomTangent(uint32_t seed, double scale = 1.0, double max_angle_rad = 3.0,
+								   int dim = idx::core_dim)
 {
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> n01(0.0, 1.0);
-	TangentVector d;
-	for (int i = 0; i < idx::dim; ++i) d[i] = scale * n01(rng);
+	TangentVector d(dim);
+	for (int i = 0; i < dim; ++i) d[i] = scale * n01(rng);
 	const Eigen::Vector3d att = d.segment<3>(idx::att);
 	if (att.norm() > max_angle_rad) d.segment<3>(idx::att) = att * (max_angle_rad / att.norm());
 	return d;
@@ -105,8 +108,9 @@ inline TangentVector RandomTangent(uint32_t seed, double scale = 1.0, double max
  *  heading; gyro bias ~1e-4 rad/s, acceleration ~0.2 m/s², gravity 9.78..9.83,
  *  accelerometer bias ~0.01 m/s², velocity ~1 m/s (vertical ~0.3 m/s),
  *  position ~200 m horizontally at 0..100 m depth, currents ~0.3 m/s, ADCP
- *  bias ~0.02 m/s, model parameters ~100 (all 1σ unless a range is given). */
-inline NavState RandomNavState(uint32_t seed)
+ *  bias ~0.02 m/s, model parameters ~100 (all 1σ unless a range is given),
+ *  and `plugin_states` plugin-owned states ~0.01. */
+inline NavState RandomNavState(uint32_t seed, int plugin_states = 0)
 {
 	std::mt19937 rng(seed * 2654435761u + 12345u);
 	std::normal_distribution<double> n01(0.0, 1.0);
@@ -127,6 +131,8 @@ inline NavState RandomNavState(uint32_t seed)
 	x.b_adcp = v2(0.02);
 	for (auto* m : {&x.M_sub, &x.Dl_sub, &x.Dq_sub})
 		for (int i = 0; i < 6; ++i) (*m)(i / 3, i % 3) = 100 * n01(rng);
+	x.extra.resize(plugin_states);
+	for (int i = 0; i < plugin_states; ++i) x.extra[i] = 0.01 * n01(rng);
 	return x;
 }
 
@@ -134,10 +140,11 @@ inline NavState RandomNavState(uint32_t seed)
  *  2°, gyro bias 1e-3 rad/s, acceleration 0.1 m/s², gravity 0.01 m/s², accel
  *  bias 0.01 m/s², velocity 0.5 m/s, position 5 m, currents 0.2 m/s, ADCP
  *  bias 0.05 m/s, model parameters 0.2 (relative for the surge/sway entries,
- *  which the state holds as logarithms; absolute for the couplings). */
-inline Covariance TypicalCovariance()
+ *  which the state holds as logarithms; absolute for the couplings), and
+ *  0.01 for `plugin_states` plugin-owned states. */
+inline Covariance TypicalCovariance(int plugin_states = 0)
 {
-	TangentVector s;
+	TangentVector s = TangentVector::Constant(idx::core_dim + plugin_states, 0.01);
 	s.segment<3>(idx::att).setConstant(2 * M_PI / 180);
 	s.segment<3>(idx::gyro_bias).setConstant(1e-3);
 	s.segment<3>(idx::acc).setConstant(0.1);
@@ -179,6 +186,12 @@ class TestContext
 
 // ---------------------------------------------------------------- comparisons
 
+/** tangentNames()[i], or "plugin_state_<k>" past the paper's 43. */
+inline std::string coordinateName(int i)
+{
+	return i < idx::core_dim ? tangentNames()[i] : "plugin_state_" + std::to_string(i - idx::core_dim);
+}
+
 /** `a ⊟ b` is within `tol` in every tangent coordinate (both states finite).
  *  On failure, names the offending coordinates (tangentNames()). The attitude
  *  part carries rounding of ~1e-16 even for equal states: use
@@ -188,13 +201,15 @@ inline ::testing::AssertionResult NavStateNear(const NavState& a, const NavState
 	if (!a.allFinite() || !b.allFinite())
 		return ::testing::AssertionFailure() << "state not finite (first: " << a.allFinite()
 											 << ", second: " << b.allFinite() << ")";
+	if (a.dim() != b.dim())
+		return ::testing::AssertionFailure() << "states of " << a.dim() << " and " << b.dim() << " coordinates";
 	const TangentVector d = a.boxminus(b);
 	std::ostringstream bad;
 	int count = 0;
-	for (int i = 0; i < idx::dim; ++i)
+	for (int i = 0; i < d.size(); ++i)
 		if (!(std::abs(d[i]) <= tol))
 		{
-			if (count++ < 6) bad << " " << tangentNames()[i] << "=" << d[i];
+			if (count++ < 6) bad << " " << coordinateName(i) << "=" << d[i];
 		}
 	if (count == 0) return ::testing::AssertionSuccess();
 	return ::testing::AssertionFailure() << count << " coordinate(s) of a ⊟ b exceed " << tol << ":" << bad.str();
@@ -205,12 +220,14 @@ inline ::testing::AssertionResult NavStateNear(const NavState& a, const NavState
  *  exactly I in floating point even for R_a = R_b. */
 inline ::testing::AssertionResult NavStateIdentical(const NavState& a, const NavState& b)
 {
+	if (a.dim() != b.dim())
+		return ::testing::AssertionFailure() << "states of " << a.dim() << " and " << b.dim() << " coordinates";
 	if (a.R_nb == b.R_nb && a.euclidean() == b.euclidean()) return ::testing::AssertionSuccess();
 	const TangentVector d = a.euclidean() - b.euclidean();
 	std::ostringstream bad;
 	if (a.R_nb != b.R_nb) bad << " attitude (|ΔR| = " << (a.R_nb - b.R_nb).cwiseAbs().maxCoeff() << ")";
-	for (int i = idx::att + 3; i < idx::dim; ++i)
-		if (!(d[i] == 0)) bad << " " << tangentNames()[i] << " " << b.euclidean()[i] << " -> " << a.euclidean()[i];
+	for (int i = idx::att + 3; i < d.size(); ++i)
+		if (!(d[i] == 0)) bad << " " << coordinateName(i) << " " << b.euclidean()[i] << " -> " << a.euclidean()[i];
 	return ::testing::AssertionFailure() << "states differ:" << bad.str();
 }
 
@@ -218,7 +235,7 @@ inline ::testing::AssertionResult NavStateIdentical(const NavState& a, const Nav
 inline ::testing::AssertionResult BoxplusRoundTrip(const NavState& x, uint32_t seed, double scale = 1.0,
 												   double tol = 1e-9)
 {
-	const TangentVector delta = RandomTangent(seed, scale);
+	const TangentVector delta = RandomTangent(seed, scale, 3.0, x.dim());
 	const NavState y = x.boxplus(delta);
 	const TangentVector back = y.boxminus(x);
 	const double err = (back - delta).cwiseAbs().maxCoeff();
@@ -291,9 +308,10 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 	}
 
 	// Same state with every undeclared block moved far away.
-	TangentVector delta = RandomTangent(opt.seed * 7919u + 1u, opt.undeclared_scale);
+	TangentVector delta = RandomTangent(opt.seed * 7919u + 1u, opt.undeclared_scale, 3.0, x.dim());
 	for (const auto& b : stateBlocks())
 		if (mask & b.bit) delta.segment(b.begin, b.size).setZero();
+	if (mask & kPluginStates) delta.tail(x.dim() - idx::core_dim).setZero();
 	const NavState x_far = x.boxplus(delta);
 
 	for (std::size_t k = 0; k < out.size(); ++k)
