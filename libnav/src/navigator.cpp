@@ -437,7 +437,8 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 				slot->streak.add(t_obs, r.innovation, m.R);
 				if (slot->streak.consistentBias(consistent_rejections_, consistency_probability_))
 				{
-					constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity;
+					// (Plugin states such as a heading bias widen with the state.)
+					constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity | kPluginStates;
 					const bool absolute = (slot->model->uses() & ~kAbsolute) == 0;
 					r = ukf_->update(*slot->model, m, ctx, absolute ? Recovery::State : Recovery::Noise);
 				}

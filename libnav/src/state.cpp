@@ -28,6 +28,12 @@ void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
 	for (int r = 0; r < 2; ++r)
 		for (int c = 0; c < 3; ++c) t[at + 3 * r + c] = m(r, c);
 }
+void add23(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2, 3>& m,
+		   const Eigen::Ref<const TangentVector>& t, int at)
+{
+	for (int r = 0; r < 2; ++r)
+		for (int c = 0; c < 3; ++c) out(r, c) = m(r, c) + t[at + 3 * r + c];
+}
 void get23(const Eigen::Ref<const TangentVector>& t, int at, Eigen::Matrix<double, 2, 3>& m)
 {
 	for (int r = 0; r < 2; ++r)
@@ -46,7 +52,8 @@ int tangentPrefix(uint32_t mask, int dim)
 
 TangentVector NavState::euclidean() const
 {
-	TangentVector t = TangentVector::Zero(dim());
+	TangentVector t(dim());	 // every entry is written below
+	t.segment<3>(idx::att).setZero();
 	t.segment<3>(idx::gyro_bias) = b_w;
 	t.segment<3>(idx::acc) = a_n;
 	t[idx::gravity] = g;
@@ -87,10 +94,19 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	if (delta.size() != dim())
 		throw std::invalid_argument("NavState::boxplus: a " + std::to_string(delta.size()) + "-vector on a " +
 									std::to_string(dim()) + "-state");
+	// Member by member (no flat round trip through euclidean(): this runs per
+	// sigma point).
 	NavState y;
-	y.setEuclidean(euclidean() + delta);
 	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
 	y.R_nb = dR * R_nb;
+	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
+	y.g = g + delta[idx::gravity];
+	y.p_n = p_n + delta.segment<3>(idx::pos);
+	y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
+	add23(y.M_sub, M_sub, delta, idx::inertia);
+	add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
+	add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
+	y.extra = extra + delta.tail(extra.size());
 	// Velocity and acceleration turn with the attitude (SE_2(3)-like
 	// retraction): a heading perturbation moves the whole body-fixed motion.
 	y.v_n = dR * v_n + delta.segment<3>(idx::vel);
@@ -111,10 +127,18 @@ TangentVector NavState::boxminus(const NavState& y) const
 	if (y.dim() != dim())
 		throw std::invalid_argument("NavState::boxminus: states of " + std::to_string(dim()) + " and " +
 									std::to_string(y.dim()) + " coordinates");
-	TangentVector d = euclidean() - y.euclidean();
+	TangentVector d(dim());	 // every entry is written below
 	const Eigen::Vector3d dtheta = so3::Log(R_nb * y.R_nb.transpose());
 	const Eigen::Matrix3d dR = so3::Exp(dtheta);
 	d.segment<3>(idx::att) = dtheta;
+	d.segment<3>(idx::gyro_bias) = b_w - y.b_w;
+	d[idx::gravity] = g - y.g;
+	d.segment<3>(idx::pos) = p_n - y.p_n;
+	d.segment<2>(idx::adcp_bias) = b_adcp - y.b_adcp;
+	put23(d, idx::inertia, M_sub - y.M_sub);
+	put23(d, idx::damping_lin, Dl_sub - y.Dl_sub);
+	put23(d, idx::damping_quad, Dq_sub - y.Dq_sub);
+	d.tail(extra.size()) = extra - y.extra;
 	d.segment<3>(idx::vel) = v_n - dR * y.v_n;
 	d.segment<3>(idx::acc) = a_n - dR * y.a_n;
 	d.segment<2>(idx::current_vehicle) =

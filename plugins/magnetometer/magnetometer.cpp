@@ -1,5 +1,7 @@
 #include "magnetometer.h"
 
+#include <auvnav/state_block_config.h>
+
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <Eigen/Geometry>
@@ -48,7 +50,7 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 	// A misspelled key must not fall back to its default silently.
 	cfg.allowOnly({"mode", "field_ut", "declination_deg", "inclination_deg", "hard_iron_ut", "soft_iron",
 	               "noise_ut", "heading_sigma_deg", "norm_tolerance", "dip_tolerance_deg", "gate_probability",
-	               "min_interval_s", "config_dir"});
+	               "min_interval_s", "states", "config_dir"});
 	const std::string mode = cfg.string("mode", "heading");
 	if (mode == "heading")
 		mode_ = Mode::Heading;
@@ -89,6 +91,16 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 	if (!(dip_tolerance_rad_ > 0))
 		cfg.fail("dip_tolerance_deg", "must be > 0 (use 180 to disable the check)");
 	gate_probability_ = gateProbabilityFrom(cfg);
+	if (cfg.has("states"))
+	{
+		const auto st = cfg.child("states");
+		st.allowOnly({"heading_bias"});
+		if (st.has("heading_bias"))
+		{
+			if (mode_ != Mode::Heading) st.fail("heading_bias", "a heading bias state needs mode: heading");
+			blocks_.push_back(stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
+		}
+	}
 	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);
 }
 
@@ -222,6 +234,11 @@ bool MagnetometerModel::doPredict(const NavState& x, const Measurement& m, const
 	{
 		if (z_pred.size() != 1) return false;
 		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(m.aux[0], m.aux[1], m.aux[2]));
+		if (bias_at_ >= 0)
+		{
+			if (x.extra.size() <= bias_at_) return false;  // declared but not in this state
+			z_pred[0] += x.extra[bias_at_];
+		}
 	}
 	return z_pred.allFinite();
 }

@@ -37,6 +37,14 @@
  *
  *  h reads only the attitude: uses() = kAttitude. h is pure: R_bs (vector
  *  mode) or u_b (heading mode) travel in Measurement::aux.
+ *
+ *  Optional plugin-owned state (heading mode; `states: {heading_bias: …}`,
+ *  state_block_config.h): a heading bias b [rad], h = heading + b. Thruster
+ *  currents and a nearby hull bend the measured heading by degrees for as
+ *  long as a leg lasts; as white noise such errors average down and the
+ *  heading σ ends far below them. A Gauss–Markov b with the errors' σ and
+ *  correlation time keeps them in the state, so the heading σ stays as large
+ *  as what the magnetometer can actually tell (uses() adds kPluginStates).
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -67,8 +75,13 @@ class MagnetometerModel final : public SafeMeasurementModel
 
 	MagnetometerModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude; }
+	uint32_t uses() const noexcept override
+	{
+		return kAttitude | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
+	}
 	double gateProbability() const noexcept override { return gate_probability_; }
+	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
+	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
 	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
 
@@ -108,5 +121,7 @@ class MagnetometerModel final : public SafeMeasurementModel
 	double last_used_s_ = -1e300;
 	std::size_t disturbed_ = 0;
 	std::size_t rate_limited_ = 0;
+	std::vector<StateBlockSpec> blocks_;
+	int bias_at_ = -1;	// heading bias in NavState::extra, after bindStates
 };
 }  // namespace auvnav::plugins

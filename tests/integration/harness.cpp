@@ -53,11 +53,15 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 	return res;
 }
 
-fs::path simulate(const std::string& mission, unsigned seed)
+fs::path simulate(const std::string& mission, unsigned seed) { return simulate(mission, seed, {}, ""); }
+
+fs::path simulate(const std::string& mission, unsigned seed,
+				  const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag)
 {
-	const auto spec = sim::MissionSpec::load(std::string(AUVNAV_SOURCE_DIR) + "/" + mission);
-	const fs::path dir = fs::temp_directory_path() /
-						 ("auvnav_it_" + spec.name + "_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
+	auto spec = sim::MissionSpec::load(std::string(AUVNAV_SOURCE_DIR) + "/" + mission);
+	for (const auto& [k, v] : sensor_overrides) spec.sensors.set(k, v);
+	const fs::path dir = fs::temp_directory_path() / ("auvnav_it_" + spec.name + tag + "_" + std::to_string(seed) +
+													  "_" + std::to_string(::getpid()));
 	fs::remove_all(dir);
 	sim::runMission(spec, seed, dir.string());
 	return dir;

@@ -50,5 +50,10 @@ double wrapPi(double a);
 
 /** Simulates `mission` (repo-relative) with `seed` into a fresh scratch folder. */
 std::filesystem::path simulate(const std::string& mission, unsigned seed);
+/** The same with `sensor_overrides` (KEY=VALUE on the mission's sensor file,
+ *  e.g. {"dvl.scale_factor_error", "0.005"}); `tag` keeps variants apart. */
+std::filesystem::path simulate(const std::string& mission, unsigned seed,
+							   const std::vector<std::pair<std::string, std::string>>& sensor_overrides,
+							   const std::string& tag);
 
 }  // namespace auvnav::test

@@ -257,7 +257,10 @@ TEST(NavStateManifold, EuclideanRoundTripAndLayout)
 	ASSERT_EQ(stored.size(), names.size());
 	for (int i = 0; i < idx::core_dim; ++i)
 	{
-		if (i < idx::acc_bias || i >= idx::acc_bias + 3) EXPECT_EQ(stored[i], names[i]) << i;
+		if (i < idx::acc_bias || i >= idx::acc_bias + 3)
+		{
+			EXPECT_EQ(stored[i], names[i]) << i;
+		}
 	}
 	EXPECT_EQ(names[idx::acc_bias], "acc_bias_n");
 	EXPECT_EQ(stored[idx::acc_bias], "acc_bias_x");

