@@ -2,6 +2,7 @@
 // output frame (instrument, vehicle, Earth NED/ENU, beams) and both signs.
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/so3.h>
 #include <auvnav/testing/model_checks.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
@@ -756,4 +757,97 @@ TEST(DvlEarth, RejectsBadAttitudeSigmas)
 	EXPECT_THROW(DvlModel(pt::configText("earth_tilt_sigma_deg: x"), "DVL"), config::ConfigError);
 	EXPECT_THROW(DvlModel(pt::configText("beam_sigma_mps: 0"), "DVL"), config::ConfigError);
 	EXPECT_TRUE(pt::ModuleRefuses("earth_heading_sigma_deg: -5", "earth_heading_sigma_deg"));
+}
+
+// ------------------------------------------------------------ plugin-owned states
+
+TEST(DvlStates, DeclaresScaleAndMisalignmentBlocksFromTheConfig)
+{
+	DvlModel none(pt::defaultConfig(), "DVL");
+	EXPECT_TRUE(none.stateBlocks().empty());
+	EXPECT_EQ(none.uses() & kPluginStates, 0u);
+	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2, process: random_walk, "
+							  "process_sigma_deg: 0.001}}"),
+			   "DVL");
+	const auto blocks = m.stateBlocks();
+	ASSERT_EQ(blocks.size(), 2u);
+	EXPECT_EQ(blocks[0].name, "scale_factor");
+	EXPECT_EQ(blocks[0].dimension(), 1);
+	EXPECT_DOUBLE_EQ(blocks[0].sigma[0], 0.01);
+	EXPECT_EQ(blocks[0].process, StateProcess::RandomConstant);
+	EXPECT_EQ(blocks[1].name, "misalignment");
+	EXPECT_EQ(blocks[1].dimension(), 3);
+	EXPECT_NEAR(blocks[1].sigma[0], 2 * kDeg, 1e-15);
+	EXPECT_EQ(blocks[1].process, StateProcess::RandomWalk);
+	EXPECT_NEAR(blocks[1].process_sigma, 0.001 * kDeg, 1e-18);
+	EXPECT_NE(m.uses() & kPluginStates, 0u);
+	// Bad blocks name the key.
+	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0}}"), "DVL"), config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("states: {scale: {sigma: 0.01}}"), "DVL"), config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("states: {misalignment: {sigma_deg: 1, process: gauss_markov}}"), "DVL"),
+				 config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0.01, tau_s: 5}}"), "DVL"), config::ConfigError);
+}
+
+TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
+{
+	// Instrument frame, states bound after two other coordinates: h = (1 + s) R_bsᵀ Exp(δ)ᵀ v_s_b,
+	// i.e. the velocity seen through the true mounting Exp(δ) R_bs, scaled.
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
+	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}"), "DVL");
+	m.bindStates(2);
+	NavState x = at::RandomNavState(7, 6);
+	const double s = 0.005;
+	const Eigen::Vector3d delta = Eigen::Vector3d(0.3, -0.2, 1.0) * kDeg;
+	x.extra[2] = s;
+	x.extra.segment<3>(3) = delta;
+	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
+	const Eigen::Vector3d expected = (1 + s) * trueSensorVelocity(x, tc.ctx(), R_bs_true, kDvlPos);
+	const Measurement meas = prepareOne(m, *dvlObs(expected), tc.ctx());
+	const Eigen::VectorXd h = at::Predict(m, meas, tc.ctx(), x);
+	EXPECT_LT((h - expected).cwiseAbs().maxCoeff(), 1e-12) << h.transpose() << " vs " << expected.transpose();
+	// Without the states the same reading is off by about s·|v| and δ·|v|.
+	NavState zero = x;
+	zero.extra.setZero();
+	EXPECT_GT((at::Predict(m, meas, tc.ctx(), zero) - expected).norm(), 1e-3 * expected.norm());
+	// A state without the plugin's coordinates: h cannot be evaluated (not a silent read).
+	const NavState short_state = at::RandomNavState(7, 3);
+	EXPECT_TRUE(at::Predict(m, meas, tc.ctx(), short_state).array().isNaN().all());
+	at::WellFormedOptions opt;
+	opt.accept_skip = false;
+	EXPECT_TRUE(at::IsWellFormed(m, *dvlObs(expected), tc.ctx(), x, opt));
+}
+
+TEST(DvlStates, AFilterLearnsTheScaleFactorFromVelocityKnownOtherwise)
+{
+	// The velocity is known to 1 mm/s (as from a GPS track): DVL readings 0.5 % high are explained
+	// by the scale factor, which the filter then knows to a fraction of its prior σ.
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.02}}"), "DVL");
+	m.bindStates(0);
+	NavState truth = at::RandomNavState(3, 1);
+	truth.extra[0] = 0.005;
+	truth.b_w.setZero();
+	Covariance P = at::TypicalCovariance(1);
+	P.block<3, 3>(idx::vel, idx::vel) = Eigen::Matrix3d::Identity() * 1e-6;
+	P(idx::extra, idx::extra) = 0.02 * 0.02;
+	NavState x0 = truth;
+	x0.extra[0] = 0;
+	ProcessModel pm;
+	pm.appendBlock(m.stateBlocks()[0]);
+	ManifoldUkf ukf(pm, UtParams{});
+	ukf.initialize(x0, P);
+	const Eigen::Vector3d v_s = (1 + 0.005) * trueSensorVelocity(truth, tc.ctx(), nominalRbs(), kDvlPos);
+	for (int i = 0; i < 20; ++i)
+	{
+		const auto r = at::ApplyObservation(ukf, m, *dvlObs(v_s, janusCovariance(0.002)), tc.ctx());
+		ASSERT_EQ(r.status, PrepareStatus::Ok) << r.why;
+	}
+	const double sigma = std::sqrt(ukf.covariance()(idx::extra, idx::extra));
+	EXPECT_NEAR(ukf.state().extra[0], 0.005, 3 * sigma);
+	EXPECT_LT(sigma, 0.2 * 0.02);
+	EXPECT_GT(ukf.state().extra[0], 0.003);
 }

@@ -662,3 +662,43 @@ TEST(Magnetometer, ForcedRecoveryAtHeadingSigma180NeverClaimsAFalseHeading)
 		    << error_deg << ": " << err / kDeg << " deg off with sigma " << sigma / kDeg;
 	}
 }
+
+TEST(MagnetometerStates, HeadingBiasAddsToTheHeadingAndIsDeclared)
+{
+	at::TestContext tc;
+	MagnetometerModel plain(pt::defaultConfig(), "MAG");
+	EXPECT_TRUE(plain.stateBlocks().empty());
+	EXPECT_EQ(plain.uses(), uint32_t(kAttitude));
+	MagnetometerModel model(pt::configText("states: {heading_bias: {sigma_deg: 4, process: gauss_markov, "
+	                                       "process_sigma_deg: 4, tau_s: 120}}"),
+	                        "MAG");
+	const auto blocks = model.stateBlocks();
+	ASSERT_EQ(blocks.size(), 1u);
+	EXPECT_EQ(blocks[0].name, "heading_bias");
+	EXPECT_EQ(blocks[0].process, StateProcess::GaussMarkov);
+	EXPECT_NEAR(blocks[0].process_sigma, 4 * kDeg, 1e-15);
+	EXPECT_DOUBLE_EQ(blocks[0].tau_s, 120);
+	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPluginStates));
+	model.bindStates(1);
+	for (uint32_t seed = 1; seed <= 5; ++seed)
+	{
+		NavState x = at::RandomNavState(seed, 2);
+		x.extra[1] = 3 * kDeg;
+		tc.ctx().mean = &x;
+		const Measurement m = prepareOne(model, *magObs(reading(x.R_nb)), tc.ctx());
+		const Measurement mp = prepareOne(plain, *magObs(reading(x.R_nb)), tc.ctx());
+		EXPECT_NEAR(plugins::wrapPi(at::Predict(model, m, tc.ctx(), x)[0] - at::Predict(plain, mp, tc.ctx(), x)[0]),
+		            3 * kDeg, 1e-12);
+		at::WellFormedOptions opt;
+		opt.seed = seed;
+		opt.accept_skip = false;
+		EXPECT_TRUE(at::IsWellFormed(model, *magObs(reading(x.R_nb)), tc.ctx(), x, opt)) << seed;
+		// The bias block missing from the state: h refuses instead of reading past the end.
+		const NavState short_state = at::RandomNavState(seed, 1);
+		EXPECT_TRUE(std::isnan(at::Predict(model, m, tc.ctx(), short_state)[0]));
+	}
+	tc.ctx().mean = nullptr;
+	EXPECT_THROW(MagnetometerModel(pt::configText("mode: vector\nstates: {heading_bias: {sigma_deg: 4}}"), "MAG"),
+	             config::ConfigError);
+	EXPECT_THROW(MagnetometerModel(pt::configText("states: {hard_iron: {sigma: 4}}"), "MAG"), config::ConfigError);
+}
