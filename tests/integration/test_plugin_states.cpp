@@ -85,6 +85,13 @@ Outcome runSquare(const fs::path& dir, bool states)
 	nav.addDenial({{"GPS"}, truth[dive].t_unix - t0, 1e9});
 	nav.addDenial({{"ADCP", "THRUSTERS"}, 0.0, 1e9});
 	EXPECT_EQ(nav.pluginStates().size(), states ? 2u : 0u);
+	EXPECT_EQ(nav.stateNames().size(), std::size_t(states ? 47 : 43));
+	if (states && nav.stateNames().size() == 47)
+	{
+		EXPECT_EQ(nav.stateNames()[43], "DVL.scale_factor");
+		EXPECT_EQ(nav.stateNames()[46], "DVL.misalignment_z");
+		EXPECT_EQ(nav.pluginStates()[1].offset, 44);
+	}
 	Outcome out;
 	bool recorded = false;
 	nav.on_predict = [&](const Navigator& n) {
