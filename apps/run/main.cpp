@@ -58,6 +58,7 @@ int main(int argc, char** argv)
 
 	std::unique_ptr<auvnav::Navigator> nav;
 	std::unique_ptr<auvnav::run::RunOutputs> outputs;
+	bool write_updates = true;
 	auvnav::PluginHost* host_ptr = nullptr;
 	try
 	{
@@ -91,8 +92,9 @@ int main(int argc, char** argv)
 			nav->addDenial(w);
 		}
 		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
+		write_updates = cfg.has("outputs") ? cfg.child("outputs").boolean("updates_csv", true) : true;
 		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
-															   nav->storedStateNames());
+															   nav->storedStateNames(), write_updates);
 	}
 	catch (const std::exception& e)
 	{
@@ -132,6 +134,7 @@ int main(int argc, char** argv)
 	};
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
 		outputs->onUpdate(label, t, r);
+		outputs->onAnyUpdate(label, nav->time(), t, r);
 		if (!gps_labels.count(label)) return;
 		outputs->onPositionFix(label, t, m, r);
 		if (live) live->onFix(t, m, r);

@@ -42,7 +42,7 @@ std::string num(double v)
 }  // namespace
 
 RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
-					   std::vector<std::string> stored_names)
+					   std::vector<std::string> stored_names, bool updates_csv)
 	: dir_(dir), names_(std::move(tangent_names)), stored_names_(std::move(stored_names)), period_s_(1.0 / rate_hz)
 {
 	fs::create_directories(dir);
@@ -68,6 +68,28 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 	if (!health_) throw std::runtime_error("cannot write outputs in " + dir);
 	health_ << "time_s,status,reason\n";
 	health_.flush();
+	if (updates_csv)
+	{
+		updates_.open(fs::path(dir) / "updates.csv");
+		if (!updates_) throw std::runtime_error("cannot write outputs in " + dir);
+		updates_ << "time_s,measurement_time_s,sensor,status,nis,dim,why\n";
+	}
+}
+
+void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s,
+							 const UpdateResult& r)
+{
+	if (!updates_.is_open()) return;
+	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
+						 : r.status == UpdateStatus::Recovered ? "recovered"
+						 : r.status == UpdateStatus::Rejected  ? "rejected"
+															   : "invalid";
+	const bool has_nis = r.status != UpdateStatus::Invalid || r.nis > 0;
+	char line[320];
+	std::snprintf(line, sizeof line, "%.6f,%.6f,%s,%s,%.6g,%d,\"%s\"\n", t_filter_s, t_measurement_s, label.c_str(), status,
+				  has_nis ? r.nis : NAN, r.dim, r.status == UpdateStatus::Accepted ? "" : r.why);
+	updates_ << line;
+	if (++update_rows_ % 500 == 0) updates_.flush();
 }
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
@@ -137,6 +159,7 @@ void RunOutputs::onUpdate(const std::string& label, double t, const UpdateResult
 void RunOutputs::flush()
 {
 	nis_.flush();
+	if (updates_.is_open()) updates_.flush();
 	tum_.flush();
 	csv_.flush();
 }

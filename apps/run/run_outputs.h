@@ -35,7 +35,11 @@ class RunOutputs
 	/** `tangent_names` / `stored_names`: Navigator::stateNames() and
 	 *  storedStateNames() (the 43 and the plugin states), for the headers. */
 	RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
-			   std::vector<std::string> stored_names);
+			   std::vector<std::string> stored_names, bool updates_csv = true);
+	/** One updates.csv row per update of any sensor and any status: filter
+	 *  time, measurement time, sensor, status, NIS, dimension, why (for
+	 *  invalid and rejected ones). */
+	void onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s, const UpdateResult& r);
 	/** Appends a row if at least 1/rate since the last one. */
 	void onState(const Navigator& nav);
 	/** Appends a GPS-like 2-D position update (label "…GPS…" or any update
@@ -56,7 +60,8 @@ class RunOutputs
 	std::vector<std::string> names_, stored_names_;
 	double period_s_;
 	double last_t_ = -1e300;
-	std::ofstream tum_, csv_, fixes_, nis_, health_;
+	std::ofstream tum_, csv_, fixes_, nis_, health_, updates_;
+	std::size_t update_rows_ = 0;
 	struct NisAcc
 	{
 		std::size_t n = 0, dim = 0;

@@ -3,7 +3,7 @@
 #         [-DEXTRA_ARGS=a;b] -DEXPECTED_EXIT_CODE=<n> [-DEXPECTED_OUTPUT=<regex>]
 #         [-DTRUNCATE_PERCENT=<p> -DTRUNCATED_RAWLOG=<file>]   run on the first p% of RAWLOG's bytes
 #         [-DCONFIG_REPLACE=<from> -DCONFIG_REPLACE_WITH=<to>] run on a copy of CONFIG with a text replaced
-#         [-DEXPECT_COMPLETED=true|false] [-DEXPECT_STATUS=ok|degraded|diverged|not_initialized] [-DMIN_TUM_LINES=<n>] [-DCSV_HEADER_REGEX=<regex>]
+#         [-DEXPECT_COMPLETED=true|false] [-DEXPECT_STATUS=ok|degraded|diverged|not_initialized] [-DMIN_TUM_LINES=<n>] [-DCSV_HEADER_REGEX=<regex>] [-DCHECK_UPDATES=true]
 #         -P check_run.cmake
 foreach(var RUN CONFIG RAWLOG OUT_DIR EXPECTED_EXIT_CODE)
   if(NOT DEFINED ${var})
@@ -99,6 +99,36 @@ if(DEFINED MIN_TUM_LINES)
     message(FATAL_ERROR "trajectory.tum has ${n} rows, expected at least ${MIN_TUM_LINES}")
   endif()
   message(STATUS "trajectory.tum: ${n} rows")
+endif()
+if(CHECK_UPDATES)
+  # updates.csv: one row per update; its accepted rows per sensor must be
+  # the summary's counts.
+  file(STRINGS "${OUT_DIR}/updates.csv" header LIMIT_COUNT 1)
+  if(NOT header STREQUAL "time_s,measurement_time_s,sensor,status,nis,dim,why")
+    message(FATAL_ERROR "updates.csv header: '${header}'")
+  endif()
+  file(READ "${OUT_DIR}/summary.json" json)
+  string(JSON n_sensors LENGTH "${json}" sensors)
+  math(EXPR last "${n_sensors} - 1")
+  set(checked 0)
+  foreach(i RANGE 0 ${last})
+    string(JSON label GET "${json}" sensors ${i} label)
+    string(JSON accepted GET "${json}" sensors ${i} accepted)
+    string(JSON plugin GET "${json}" sensors ${i} plugin)
+    if(plugin STREQUAL "(prediction)")
+      continue()
+    endif()
+    file(STRINGS "${OUT_DIR}/updates.csv" rows REGEX "^[0-9.]+,[0-9.]+,${label},accepted,")
+    list(LENGTH rows n)
+    if(NOT n EQUAL accepted)
+      message(FATAL_ERROR "updates.csv: ${n} accepted rows for ${label}, summary.json says ${accepted}")
+    endif()
+    math(EXPR checked "${checked} + ${n}")
+  endforeach()
+  if(checked LESS 1)
+    message(FATAL_ERROR "updates.csv: no accepted updates at all")
+  endif()
+  message(STATUS "updates.csv: ${checked} accepted updates, as in summary.json")
 endif()
 if(DEFINED CSV_HEADER_REGEX)
   file(STRINGS "${OUT_DIR}/states.csv" header LIMIT_COUNT 1)
