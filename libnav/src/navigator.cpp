@@ -1,9 +1,7 @@
 #include <auvnav/navigator.h>
 #include <auvnav/rejection_streak.h>
 #include <auvnav/so3.h>
-#include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
-#include <mrpt/obs/gnss_messages_ascii_nmea.h>
 
 #include <cmath>
 #include <filesystem>
@@ -143,6 +141,14 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
 		slots_.push_back(std::move(slot));
 	}
+	if (position_from_gps_)
+	{
+		bool found = false;
+		for (const auto& slot : slots_) found = found || slot->stats.label == gps_label_;
+		if (!found)
+			initial_.fail("gps_label", "'" + gps_label_ + "' is not the label of any entry in sensors: (the first fix comes "
+									  "from that sensor's plugin)");
+	}
 	appendPluginStates(pm);
 	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
 }
@@ -252,15 +258,20 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 		// whole: its accelerometer part must not update the state either.
 		if (!handleImu(obs)) return;
 	}
-	// Record the first GPS fix for initialisation.
+	// The first fix for initialisation comes from the fix sensor's plugin
+	// (MeasurementModel::initialFix: the GPS decodes its GGA, a USBL its own).
 	if (!initialized_ && position_from_gps_ && obs.sensorLabel == gps_label_ && !denied(obs.sensorLabel, t))
-		if (const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs))
-			if (gps->has_GGA_datum())
+		for (auto& slot : slots_)
+			if (slot->stats.label == gps_label_)
 			{
-				const auto& gga = gps->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>();
-				const double lat = gga.fields.latitude_degrees, lon = gga.fields.longitude_degrees;
-				if (gga.fields.fix_quality > 0 && std::isfinite(lat) && std::isfinite(lon))
-					gps_fix_n_ = frame_->toNed({lat * kDeg, lon * kDeg, 0.0});
+				InitialFix fix;
+				FilterContext ctx;
+				ctx.t_s = ctx.t_measurement_s = t;
+				ctx.frame = frame_.get();
+				ctx.imu_position_b = imu_position_b_;
+				ctx.omega_ie_n = frame_->earthRate();
+				if (slot->model->initialFix(obs, ctx, fix) && fix.p_n.allFinite() && fix.r_b.allFinite())
+					gps_fix_ = fix;
 			}
 	dispatch(obs, t);
 }
@@ -293,7 +304,7 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 		t_s_ = t;
 		omega_ib_b_ = w;
 		++imu_stats_.before_init;
-		if (t - leveling_start_s_ >= leveling_s_ && (!position_from_gps_ || gps_fix_n_)) initialize();
+		if (t - leveling_start_s_ >= leveling_s_ && (!position_from_gps_ || gps_fix_)) initialize();
 		return true;
 	}
 	const double dt = t - t_s_;
@@ -335,7 +346,9 @@ void Navigator::initialize()
 				  .toRotationMatrix();
 	x0.g = earth::normalGravity(frame_->origin().lat_rad, frame_->origin().h_m);
 	Eigen::Vector3d p_body(initial_.number("north_m", 0.0), initial_.number("east_m", 0.0), 0.0);
-	if (position_from_gps_ && gps_fix_n_) p_body = *gps_fix_n_;
+	// A fix is of its sensor point (e.g. the antenna): the body origin is
+	// r_b behind it along the initial attitude.
+	if (position_from_gps_ && gps_fix_) p_body = gps_fix_->p_n - x0.R_nb * gps_fix_->r_b;
 	p_body.z() = initial_.number("depth_m", 0.0);
 	x0.p_n = p_body + x0.R_nb * imu_position_b_;
 	// Plugin states start at their declared means (the process model's prior).
@@ -356,7 +369,7 @@ std::string Navigator::waitingFor() const
 	if (t_s_ - leveling_start_s_ < leveling_s_)
 		return "IMU data for levelling: " + std::to_string(t_s_ - leveling_start_s_) + " s of " +
 			   std::to_string(leveling_s_) + " s (imu.leveling_s)";
-	if (position_from_gps_ && !gps_fix_n_)
+	if (position_from_gps_ && !gps_fix_)
 		return "a valid GPS fix on label '" + gps_label_ +
 			   "' (filter.initial.position: gps); set filter.initial.position: config to start without one";
 	return "initialisation";

@@ -22,11 +22,10 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
 
-PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-								  std::vector<Measurement>& out, std::string& why)
+PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
+								  double& hdop, std::string& why) const
 {
 	using mrpt::obs::gnss::Message_NMEA_GGA;
-	out.clear();
 	const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs);
 	if (!gps)
 	{
@@ -63,12 +62,42 @@ PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 	// the origin's height will do.
 	const double h = f.altitude_meters + f.geoidal_distance;
 	geo.h_m = std::isfinite(h) ? h : ctx.frame->origin().h_m;
-	const Eigen::Vector3d p_n = ctx.frame->toNed(geo);
+	p_n = ctx.frame->toNed(geo);
 	if (!p_n.allFinite())
 	{
 		why = "position conversion failed";
 		return PrepareStatus::Invalid;
 	}
+	hdop = static_cast<double>(f.HDOP);
+	return PrepareStatus::Ok;
+}
+
+bool GpsModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
+{
+	try
+	{
+		Eigen::Vector3d p_n;
+		double hdop = 0;
+		std::string why;
+		if (decodeFix(obs, ctx, p_n, hdop, why) != PrepareStatus::Ok) return false;
+		out.p_n = p_n;
+		out.r_b = position_b_;
+		return true;
+	}
+	catch (...)
+	{
+		return false;
+	}
+}
+
+PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+								  std::vector<Measurement>& out, std::string& why)
+{
+	out.clear();
+	Eigen::Vector3d p_n;
+	double hdop = 0;
+	const PrepareStatus decoded = decodeFix(obs, ctx, p_n, hdop, why);
+	if (decoded != PrepareStatus::Ok) return decoded;
 	// GPS errors are correlated over tens of seconds: using every 1 Hz fix as
 	// independent would make the filter overconfident. Use one fix per
 	// min_interval_s (the error's correlation time) instead.
@@ -81,7 +110,7 @@ PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 	const double since_last_s = t_obs - last_used_s_;
 	last_used_s_ = t_obs;
 	double sigma = sigma_m_;
-	if (scale_by_hdop_ && std::isfinite(f.HDOP) && f.HDOP > 0) sigma *= static_cast<double>(f.HDOP);
+	if (scale_by_hdop_ && std::isfinite(hdop) && hdop > 0) sigma *= hdop;
 
 	Measurement m;
 	m.z = p_n.head<2>();

@@ -37,6 +37,8 @@ class GpsModel final : public SafeMeasurementModel
 	double gateProbability() const noexcept override { return gate_probability_; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
+	/** The antenna's position from a valid GGA fix (no rate limit, no state). */
+	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept override;
 
    protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -45,6 +47,9 @@ class GpsModel final : public SafeMeasurementModel
 				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
    private:
+	/** The GGA fix of `obs` in the navigation frame (Ok), or why not. */
+	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
+							double& hdop, std::string& why) const;
 	/** Variance [m²] of the correlated error for a fix `since_last_s` after
 	 *  the last one used (0 when correlated_sigma_m is 0). */
 	double correlatedVariance(double since_last_s) const;

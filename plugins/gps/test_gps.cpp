@@ -313,3 +313,25 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 	EXPECT_THROW(GpsModel(pt::configText("correlated_sigma_m: -1\n"), "GPS"), config::ConfigError);
 	EXPECT_THROW(GpsModel(pt::configText("correlation_time_s: 0\n"), "GPS"), config::ConfigError);
 }
+
+TEST(Gps, InitialFixIsTheAntennaPositionWithItsLeverArm)
+{
+	// The navigator starts from this (position: gps): the antenna's point in
+	// the navigation frame and where the antenna sits on the body.
+	at::TestContext tc;
+	GpsModel model(pt::configText("position_m: [-0.3, 0.1, -0.6]"), "GPS");
+	const Eigen::Vector3d p(123.4, -56.7, 0.0);
+	InitialFix fix;
+	ASSERT_TRUE(model.initialFix(*ggaObs(tc.frame(), p), tc.ctx(), fix));
+	EXPECT_LT((fix.p_n.head<2>() - p.head<2>()).norm(), 1e-6);
+	EXPECT_TRUE(fix.r_b.isApprox(Eigen::Vector3d(-0.3, 0.1, -0.6)));
+	// No fix, no frame, wrong class: nothing to start from (and no exception).
+	EXPECT_FALSE(model.initialFix(*ggaObs(tc.frame(), p, 0), tc.ctx(), fix));
+	FilterContext no_frame;
+	EXPECT_FALSE(model.initialFix(*ggaObs(tc.frame(), p), no_frame, fix));
+	EXPECT_FALSE(model.initialFix(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), fix));
+	// Unlike prepare, it is not rate limited: every valid fix offers a start.
+	GpsModel limited(pt::configText("min_interval_s: 100"), "GPS");
+	EXPECT_TRUE(limited.initialFix(*ggaObs(tc.frame(), p), tc.ctx(), fix));
+	EXPECT_TRUE(limited.initialFix(*ggaObs(tc.frame(), p), tc.ctx(), fix));
+}

@@ -6,7 +6,9 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <gtest/gtest.h>
+#include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/gnss_messages_ascii_nmea.h>
 
 #include <cmath>
 #include <limits>
@@ -162,4 +164,55 @@ TEST(NavigatorInput, UnknownSensorsAndWrongClassesAreHarmless)
 	f.nav->process(*dvl);
 	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").invalid, 1u);
 	EXPECT_TRUE(f.nav->filter().state().allFinite());
+}
+
+TEST(NavigatorInput, FirstFixComesFromTheFixSensorsPluginAtItsAntenna)
+{
+	// position: gps starts from the GPS plugin's initialFix: the antenna's
+	// point, moved to the body origin with the initial attitude.
+	config::Node cfg = config::Node::load(kConfig);
+	cfg.set("filter.initial.heading_deg", "90");
+	cfg.set("sensors.GPS.config.position_m.0", "-0.3");
+	cfg.set("sensors.GPS.config.position_m.1", "0.1");
+	PluginHost host;
+	Navigator nav(cfg, host);
+	double t = kT0;
+	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));  // past the levelling
+	EXPECT_FALSE(nav.initialized());
+	EXPECT_NE(nav.waitingFor().find("GPS fix"), std::string::npos) << nav.waitingFor();
+	auto gps = mrpt::obs::CObservationGPS::Create();
+	gps->sensorLabel = "GPS";
+	gps->timestamp = mrpt::Clock::fromDouble(t + 0.005);
+	mrpt::obs::gnss::Message_NMEA_GGA gga;
+	const earth::Geodetic geo = nav.frame().toGeodetic(Eigen::Vector3d(50, -20, 0));
+	gga.fields.latitude_degrees = geo.lat_rad * 180 / M_PI;
+	gga.fields.longitude_degrees = geo.lon_rad * 180 / M_PI;
+	gga.fields.fix_quality = 1;
+	gps->setMsg(gga);
+	nav.process(*gps);
+	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));
+	ASSERT_TRUE(nav.initialized());
+	// Heading 90°: body x points east, y south. The antenna at (−0.3, 0.1) in
+	// the body is 0.3 m west and 0.1 m south of the origin, so the origin is
+	// 0.3 m east and 0.1 m north of the fix.
+	const Eigen::Vector3d p = nav.bodyPosition_n();
+	EXPECT_NEAR(p.x(), 50 + 0.1, 0.02);
+	EXPECT_NEAR(p.y(), -20 + 0.3, 0.02);
+}
+
+TEST(NavigatorInput, FixLabelNamingNoSensorIsAConfigError)
+{
+	config::Node cfg = config::Node::load(kConfig);
+	cfg.set("filter.initial.gps_label", "GNSS");
+	PluginHost host;
+	try
+	{
+		Navigator nav(cfg, host);
+		FAIL() << "accepted a gps_label that names no sensor";
+	}
+	catch (const config::ConfigError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("filter.initial.gps_label"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("'GNSS'"), std::string::npos) << e.what();
+	}
 }

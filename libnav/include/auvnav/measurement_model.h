@@ -78,6 +78,15 @@ struct Measurement
 	bool skipped = false;
 };
 
+/** A position fix to start the filter from (position: gps in the config):
+ *  where the sensor point (antenna, transponder) is, and where it sits on the
+ *  body; the navigator moves it to the IMU with the initial attitude. */
+struct InitialFix
+{
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();	//!< sensor point, navigation frame [m] (its down is ignored)
+	Eigen::Vector3d r_b = Eigen::Vector3d::Zero();	//!< sensor point in the body frame [m]
+};
+
 enum class PrepareStatus
 {
 	Ok,		  //!< `out` holds the measurements to apply (possibly none)
@@ -107,6 +116,14 @@ class MeasurementModel
 	/** Gate probability; the filter gates at the χ² quantile of the
 	 *  measurement's own dimension. 1.0 disables the gate. */
 	virtual double gateProbability() const noexcept { return 0.999; }
+	/** A fix the filter may start from (called only before initialisation,
+	 *  for the sensor named by filter.initial.gps_label); false: this
+	 *  observation gives none. */
+	virtual bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
+	{
+		(void)obs, (void)ctx, (void)out;
+		return false;
+	}
 	/** The state blocks this model owns (called once, after construction). */
 	virtual std::vector<StateBlockSpec> stateBlocks() const { return {}; }
 	/** Where the model's first block starts in NavState::extra (called once,

@@ -150,7 +150,7 @@ class Navigator
 	Eigen::Vector3d f_sum_ = Eigen::Vector3d::Zero(), w_sum_ = Eigen::Vector3d::Zero();
 	std::size_t leveling_samples_ = 0;
 	double leveling_start_s_ = -1;
-	std::optional<Eigen::Vector3d> gps_fix_n_;
+	std::optional<InitialFix> gps_fix_;	// from the fix sensor's plugin (initialFix)
 	SensorStats imu_stats_;
 	std::size_t predictions_ = 0, imu_gaps_ = 0;
 	HealthMonitor health_;

@@ -28,7 +28,7 @@
 
 // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance;
 // 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
-// state dimension), FilterContext::t_measurement_s
+// state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix
 #define AUVNAV_PLUGIN_ABI_VERSION 4u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
