@@ -112,6 +112,11 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	}
 	else if (position_source != "config")
 		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
+	// Used at initialisation (or with the other position source); checked now so
+	// that a bad or misspelled key fails at start.
+	(void)in.string("gps_label", "GPS");
+	(void)in.inRange("heading_deg", -360, 360);
+	(void)in.number("north_m", 0.0), (void)in.number("east_m", 0.0), (void)in.number("depth_m", 0.0);
 
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
 	if (cfg.has("gates"))
@@ -140,9 +145,21 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
-		slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
+		s.markFreeForm("config");  // the plugin checks its own keys
+		try
+		{
+			slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
+		}
+		catch (const PluginError& e)
+		{
+			// Name the file the plugin's configuration came from.
+			throw PluginError((s.has("config_file") ? s.filePath("config_file") : s.where("config")) + ": " + e.what());
+		}
 		slots_.push_back(std::move(slot));
 	}
+	// Every key must have been read: a misspelled one is an error, not a default.
+	// plugin_paths and outputs belong to the program (auvnav-run checks them).
+	cfg.checkAllKeysUsed({"plugin_paths", "outputs"});
 }
 
 std::string pluginConfigText(const config::Node& s)
