@@ -146,6 +146,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
 		s.markFreeForm("config");  // the plugin checks its own keys
+		host.load(slot->stats.plugin);	// a plugin that does not load is no config error
 		try
 		{
 			slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
