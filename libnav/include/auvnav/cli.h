@@ -43,7 +43,7 @@ class OneLineFailure : public TCLAP::StdOutput
 		for (const TCLAP::Arg* a : cmd.getArgList())
 			if (a->isRequired() && !a->isSet())
 				missing += (missing.empty() ? "" : ", ") +
-						   (a->getFlag().empty() && a->getName().size() ? "<" + a->getName() + ">" : "--" + a->getName());
+						   (a->longID().rfind('<', 0) == 0 ? a->longID() : "--" + a->getName());  // <RAWLOG> or --name
 		if (reason.find("required arguments missing") != std::string::npos && !missing.empty())
 			reason = "missing required argument(s): " + missing;
 		std::string id = e.argId();
