@@ -10,7 +10,7 @@
 // readings, not enough rotation or heading coverage, no ellipsoid/ellipse,
 // implausible result).
 #include <auvnav/io/rawlog.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <cmath>
 #include <fstream>
@@ -27,16 +27,6 @@ constexpr int kExitOk = 0;
 constexpr int kExitUsage = 1;
 constexpr int kExitInput = 2;
 constexpr int kExitRefused = 3;
-
-bool askedForHelpOrVersion(int argc, char** argv)
-{
-	for (int i = 1; i < argc; ++i)
-	{
-		const std::string a = argv[i];
-		if (a == "-h" || a == "--help" || a == "--version") return true;
-	}
-	return false;
-}
 
 std::string join(const std::vector<std::string>& v)
 {
@@ -190,7 +180,7 @@ int main(int argc, char** argv)
 	    false, 10.0, "DEG", cmd);
 	TCLAP::UnlabeledValueArg<std::string> rawlog("RAWLOG", "Rawlog with the rotation segment.", true, "",
 	                                             "RAWLOG", cmd);
-	if (!cmd.parse(argc, argv)) return askedForHelpOrVersion(argc, argv) ? kExitOk : kExitUsage;
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-calibrate-mag")) return *code;
 
 	if (!(from.getValue() >= 0) || !(to.getValue() > from.getValue()))
 	{

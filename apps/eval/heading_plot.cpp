@@ -14,7 +14,7 @@
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/register.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <Eigen/Geometry>
@@ -79,7 +79,7 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> label("", "label", "Magnetometer sensor label. Default: MAG.", false, "MAG", "LABEL", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "Title prefix of the figures.", false, "", "TEXT", cmd);
 	TCLAP::ValueArg<std::string> out("", "out", "Prefix of the PNG files.", true, "", "PREFIX", cmd);
-	cmd.parse(argc, argv);
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-heading-plot")) return *code;
 	try
 	{
 		auvnav::obs::registerAllClasses();

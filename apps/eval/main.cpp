@@ -1,7 +1,7 @@
 // auvnav-eval: a run against the simulator's ground truth; figures and a table.
 //   auvnav-eval --run RUN --truth SIM/ground_truth.csv --out DIR
 //   auvnav-eval --run R1 --truth T1 --run R2 --truth T2 ... --out DIR   (Monte Carlo: averaged NEES)
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <algorithm>
 #include <cmath>
@@ -236,15 +236,7 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> out("o", "out", "Output folder", true, "", "DIR", cmd);
 	TCLAP::ValueArg<double> every("", "every", "Seconds between evaluated samples", false, 1.0, "S", cmd);
 	TCLAP::ValueArg<double> settle("", "settle", "Monte Carlo: also report the NEES fractions from S seconds after the start (after the initial alignment)", false, 0.0, "S", cmd);
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-eval: " << e.error() << "\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-eval")) return *code;
 	try
 	{
 		const auto& r = runs.getValue();

@@ -5,7 +5,7 @@
 #include <auvnav/io/rawlog.h>
 #include <auvnav/navigator.h>
 #include <auvnav/obs/register.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -122,10 +122,12 @@ int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int ma
 		seed_list.resize(static_cast<std::size_t>(max_seeds));
 	std::vector<Configuration> configs;
 	for (const auto& c : ex.sequence("configurations")) configs.push_back({c.string("name"), c.strings("deny")});
+	ex.checkAllKeysUsed();
+	static PluginHost host;
+	{ const Navigator probe(nav_cfg, host); }  // refuses a bad navigator file before the first simulation
 	fs::create_directories(out_dir);
 	std::ofstream runs(fs::path(out_dir) / "dropout_runs.csv");
 	runs << "seed,configuration,gaps,gap_time_s,drift_m,drift_rate_m_per_min\n";
-	static PluginHost host;
 	std::vector<DropoutDrift> total(configs.size());
 	for (unsigned seed : seed_list)
 	{
@@ -178,15 +180,7 @@ int main(int argc, char** argv)
 	TCLAP::UnlabeledValueArg<std::string> exp_file("experiment", "Experiment YAML", true, "", "EXPERIMENT.yaml", cmd);
 	TCLAP::ValueArg<std::string> out("o", "out", "Output directory", true, "", "DIR", cmd);
 	TCLAP::ValueArg<int> seeds("n", "seeds", "Use only the first N seeds of the file", false, 0, "N", cmd);
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-experiment: " << e.error() << "\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-experiment")) return *code;
 	try
 	{
 		obs::registerAllClasses();
@@ -207,10 +201,12 @@ int main(int argc, char** argv)
 		for (const auto& c : ex.sequence("configurations"))
 			configs.push_back({c.string("name"), c.strings("deny"), c.number("paper_uncertainty_2sigma_m", NAN),
 							   c.number("paper_error_m", NAN)});
+		ex.checkAllKeysUsed();
+		static PluginHost host;
+		{ const Navigator probe(nav_cfg, host); }  // refuses a bad navigator file before the first simulation
 		fs::create_directories(out.getValue());
 		std::ofstream runs(fs::path(out.getValue()) / "runs.csv");
 		runs << "seed,configuration,error_m,two_sigma_m,inside_2sigma\n";
-		static PluginHost host;
 		std::vector<std::vector<Outcome>> results(configs.size());
 		for (unsigned seed : seed_list)
 		{

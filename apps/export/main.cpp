@@ -3,23 +3,10 @@
 //
 // Exit codes: 0 success, 1 usage error, 2 unreadable rawlog or unwritable output.
 #include <auvnav/import/exporter.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <iostream>
 #include <string>
-
-namespace
-{
-bool askedForHelpOrVersion(int argc, char** argv)
-{
-	for (int i = 1; i < argc; ++i)
-	{
-		const std::string a = argv[i];
-		if (a == "-h" || a == "--help" || a == "--version") return true;
-	}
-	return false;
-}
-}  // namespace
 
 int main(int argc, char** argv)
 {
@@ -31,7 +18,7 @@ int main(int argc, char** argv)
 		' ', AUVNAV_VERSION);
 	TCLAP::ValueArg<std::string> out("", "out", "Folder to write (created).", true, "", "DIR", cmd);
 	TCLAP::UnlabeledValueArg<std::string> rawlog("RAWLOG", "Rawlog to export.", true, "", "RAWLOG", cmd);
-	if (!cmd.parse(argc, argv)) return askedForHelpOrVersion(argc, argv) ? 0 : 1;
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-export")) return *code;
 	auvnav::import::ExportReport report;
 	try
 	{

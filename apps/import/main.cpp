@@ -7,7 +7,7 @@
 // stderr naming file, line/message and field; the partial rawlog is removed,
 // the report still written).
 #include <auvnav/import/importer.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <cstdio>
 #include <fstream>
@@ -20,16 +20,6 @@ namespace
 constexpr int kExitOk = 0;
 constexpr int kExitUsage = 1;
 constexpr int kExitBadInput = 2;
-
-bool askedForHelpOrVersion(int argc, char** argv)
-{
-	for (int i = 1; i < argc; ++i)
-	{
-		const std::string a = argv[i];
-		if (a == "-h" || a == "--help" || a == "--version") return true;
-	}
-	return false;
-}
 
 std::string withoutRawlogSuffix(const std::string& out)
 {
@@ -66,7 +56,7 @@ int main(int argc, char** argv)
 	TCLAP::SwitchArg check("", "check", "Only validate the spec (keys, classes, units, formats); read no input.", cmd);
 	TCLAP::UnlabeledMultiArg<std::string> inputs("INPUT", "Files or folders holding the spec's sources.", false,
 												 "INPUT", cmd);
-	if (!cmd.parse(argc, argv)) return askedForHelpOrVersion(argc, argv) ? kExitOk : kExitUsage;
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-import")) return *code;
 
 	if (check.getValue())
 	{
@@ -111,7 +101,7 @@ int main(int argc, char** argv)
 		if (!ok)
 		{
 			std::cerr << "auvnav-import: error: cannot write the report " << report_base << ".import.{json,md}\n";
-			if (rc == kExitOk) rc = kExitUsage;
+			if (rc == kExitOk) rc = kExitBadInput;
 		}
 	}
 	if (rc == kExitOk)

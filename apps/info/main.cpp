@@ -9,7 +9,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/system/datetime.h>
 
@@ -422,18 +422,7 @@ struct Options
 	std::string json;  // empty: no JSON
 };
 
-bool askedForHelpOrVersion(int argc, char** argv)
-{
-	for (int i = 1; i < argc; ++i)
-	{
-		const std::string a = argv[i];
-		if (a == "-h" || a == "--help" || a == "--version") return true;
-	}
-	return false;
-}
-
-// MRPT's TCLAP returns false instead of exiting, both for --help and for bad
-// arguments; `exit_code` tells them apart.
+// `exit_code`: set when the program should stop (after --help, or a bad command line).
 std::optional<Options> parseCommandLine(int argc, char** argv, int& exit_code)
 {
 	TCLAP::CmdLine cmd(
@@ -448,9 +437,9 @@ std::optional<Options> parseCommandLine(int argc, char** argv, int& exit_code)
 	TCLAP::ValueArg<std::string> json(
 	    "", "json", "Also write the summary as JSON to FILE; '-' writes only the JSON, to stdout.", false, "",
 	    "FILE", cmd);
-	if (!cmd.parse(argc, argv))
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-info"))
 	{
-		exit_code = askedForHelpOrVersion(argc, argv) ? kExitOk : kExitUsage;
+		exit_code = *code;
 		return std::nullopt;
 	}
 	return Options{rawlog.getValue(), json.getValue()};

@@ -2,7 +2,7 @@
 #include <auvnav/io/rawlog.h>
 #include <auvnav/navigator.h>
 #include <auvnav/obs/register.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -41,15 +41,7 @@ int main(int argc, char** argv)
 	TCLAP::SwitchArg view("", "view", "Live MRPT 3D window of the run (needs a display; xvfb-run works)", cmd);
 	TCLAP::ValueArg<double> view_hold("", "view-hold", "With --view: keep the window S seconds after the run (0: until a key)",
 									  false, 0, "S", cmd);
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-run: " << e.error() << " (" << e.argId() << ")\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-run")) return *code;
 	auvnav::obs::registerAllClasses();
 	std::signal(SIGINT, onSignal);
 	std::signal(SIGTERM, onSignal);
@@ -93,6 +85,7 @@ int main(int argc, char** argv)
 		}
 		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
 		write_updates = cfg.has("outputs") ? cfg.child("outputs").boolean("updates_csv", true) : true;
+		cfg.checkAllKeysUsed();	 // the navigator checked its sections; this adds plugin_paths and outputs
 		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
 															   nav->storedStateNames(), write_updates);
 	}

@@ -1,7 +1,7 @@
 // auvnav-sim: simulate an AUV mission (the vehicle and sensor files the
 // mission names: FlatFish-like, BlueROV2-Heavy-like) into an MRPT rawlog with
 // ground truth. See README.md and config/missions/.
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <chrono>
 #include <cstdio>
@@ -23,15 +23,7 @@ int main(int argc, char** argv)
 												  "MISSION.yaml", cmd);
 	TCLAP::ValueArg<unsigned> seed("s", "seed", "Random seed (default 1)", false, 1, "N", cmd);
 	TCLAP::ValueArg<std::string> out("o", "out", "Output directory (created)", true, "", "DIR", cmd);
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;  // --help or --version was shown
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-sim: " << e.error() << " (" << e.argId() << ")\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-sim")) return *code;
 	try
 	{
 		const auto t0 = std::chrono::steady_clock::now();

@@ -198,6 +198,12 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 		sonar_truth->line("unix_time_s,pole_id,bearing_deg,range_m");
 	}
 
+	// Everything but the logger clocks is read; those are read next. A disabled
+	// sensor's section is kept for when it is enabled again: not checked.
+	if (!gps) sc.markFreeForm("gps");
+	if (!mag) sc.markFreeForm("magnetometer");
+	if (!use_sonar) sc.markFreeForm("sonar");
+
 	// The logger's clock per sensor (logger_clock.h), each with its own stream.
 	auto clockFor = [&](const char* key, long every_steps, uint32_t id) {
 		if (!sc.has(key)) return LoggerClock{};
@@ -211,6 +217,10 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 				thr_clk = clockFor("thrusters", ctl_s.every, 36),
 				sonar_clk = use_sonar ? clockFor("sonar", sonar_s.every, 37) : LoggerClock{},
 				mag_clk = mag ? clockFor("magnetometer", mag_s.every, 38) : LoggerClock{};
+	// Every key of the mission, vehicle and sensors files must have been read.
+	spec.mission.checkAllKeysUsed();
+	spec.vehicle.checkAllKeysUsed();
+	spec.sensors.checkAllKeysUsed();
 	double max_jitter_s = 0;
 	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk})
 		max_jitter_s = std::max(max_jitter_s, c->maxEarly_s());

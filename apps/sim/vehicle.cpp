@@ -71,6 +71,7 @@ VehicleParams VehicleParams::fromConfig(const config::Node& n)
 			n.fail("inertia_diag", "translational inertia must include the rigid-body mass weight_n/g");
 	for (const auto& t : n.sequence("thrusters"))
 	{
+		t.markFreeForm("name");	 // a label for people only
 		Thruster th;
 		th.position_b = t.vector3("position_m");
 		th.direction_b = t.vector3("direction");

@@ -10,7 +10,7 @@
 #include <auvnav/obs/register.h>
 #include <auvnav/sonar/frame.h>
 #include <auvnav/sonar/pipeline.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 
 #include <algorithm>
 #include <cmath>
@@ -171,19 +171,13 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> export_polar("", "export-polar",
 		"Also write each raw polar frame as DIR/frame_<unix time>.png (input for a later PNG-folder run)", false, "", "DIR", cmd);
 	TCLAP::ValueArg<int> every("", "images-every", "Write every Nth annotated fan image (0: none)", false, 1, "N", cmd);
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-sonar: " << e.error() << "\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-sonar")) return *code;
 	try
 	{
 		obs::registerAllClasses();
-		const auto cfg = sonar::SonarConfig::fromConfig(config::Node::load(config.getValue()));
+		const auto cfg_file = config::Node::load(config.getValue());
+		const auto cfg = sonar::SonarConfig::fromConfig(cfg_file);
+		cfg_file.checkAllKeysUsed();
 		std::optional<sonarapp::TumTrajectory> trajectory;
 		if (!traj.getValue().empty()) trajectory = sonarapp::TumTrajectory::load(traj.getValue());
 		std::optional<sonarapp::SonarTruth> sim_truth;

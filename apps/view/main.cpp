@@ -4,7 +4,7 @@
 // Without --no-window (and with a display) it opens an interactive MRPT window;
 // --save-scene writes a file MRPT's SceneViewer3D opens; --screenshot renders
 // off screen (EGL: no display server needed, Mesa's software renderer works).
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <auvnav/cli.h>
 #include <mrpt/gui/CDisplayWindow3D.h>
 
 #include <chrono>
@@ -31,15 +31,7 @@ int main(int argc, char** argv)
 	TCLAP::SwitchArg no_window("", "no-window", "Do not open the interactive window", cmd);
 	TCLAP::ValueArg<double> window_s("", "window-seconds", "Close the window after S seconds (0: on a key)", false, 0, "S", cmd);
 
-	try
-	{
-		if (!cmd.parse(argc, argv)) return 0;
-	}
-	catch (const TCLAP::ArgException& e)
-	{
-		std::cerr << "auvnav-view: " << e.error() << "\n";
-		return 1;
-	}
+	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-view")) return *code;
 	try
 	{
 		auvnav::view::RunData data = auvnav::view::loadRun(run.getValue());

@@ -110,6 +110,11 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	}
 	else if (position_source != "config")
 		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
+	// Used at initialisation (or with the other position source); checked now so
+	// that a bad or misspelled key fails at start.
+	(void)in.string("gps_label", "GPS");
+	(void)in.inRange("heading_deg", -360, 360);
+	(void)in.number("north_m", 0.0), (void)in.number("east_m", 0.0), (void)in.number("depth_m", 0.0);
 
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
 	if (cfg.has("gates"))
@@ -138,7 +143,17 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
-		slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
+		s.markFreeForm("config");  // the plugin checks its own keys
+		host.load(slot->stats.plugin);	// a plugin that does not load is no config error
+		try
+		{
+			slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
+		}
+		catch (const PluginError& e)
+		{
+			// Name the file the plugin's configuration came from.
+			throw PluginError((s.has("config_file") ? s.filePath("config_file") : s.where("config")) + ": " + e.what());
+		}
 		slots_.push_back(std::move(slot));
 	}
 	if (position_from_gps_)
@@ -149,6 +164,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 			initial_.fail("gps_label", "'" + gps_label_ + "' is not the label of any entry in sensors: (the first fix comes "
 									  "from that sensor's plugin)");
 	}
+	// Every key must have been read: a misspelled one is an error, not a default.
+	// plugin_paths and outputs belong to the program (auvnav-run checks them).
+	cfg.checkAllKeysUsed({"plugin_paths", "outputs"});
 	appendPluginStates(pm);
 	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
 }

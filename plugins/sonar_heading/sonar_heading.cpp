@@ -31,7 +31,9 @@ double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double 
 
 SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& label) : label_(label)
 {
-	sonar_ = sonar::SonarConfig::fromConfig(config::Node::load(resolve(cfg, "sonar_config")));
+	const auto sonar_file = config::Node::load(resolve(cfg, "sonar_config"));
+	sonar_ = sonar::SonarConfig::fromConfig(sonar_file);
+	sonar_file.checkAllKeysUsed();
 	const std::string mode = cfg.string("mode", "validate");
 	if (mode != "validate" && mode != "update") cfg.fail("mode", "expected 'validate' or 'update', got '" + mode + "'");
 	validate_only_ = mode == "validate";

@@ -320,3 +320,90 @@ TEST(NavigatorRefusal, NonFiniteImuSampleIsCountedAndNeverReachesTheState)
 	EXPECT_CONTAINS(f.nav->imuStats().last_problem, "non-finite");
 	EXPECT_TRUE(at::NavStateIdentical(f.nav->filter().state(), before));
 }
+
+// ------------------------------------------------------------ unknown configuration keys
+
+namespace
+{
+/** `key` with two neighbouring letters in its middle swapped ("sigma_pa" -> "sigm_apa"). */
+std::string misspelled(std::string key)
+{
+	for (std::size_t i = key.size() / 2; i + 1 < key.size(); ++i)
+		if (key[i] != key[i + 1])
+		{
+			std::swap(key[i], key[i + 1]);
+			return key;
+		}
+	return key + "x";
+}
+}  // namespace
+
+class ShippedPlugin : public ::testing::TestWithParam<std::string>
+{
+};
+
+// Every shipped plugin loads its own default configuration (no key in it goes
+// unread) and refuses a misspelled key of it, naming the key and the right one.
+TEST_P(ShippedPlugin, RefusesAMisspelledKeyWithTheNearestValidOne)
+{
+	const std::string name = GetParam();
+	const std::string dir = AUVNAV_SOURCE_DIR "/plugins/" + name;
+	const std::string text = readFile(dir + "/" + name + ".yaml") + "\nconfig_dir: " + dir + "\n";
+	PluginHost host;
+	EXPECT_NO_THROW(host.create(name, text, "X")) << name << ".yaml";
+	for (const auto& key : config::Node::fromText(text).keys())
+	{
+		if (key == "config_dir") continue;
+		const std::string typo = misspelled(key);
+		const std::string msg = pluginError([&] { host.create(name, text + typo + ": 1\n", "X"); });
+		// (plugins that also call allowOnly() list the valid keys after the '?')
+		EXPECT_CONTAINS(msg, name + " plugin config: " + typo + ": unknown key (did you mean '" + key + "'?");
+	}
+}
+
+INSTANTIATE_TEST_SUITE_P(Host, ShippedPlugin,
+						 ::testing::Values("adcp", "ahrs", "dvl", "gps", "inertial", "magnetometer", "model_aiding",
+										   "pressure", "sonar_heading"));
+
+TEST(PluginConfig, MisspelledKeyThroughTheNavigatorNamesTheFileAndTheEntry)
+{
+	PluginHost host;
+	const auto cfg = navigatorConfig(
+		"sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN ", config: {sigma_pa: 100, sigmapa: 3}}\n");
+	const std::string msg = pluginError([&] { Navigator nav(cfg, host); });
+	EXPECT_CONTAINS(msg, "config/flatfish.yaml: sensors[0].config: ");
+	EXPECT_CONTAINS(msg, "sigmapa: unknown key (did you mean 'sigma_pa'?)");
+}
+
+TEST(NavigatorConfig, MisspelledKeysAreRefusedWithTheNearestValidOne)
+{
+	PluginHost host;
+	const std::string sensors = "sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN ", config: {}}\n";
+	{
+		const auto cfg = navigatorConfig(sensors);
+		EXPECT_NO_THROW({ const Navigator nav(cfg, host); });
+	}
+	const std::vector<std::pair<std::string, std::string>> cases = {
+		{"filter.initial.heading_dg", "filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)"},
+		{"imu.max_gap", "imu.max_gap: unknown key (did you mean 'max_gap_s'?)"},
+		{"filter.process_noise.gyro_arw_deg_per_sqrt_hh",
+		 "filter.process_noise.gyro_arw_deg_per_sqrt_hh: unknown key (did you mean"},
+		{"gatse.recovery_after_s", "gatse: unknown key (did you mean 'gates'?)"},
+		{"sensors.DEPTH.plugn", "sensors[0].plugn: unknown key (did you mean 'plugin'?)"},
+	};
+	for (const auto& [key, expected] : cases)
+	{
+		auto cfg = navigatorConfig(sensors);
+		cfg.set(key, "1");
+		std::string msg;
+		try
+		{
+			Navigator nav(cfg, host);
+		}
+		catch (const config::ConfigError& e)
+		{
+			msg = e.what();
+		}
+		EXPECT_CONTAINS(msg, "config/flatfish.yaml: " + expected);
+	}
+}

@@ -78,3 +78,134 @@ TEST(Config, OverridesEnterListsByLabelOrIndex)
 		EXPECT_NE(std::string(e.what()).find("no element 'GPS'"), std::string::npos) << e.what();
 	}
 }
+
+// ------------------------------------------------------------ unknown keys
+
+TEST(ConfigUnknownKeys, AllReadKeysPass)
+{
+	const Node n = Node::fromText("a: 1\nb: {c: 2, d: [1, 2, 3]}\n", "t.yaml");
+	n.number("a");
+	const auto b = n.child("b");  // a copy: its reads still count for the root
+	b.number("c");
+	b.numbers("d");
+	EXPECT_NO_THROW(n.checkAllKeysUsed());
+}
+
+TEST(ConfigUnknownKeys, NestedMisspellingNamesFilePathAndNearestKey)
+{
+	const Node n = Node::fromText(
+		"filter:\n  initial:\n    heading_dg: 25\n    heading_sigma_deg: 30\n", "config/x.yaml");
+	const auto in = n.child("filter").child("initial");
+	EXPECT_DOUBLE_EQ(in.number("heading_deg", 0.0), 0.0);  // the misspelling falls back to the default...
+	in.positive("heading_sigma_deg");
+	// ...which is why the check must refuse it.
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+			  "config/x.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)");
+}
+
+TEST(ConfigUnknownKeys, TranspositionsAndMissingSuffixesAreSuggested)
+{
+	const Node n = Node::fromText("use_dpeth: true\n", "p.yaml");
+	n.boolean("use_depth", false);
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "p.yaml: use_dpeth: unknown key (did you mean 'use_depth'?)");
+	const Node m = Node::fromText("max_gap: 0.5\n", "i.yaml");
+	m.number("max_gap_s", 1.0);
+	EXPECT_EQ(errorOf([&] { m.checkAllKeysUsed(); }), "i.yaml: max_gap: unknown key (did you mean 'max_gap_s'?)");
+}
+
+TEST(ConfigUnknownKeys, FarKeyListsTheValidOnes)
+{
+	const Node n = Node::fromText("a: 1\ncompletely_else: 2\n", "t.yaml");
+	n.number("a");
+	n.number("bee", 0.0);
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: completely_else: unknown key (valid here: a, bee)");
+}
+
+TEST(ConfigUnknownKeys, MisspelledSectionIsRefusedAtTheTop)
+{
+	const Node n = Node::fromText("gatse: {recovery_after_s: 5}\nhealth: {}\n", "t.yaml");
+	EXPECT_FALSE(n.has("gates"));  // has() of an absent key makes it a candidate, not known
+	n.has("health");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: gatse: unknown key (did you mean 'gates'?)");
+}
+
+TEST(ConfigUnknownKeys, ListElementsAreCheckedWithTheirIndex)
+{
+	const Node n = Node::fromText(
+		"sensors:\n  - {label: A, plugin: dvl}\n  - {label: B, plugn: gps, plugin: gps}\n", "nav.yaml");
+	for (const auto& s : n.sequence("sensors"))
+	{
+		s.string("label");
+		s.string("plugin");
+	}
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "nav.yaml: sensors[1].plugn: unknown key (did you mean 'plugin'?)");
+}
+
+TEST(ConfigUnknownKeys, KeyOfAnotherLevelIsNotSuggested)
+{
+	// 'rate_hz' is read, but under imu: the top level's 'rate_h' must not be told to use it.
+	const Node n = Node::fromText("imu: {rate_hz: 100}\nrate_h: 5\nname: x\n", "t.yaml");
+	n.child("imu").number("rate_hz");
+	n.string("name");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: rate_h: unknown key (valid here: imu, name)");
+}
+
+TEST(ConfigUnknownKeys, UnreadSubtreeOfAReadSectionIsRefused)
+{
+	const Node n = Node::fromText("a: {b: {c: 1, d: 2}}\n", "t.yaml");
+	n.child("a").child("b").number("c");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: a.b.d: unknown key (valid here: c)");
+}
+
+TEST(ConfigUnknownKeys, FreeFormSubtreesAndExceptionsAreSkipped)
+{
+	const Node n = Node::fromText("metadata: {anything: 1, goes: [x]}\nrun_only: {x: 1}\nv: 1\n", "t.yaml");
+	n.number("v");
+	EXPECT_NE(errorOf([&] { n.checkAllKeysUsed(); }), "");
+	EXPECT_NO_THROW(n.checkAllKeysUsed({"metadata", "run_only"}));
+	n.markFreeForm("metadata");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: run_only: unknown key (valid here: metadata, v)");
+}
+
+TEST(ConfigUnknownKeys, ChecksOnlyTheSubtreeOfAChild)
+{
+	const Node n = Node::fromText("mine: {a: 1}\nsomeone_elses: 2\n", "t.yaml");
+	const auto mine = n.child("mine");
+	mine.number("a");
+	EXPECT_NO_THROW(mine.checkAllKeysUsed());
+	EXPECT_NE(errorOf([&] { n.checkAllKeysUsed(); }), "");
+}
+
+TEST(ConfigUnknownKeys, AllowOnlyCountsAsReadAndSuggests)
+{
+	const Node n = Node::fromText("mode: x\nconfig_dir: /tmp\n", "t.yaml");
+	n.allowOnly({"mode", "config_dir"});
+	n.string("mode");
+	EXPECT_NO_THROW(n.checkAllKeysUsed());
+	const Node m = Node::fromText("mdoe: x\n", "t.yaml");
+	EXPECT_EQ(errorOf([&] { m.allowOnly({"mode", "gain"}); }),
+			  "t.yaml: mdoe: unknown key (did you mean 'mode'? expected one of: mode, gain)");
+}
+
+TEST(ConfigUnknownKeys, MisspelledOverrideIsRefusedAsAnOverride)
+{
+	Node n = Node::fromText("filter: {initial: {heading_deg: 30}}\nsensors:\n  - {label: DVL, plugin: dvl}\n", "nav.yaml");
+	n.set("filter.initial.heading_dg", "25");
+	n.child("filter").child("initial").number("heading_deg");
+	for (const auto& s : n.sequence("sensors"))
+	{
+		s.string("label");
+		s.string("plugin");
+	}
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+			  "nav.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?) [given as an override]");
+	Node m = Node::fromText("sensors:\n  - {label: DVL, plugin: dvl}\n", "nav.yaml");
+	m.set("sensors.DVL.plugn", "gps");  // entered by label, reported by index
+	for (const auto& s : m.sequence("sensors"))
+	{
+		s.string("label");
+		s.string("plugin");
+	}
+	EXPECT_EQ(errorOf([&] { m.checkAllKeysUsed(); }),
+			  "nav.yaml: sensors[0].plugn: unknown key (did you mean 'plugin'?) [given as an override]");
+}

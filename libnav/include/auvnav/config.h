@@ -6,10 +6,22 @@
  *  in range) and throws ConfigError whose message names the file and the full
  *  key path, e.g. "config/missions/x.yaml: vehicle.mass_kg: expected a
  *  positive number, got '-3'". Nodes are values: a child copies its subtree.
+ *
+ *  Unknown keys: a node and the children taken from it share one access
+ *  record of the keys read (any accessor, has() of a present key,
+ *  allowOnly). Once its owner has read everything, checkAllKeysUsed() refuses
+ *  the first key nobody read, with the nearest key read or asked for at that
+ *  map level: "x.yaml: filter.initial.heading_dg: unknown key (did you mean
+ *  'heading_deg'?)". Maps whose content is someone else's (a plugin's config,
+ *  comments, metadata) are marked with markFreeForm(). The record is shared
+ *  by copies and not synchronised: read one document from one thread.
  */
 #include <Eigen/Core>
 #include <mrpt/containers/yaml.h>
 
+#include <map>
+#include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -41,8 +53,17 @@ class Node
 	/** The keys of this map (sorted: MRPT keeps maps ordered). */
 	std::vector<std::string> keys() const;
 	/** Throws ConfigError naming the first key not in `allowed` (a misspelled
-	 *  key must not fall back to a default silently). */
+	 *  key must not fall back to a default silently). The allowed keys count
+	 *  as read for checkAllKeysUsed(). */
 	void allowOnly(const std::vector<std::string>& allowed) const;
+	/** The subtree under `key` (if present) is not checked by
+	 *  checkAllKeysUsed(): free text, or checked by another reader. */
+	void markFreeForm(const std::string& key) const;
+	/** Throws ConfigError for the first key of this subtree that was not read
+	 *  (nor marked free-form), naming file and key path and suggesting the
+	 *  nearest key read or asked for at the same level. Top-level keys in
+	 *  `except` (read by someone else later) are skipped with their subtrees. */
+	void checkAllKeysUsed(const std::vector<std::string>& except = {}) const;
 	/** Required sub-map. */
 	Node child(const std::string& key) const;
 	/** Required sequence of maps/scalars, as nodes. */
@@ -87,12 +108,26 @@ class Node
 	[[noreturn]] void fail(const std::string& key, const std::string& what) const;
 
    private:
-	Node(mrpt::containers::yaml y, std::string file, std::string path);
+	/** Which keys of one document were read, shared by a node and its children.
+	 *  Paths are full ("filter.initial.heading_deg", "sensors[1].label");
+	 *  `asked` keys the names queried per level with list indices dropped
+	 *  ("sensors[]"), the candidates for suggestions. */
+	struct Access
+	{
+		std::set<std::string> used, free_form, overridden;
+		std::map<std::string, std::set<std::string>> asked;
+	};
+	Node(mrpt::containers::yaml y, std::string file, std::string path, std::shared_ptr<Access> access);
 	std::string scalarText(const std::string& key) const;
+	std::string fullPath(const std::string& key) const;
+	/** Records that `key` was asked for here; present keys become "used". */
+	void noteAccess(const std::string& key) const;
+	void checkUnder(const mrpt::containers::yaml& y, const std::string& path, const std::vector<std::string>& except) const;
 
 	mrpt::containers::yaml y_;
 	std::string file_;
 	std::string path_;
+	std::shared_ptr<Access> access_ = std::make_shared<Access>();
 };
 
 }  // namespace auvnav::config

@@ -25,10 +25,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 
 // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance;
 // 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
-// state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix
+// state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix, config::Node's
+// access record (layout)
 #define AUVNAV_PLUGIN_ABI_VERSION 4u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
@@ -88,7 +90,10 @@ extern "C"
 
 /** Defines the entry point of a plugin whose model class `ModelClass` has a
  *  constructor `ModelClass(const auvnav::config::Node& cfg, const std::string& label)`.
- *  Exceptions from the constructor become an error message. */
+ *  Exceptions from the constructor become an error message. Once the
+ *  constructor is done, every key of `cfg` must have been read (or marked
+ *  free-form): a misspelled key is refused with the nearest valid one
+ *  (config.h, checkAllKeysUsed). The host's `config_dir` is always allowed. */
 #define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                  \
 	namespace                                                                                        \
 	{                                                                                                \
@@ -99,7 +104,10 @@ extern "C"
 		{                                                                                            \
 			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                       \
 															std::string(plugin_name) + " plugin config"); \
-			return new ModelClass(cfg, label ? label : "");                                          \
+			cfg.markFreeForm("config_dir");                                                           \
+			std::unique_ptr<ModelClass> model(new ModelClass(cfg, label ? label : ""));               \
+			cfg.checkAllKeysUsed();                                                                   \
+			return model.release();                                                                   \
 		}                                                                                            \
 		catch (const std::exception& e)                                                              \
 		{                                                                                            \

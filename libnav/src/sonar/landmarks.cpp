@@ -29,7 +29,13 @@ PoleMap PoleMap::fromConfig(const config::Node& n)
 	return m;
 }
 
-PoleMap PoleMap::load(const std::string& file) { return fromConfig(config::Node::load(file)); }
+PoleMap PoleMap::load(const std::string& file)
+{
+	const auto n = config::Node::load(file);
+	PoleMap m = fromConfig(n);
+	n.checkAllKeysUsed();
+	return m;
+}
 
 void predictPole(const SonarPose& pose, const Eigen::Vector2d& ne, double& bearing_rad, double& range_m)
 {
