@@ -124,7 +124,10 @@ TEST(SonarDetector, FindsKnownPolesWithBearingAndRange)
 					EXPECT_GT(d.sigma_bearing_rad, 0);
 					EXPECT_LT(d.sigma_bearing_rad, 1 * kDeg);
 					// Behind the seabed onset a shadow confirmed it; before it, brightness.
-					if (poles[j].range_m > 8) EXPECT_LT(d.shadow_ratio, 0.6);
+					if (poles[j].range_m > 8)
+					{
+						EXPECT_LT(d.shadow_ratio, 0.6);
+					}
 					break;
 				}
 			}
