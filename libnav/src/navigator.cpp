@@ -283,12 +283,7 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 			if (slot->stats.label == gps_label_)
 			{
 				InitialFix fix;
-				FilterContext ctx;
-				ctx.t_s = ctx.t_measurement_s = t;
-				ctx.frame = frame_.get();
-				ctx.imu_position_b = imu_position_b_;
-				ctx.omega_ie_n = frame_->earthRate();
-				if (slot->model->initialFix(obs, ctx, fix) && fix.p_n.allFinite() && fix.r_b.allFinite())
+				if (slot->model->initialFix(obs, context(t), fix) && fix.p_n.allFinite() && fix.r_b.allFinite())
 					gps_fix_ = fix;
 			}
 	dispatch(obs, t);
@@ -398,7 +393,7 @@ void Navigator::finish()
 	if (!initialized_) health_.setNotInitialized(waitingFor());
 }
 
-void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
+FilterContext Navigator::context(double t_obs) const
 {
 	FilterContext ctx;
 	ctx.t_s = t_s_;
@@ -411,6 +406,12 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 	ctx.mean = initialized_ ? &ukf_->state() : nullptr;
 	ctx.current_far_distance_m = ukf_ ? ukf_->processModel().current_far_distance_m : 0.0;
 	ctx.covariance = initialized_ ? &ukf_->covariance() : nullptr;
+	return ctx;
+}
+
+void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
+{
+	const FilterContext ctx = context(t_obs);
 	for (auto& slot : slots_)
 	{
 		SensorStats& st = slot->stats;

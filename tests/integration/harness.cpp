@@ -1,5 +1,7 @@
 #include "harness.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <unistd.h>
 
 #include <chrono>
@@ -51,6 +53,25 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 	res.worst = nav.health().worst();
 	res.status_reason = nav.health().reason();
 	return res;
+}
+
+std::pair<std::size_t, std::size_t> diveAndResurfacing(const std::vector<TruthRow>& truth)
+{
+	std::size_t dive = 0;
+	while (dive < truth.size() && !truth[dive].submerged) ++dive;
+	std::size_t surf = dive;
+	while (surf < truth.size() && truth[surf].submerged) ++surf;
+	return {dive, surf};
+}
+
+HorizontalError horizontalError(const Navigator& nav, const std::vector<TruthRow>& truth)
+{
+	const auto& tr = truthAt(truth, nav.time());
+	const Eigen::Matrix2d P = nav.filter().covariance().block<2, 2>(idx::pos, idx::pos);
+	HorizontalError e;
+	e.error_m = (nav.bodyPosition_n() - tr.p_n).head<2>().norm();
+	e.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
+	return e;
 }
 
 fs::path simulate(const std::string& mission, unsigned seed) { return simulate(mission, seed, {}, ""); }

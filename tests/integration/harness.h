@@ -48,6 +48,18 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 double yawOf(const Eigen::Matrix3d& R);
 double wrapPi(double a);
 
+/** Indices of the first submerged truth row (the dive) and of the first
+ *  surfaced row after it (resurfacing; truth.size() if none). */
+std::pair<std::size_t, std::size_t> diveAndResurfacing(const std::vector<TruthRow>& truth);
+
+/** Horizontal error of the body origin against the truth at the filter's
+ *  time, and twice the σ of the position's major axis. */
+struct HorizontalError
+{
+	double error_m = 0, two_sigma_m = 0;
+};
+HorizontalError horizontalError(const Navigator& nav, const std::vector<TruthRow>& truth);
+
 /** Simulates `mission` (repo-relative) with `seed` into a fresh scratch folder. */
 std::filesystem::path simulate(const std::string& mission, unsigned seed);
 /** The same with `sensor_overrides` (KEY=VALUE on the mission's sensor file,

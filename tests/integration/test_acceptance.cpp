@@ -40,11 +40,8 @@ SquareOutcome runSquare(unsigned seed)
 {
 	const fs::path dir = simulate("config/missions/square_5x50m.yaml", seed);
 	const auto truth = readTruth(dir / "ground_truth.csv");
-	// Dive: first submerged row; resurfacing: first surfaced row after that.
-	std::size_t dive = 0;
-	while (dive < truth.size() && !truth[dive].submerged) ++dive;
-	std::size_t surf = dive;
-	while (surf < truth.size() && truth[surf].submerged) ++surf;
+	const auto span = diveAndResurfacing(truth);
+	const std::size_t dive = span.first, surf = span.second;
 	EXPECT_LT(surf, truth.size());
 	const double t0 = truth.front().t_unix;
 	const double true_heading0 = yawOf(truth.front().q_nb.toRotationMatrix());
@@ -65,10 +62,10 @@ SquareOutcome runSquare(unsigned seed)
 	nav.on_predict = [&](const Navigator& n) {
 		if (recorded || n.time() < truth[surf].t_unix) return;
 		recorded = true;
+		const HorizontalError e = horizontalError(n, truth);
+		out.error_m = e.error_m;
+		out.two_sigma_m = e.two_sigma_m;
 		const auto& tr = truthAt(truth, n.time());
-		out.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
-		const Eigen::Matrix2d P = n.filter().covariance().block<2, 2>(idx::pos, idx::pos);
-		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
 		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
 	io::RawlogReader reader((dir / "square_5x50m.rawlog").string());

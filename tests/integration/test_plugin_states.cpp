@@ -66,10 +66,8 @@ struct Outcome
 Outcome runSquare(const fs::path& dir, bool states)
 {
 	const auto truth = readTruth(dir / "ground_truth.csv");
-	std::size_t dive = 0;
-	while (dive < truth.size() && !truth[dive].submerged) ++dive;
-	std::size_t surf = dive;
-	while (surf < truth.size() && truth[surf].submerged) ++surf;
+	const auto span = diveAndResurfacing(truth);
+	const std::size_t dive = span.first, surf = span.second;
 	EXPECT_LT(surf, truth.size());
 	const double t0 = truth.front().t_unix;
 	auto cfg = config::Node::load(kConfig);
@@ -97,10 +95,9 @@ Outcome runSquare(const fs::path& dir, bool states)
 	nav.on_predict = [&](const Navigator& n) {
 		if (recorded || n.time() < truth[surf].t_unix) return;
 		recorded = true;
-		const auto& tr = truthAt(truth, n.time());
-		out.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
-		const Eigen::Matrix2d P = n.filter().covariance().block<2, 2>(idx::pos, idx::pos);
-		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
+		const HorizontalError e = horizontalError(n, truth);
+		out.error_m = e.error_m;
+		out.two_sigma_m = e.two_sigma_m;
 		if (!states) return;
 		const auto& x = n.filter().state();
 		const auto& C = n.filter().covariance();

@@ -120,6 +120,8 @@ class Navigator
 	bool handleImu(const mrpt::obs::CObservation& obs);  // false: sample dropped
 	void initialize();
 	void dispatch(const mrpt::obs::CObservation& obs, double t_obs);
+	/** What a plugin sees besides the state, for an observation at t_obs. */
+	FilterContext context(double t_obs) const;
 	bool denied(const std::string& label, double t_obs) const;
 	/** Appends the plugins' state blocks to `pm` and P0 (plugin SDK v2). */
 	void appendPluginStates(ProcessModel& pm);
