@@ -84,12 +84,12 @@ mrpt::obs::CObservation::Ptr RawlogReader::next()
 			const std::string what = e.what();
 			if (what.find("not registered") != std::string::npos)
 			{
-				// Not corruption: a class from an observation library nobody
-				// loaded (obs_libraries.h).
+				// Garbage bytes or, far likelier in a well-formed file, a class
+				// from an observation library nobody loaded (obs_libraries.h).
 				msg << path_ << ": cannot read object #" << objects_read_ << " at byte " << offset
 					<< " (uncompressed): " << mrptMessage(what)
-					<< " (load the observation library that defines it first: --obs-lib LIB, or obs_libs "
-					   "in the sensor's config entry)";
+					<< " (a corrupt rawlog, or a class whose observation library is not loaded: load it with "
+					   "--obs-lib LIB, or obs_libs in the sensor's config entry)";
 				throw RawlogError(msg.str());
 			}
 			msg << path_ << ": corrupt rawlog: cannot read object #" << objects_read_
