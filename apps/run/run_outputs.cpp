@@ -190,6 +190,7 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 	j << "  \"real_time_factor\": " << num(wall_s > 0 ? data_s / wall_s : 0) << ",\n";
 	j << "  \"predictions\": " << nav.predictions() << ",\n";
 	j << "  \"imu_gaps\": " << nav.imuGaps() << ",\n";
+	j << "  \"replayed_predictions\": " << nav.replayedPredictions() << ",\n";
 	j << "  \"cholesky_repairs\": " << nav.filter().choleskyRepairs() << ",\n";
 	j << "  \"sensors\": [\n";
 	const auto stats = nav.stats();
@@ -199,7 +200,8 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 		j << "    {\"label\": \"" << jsonEscape(s.label) << "\", \"plugin\": \"" << jsonEscape(s.plugin)
 		  << "\", \"accepted\": " << s.accepted << ", \"recovered\": " << s.recovered
 		  << ", \"rejected\": " << s.rejected << ", \"invalid\": " << s.invalid << ", \"skipped\": " << s.skipped
-		  << ", \"denied\": " << s.denied << ", \"late\": " << s.late << ", \"before_init\": " << s.before_init
+		  << ", \"denied\": " << s.denied << ", \"late\": " << s.late << ", \"delayed\": " << s.delayed
+		  << ", \"before_init\": " << s.before_init
 		  << ", \"mean_nis_per_dim\": " << num(s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN)
 		  << ", \"last_problem\": \"" << jsonEscape(s.last_problem) << "\"}" << (i + 1 < stats.size() ? "," : "")
 		  << "\n";

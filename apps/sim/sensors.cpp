@@ -486,6 +486,68 @@ mrpt::obs::CObservationGPS::Ptr GpsSim::sample(const Truth& t, const earth::Tang
 	return obs;
 }
 
+// ---------------------------------------------------------------- USBL
+UsblSim::UsblSim(const config::Node& n, uint32_t seed)
+	: period_s_(1.0 / n.positive("rate_hz")),
+	  mount_(Mounting::fromConfig(n)),
+	  sigma_m_(n.nonNegative("sigma_m")),
+	  sigma_range_fraction_(n.inRange("sigma_range_fraction", 0, 1, 0.0)),
+	  depth_sigma_m_(n.nonNegative("depth_sigma_m", 1.0)),
+	  latency_s_(n.inRange("latency_s", 0, 60)),
+	  dropout_probability_(n.inRange("dropout_probability", 0, 1, 0.0)),
+	  outlier_probability_(n.inRange("outlier_probability", 0, 1, 0.0)),
+	  outlier_min_m_(n.nonNegative("outlier_min_m", 10.0)),
+	  outlier_max_m_(n.nonNegative("outlier_max_m", 50.0)),
+	  report_time_(n.boolean("report_measurement_time", true)),
+	  report_covariance_(n.boolean("report_covariance", true)),
+	  label_(n.string("label", "USBL"))
+{
+	const auto ship = n.numbers("ship_position_ne_m");
+	if (ship.size() != 2) n.fail("ship_position_ne_m", "expected [north_m, east_m]");
+	ship_n_ = {ship[0], ship[1], n.inRange("transducer_depth_m", 0, 100, 2.0)};
+	if (outlier_max_m_ < outlier_min_m_) n.fail("outlier_max_m", "must be >= outlier_min_m");
+	rng_.randomize(streamSeed(seed, 14));
+	bias_ne_m_ = {n.number("bias_north_m", 0.0), n.number("bias_east_m", 0.0)};
+}
+
+auvnav::obs::CObservationUSBL::Ptr UsblSim::sample(const Truth& t, const earth::TangentFrame& frame)
+{
+	// The same draws for every ping, used or not, so that options never
+	// change the fixes of a seed.
+	const double u_drop = rng_.drawUniform(0.0, 1.0);
+	const Eigen::Vector3d w(rng_.drawGaussian1D_normalized(), rng_.drawGaussian1D_normalized(),
+							rng_.drawGaussian1D_normalized());
+	const double u_out = rng_.drawUniform(0.0, 1.0), out_mag = rng_.drawUniform(outlier_min_m_, outlier_max_m_),
+				 out_dir = rng_.drawUniform(0.0, 2 * M_PI);
+	if (u_drop < dropout_probability_) return nullptr;
+
+	const Eigen::Vector3d p_t = pointOnVehicle(*t.x, mount_.position_b).p_n;
+	const double range = (p_t - ship_n_).norm();
+	const double sigma = std::hypot(sigma_m_, sigma_range_fraction_ * range);
+	Eigen::Vector3d p_fix = p_t;
+	p_fix.head<2>() += bias_ne_m_ + sigma * w.head<2>();
+	p_fix.z() += depth_sigma_m_ * w.z();
+	if (u_out < outlier_probability_)
+	{
+		p_fix.x() += out_mag * std::cos(out_dir);
+		p_fix.y() += out_mag * std::sin(out_dir);
+		++outliers_;
+	}
+	// Latitude/longitude of the point; depth as a pressure sensor gives it.
+	const earth::Geodetic g = frame.toGeodetic(Eigen::Vector3d(p_fix.x(), p_fix.y(), 0.0));
+	auto obs = auvnav::obs::CObservationUSBL::Create();
+	obs->sensorLabel = label_;
+	obs->sensorPose = mount_.nominalPose();
+	obs->timestamp = t.stamp + std::chrono::duration_cast<mrpt::Clock::duration>(std::chrono::duration<double>(latency_s_));
+	if (report_time_) obs->measurement_time = t.stamp;
+	obs->frame = auvnav::obs::UsblFrame::Geodetic;
+	obs->position = {g.lat_rad / kDeg, g.lon_rad / kDeg, p_fix.z()};
+	if (report_covariance_)
+		obs->covariance_ned_m2 = {sigma * sigma, 0, 0, 0, sigma * sigma, 0, 0, 0, depth_sigma_m_ * depth_sigma_m_};
+	obs->slant_range_m = range;
+	return obs;
+}
+
 // ---------------------------------------------------------------- magnetometer
 Eigen::Vector3d MagneticField::fieldNed_ut() const
 {

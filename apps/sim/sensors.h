@@ -11,6 +11,7 @@
 #include <auvnav/obs/CObservationADCP.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/obs/CObservationUSBL.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/random/RandomGenerators.h>
@@ -190,6 +191,43 @@ class GpsSim
 	std::array<GaussMarkov, 2> corr_;
 	double last_t_s_ = 0;
 	double surfaced_since_s_ = -1;	// −1: antenna under water
+	std::size_t outliers_ = 0;
+	mrpt::random::CRandomGenerator rng_;
+	std::string label_;
+};
+
+/** A ship's USBL tracking the vehicle's transponder (`usbl:`): the ship holds
+ *  station at `ship_position_ne_m` with its transducer `transducer_depth_m`
+ *  deep; each ping (`rate_hz`) is lost with `dropout_probability`, else the
+ *  fix is the true transponder position plus a constant horizontal bias
+ *  (`bias_north_m`, `bias_east_m`, config values: the ship's GNSS and alignment), white noise of
+ *  σ = hypot(sigma_m, sigma_range_fraction · slant range) per horizontal axis
+ *  (`depth_sigma_m` vertically) and, with `outlier_probability`, a gross
+ *  error of outlier_min_m..outlier_max_m in a random direction (multipath).
+ *  The fix reaches the logger `latency_s` after it was taken (travel time,
+ *  processing, telemetry): the observation's timestamp is that arrival time,
+ *  its measurement_time the fix time (or unset, `report_measurement_time:
+ *  false`, as a system that does not say). Geodetic fix with the covariance
+ *  the error model gives (`report_covariance`). The random draws per ping do
+ *  not depend on the latency or the reporting options, so for one seed those
+ *  variants log the same fixes. Own stream. */
+class UsblSim
+{
+   public:
+	UsblSim(const config::Node& n, uint32_t seed);
+	double period_s() const { return period_s_; }
+	/** A fix (timestamp = arrival), or nothing (dropout). */
+	auvnav::obs::CObservationUSBL::Ptr sample(const Truth& truth, const earth::TangentFrame& frame);
+	std::size_t outliers() const { return outliers_; }
+
+   private:
+	double period_s_;
+	Mounting mount_;
+	Eigen::Vector3d ship_n_;
+	double sigma_m_, sigma_range_fraction_, depth_sigma_m_, latency_s_, dropout_probability_, outlier_probability_,
+		outlier_min_m_, outlier_max_m_;
+	Eigen::Vector2d bias_ne_m_;
+	bool report_time_, report_covariance_;
 	std::size_t outliers_ = 0;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;

@@ -4,6 +4,7 @@
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <cmath>
+#include <deque>
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -38,9 +39,47 @@ struct Navigator::Slot
 {
 	SensorStats stats;
 	ModelPtr model;
+	double latency_s = 0;			// sensors[].latency_s: measurement time = stamp − latency
 	double rejecting_since_s = -1;	// start of the current run of rejections
 	RejectionStreak streak;			// its innovations (rejection_streak.h)
 	std::vector<Measurement> buffer;
+};
+
+/** What re-filtering for delayed measurements needs (navigator.h): the
+ *  filter's inputs since the oldest checkpoint, in the order applied, and
+ *  checkpoints of everything that decides how they are applied. */
+struct Navigator::History
+{
+	struct Event
+	{
+		bool imu = false;  // an IMU sample to predict to, or one observation's prepared measurements
+		double t = 0;	   // IMU: its time; else the filter time it was applied at
+		Eigen::Vector3d w = Eigen::Vector3d::Zero();  // IMU: gyro sample
+		std::size_t slot = 0;
+		double t_obs = 0;  // measurement time
+		FilterContext ctx;	// as prepared (mean and covariance pointers are re-set)
+		std::vector<Measurement> ms;
+	};
+	struct Gate
+	{
+		double rejecting_since_s = -1;
+		RejectionStreak streak;
+	};
+	struct Checkpoint
+	{
+		std::size_t event = 0;	// absolute index of the IMU event it precedes
+		double t_s = 0;
+		NavState x;
+		Covariance P;
+		Eigen::Vector3d omega_ib_b, alpha_b;
+		std::vector<Gate> gates;
+	};
+	std::deque<Event> events;
+	std::size_t first = 0;	// absolute index of events.front()
+	std::deque<Checkpoint> checkpoints;
+
+	Event& at(std::size_t abs) { return events[abs - first]; }
+	std::size_t end() const { return first + events.size(); }
 };
 
 Navigator::~Navigator() = default;
@@ -82,6 +121,14 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		ut.max_attitude_spread_rad = u.inRange("max_attitude_spread_deg", 1, 170, 30) * kDeg;
 	}
 	earth_rate_ = f.boolean("earth_rate", true);
+	if (f.has("delayed_measurements"))
+	{
+		const auto d = f.child("delayed_measurements");
+		max_delay_s_ = d.inRange("max_delay_s", 0, 600, max_delay_s_);
+		apply_now_within_s_ = d.inRange("apply_now_within_s", 0, 1, apply_now_within_s_);
+		checkpoint_every_s_ = d.inRange("checkpoint_every_s", 0.001, 10, checkpoint_every_s_);
+	}
+	if (max_delay_s_ > 0) history_ = std::make_unique<History>();
 
 	// Initial covariance (diagonal, tangent order).
 	const auto& in = initial_;
@@ -143,6 +190,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
+		slot->latency_s = s.inRange("latency_s", 0, 600, 0.0);
 		s.markFreeForm("config");  // the plugin checks its own keys
 		host.load(slot->stats.plugin);	// a plugin that does not load is no config error
 		try
@@ -327,15 +375,19 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 		imu_stats_.last_problem = dt == 0 ? "duplicate IMU timestamp" : "IMU timestamp going backwards";
 		return false;
 	}
-	// A gap: predict in steps no longer than the nominal limit with the new rate.
-	const int steps = dt > max_gap_s_ ? static_cast<int>(std::ceil(dt / 0.01)) : 1;
-	if (steps > 1) ++imu_gaps_;
-	for (int i = 0; i < steps; ++i) ukf_->predict(w, earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero(), dt / steps);
+	if (history_)
+	{
+		checkpointIfDue(history_->end());
+		trimHistory();
+		History::Event e;
+		e.imu = true;
+		e.t = t;
+		e.w = w;
+		history_->events.push_back(std::move(e));
+	}
+	if (dt > max_gap_s_) ++imu_gaps_;
+	propagate(w, t);
 	++predictions_;
-	// Angular acceleration: first-order low-pass of the gyro's derivative.
-	alpha_b_ += ((w - omega_ib_b_) / dt - alpha_b_) * (dt / (alpha_tau_s_ + dt));
-	t_s_ = t;
-	omega_ib_b_ = w;
 	++imu_stats_.accepted;
 	if (t_s_ >= next_health_check_s_)
 	{
@@ -344,6 +396,133 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	}
 	if (on_predict) on_predict(*this);
 	return true;
+}
+
+void Navigator::propagate(const Eigen::Vector3d& w, double t)
+{
+	const double dt = t - t_s_;
+	// A gap: predict in steps no longer than the nominal limit with the new rate.
+	const int steps = dt > max_gap_s_ ? static_cast<int>(std::ceil(dt / 0.01)) : 1;
+	for (int i = 0; i < steps; ++i) ukf_->predict(w, earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero(), dt / steps);
+	// Angular acceleration: first-order low-pass of the gyro's derivative.
+	alpha_b_ += ((w - omega_ib_b_) / dt - alpha_b_) * (dt / (alpha_tau_s_ + dt));
+	t_s_ = t;
+	omega_ib_b_ = w;
+}
+
+void Navigator::checkpointIfDue(std::size_t event)
+{
+	auto& cps = history_->checkpoints;
+	if (!cps.empty() && t_s_ - cps.back().t_s < checkpoint_every_s_) return;
+	History::Checkpoint c;
+	c.event = event;
+	c.t_s = t_s_;
+	c.x = ukf_->state();
+	c.P = ukf_->covariance();
+	c.omega_ib_b = omega_ib_b_;
+	c.alpha_b = alpha_b_;
+	c.gates.reserve(slots_.size());
+	for (const auto& slot : slots_) c.gates.push_back({slot->rejecting_since_s, slot->streak});
+	cps.push_back(std::move(c));
+}
+
+void Navigator::trimHistory()
+{
+	// Keep the newest checkpoint at or before t − max_delay and all after it:
+	// a measurement up to max_delay_s old finds one before it.
+	auto& H = *history_;
+	while (H.checkpoints.size() >= 2 && H.checkpoints[1].t_s <= t_s_ - max_delay_s_) H.checkpoints.pop_front();
+	const std::size_t keep_from = H.checkpoints.empty() ? H.end() : H.checkpoints.front().event;
+	while (H.first < keep_from && !H.events.empty())
+	{
+		H.events.pop_front();
+		++H.first;
+	}
+}
+
+void Navigator::restoreLastCheckpoint()
+{
+	const History::Checkpoint& c = history_->checkpoints.back();
+	ukf_->restore(c.x, c.P);
+	t_s_ = c.t_s;
+	omega_ib_b_ = c.omega_ib_b;
+	alpha_b_ = c.alpha_b;
+	for (std::size_t i = 0; i < slots_.size(); ++i)
+	{
+		slots_[i]->rejecting_since_s = c.gates[i].rejecting_since_s;
+		slots_[i]->streak = c.gates[i].streak;
+	}
+}
+
+void Navigator::replayEvent(std::size_t event)
+{
+	History::Event& e = history_->at(event);
+	if (e.imu)
+	{
+		checkpointIfDue(event);
+		propagate(e.w, e.t);
+		++replayed_predictions_;
+		return;
+	}
+	FilterContext ctx = e.ctx;
+	ctx.t_s = t_s_;
+	ctx.mean = &ukf_->state();
+	ctx.covariance = &ukf_->covariance();
+	applyMeasurements(*slots_[e.slot], e.ms, ctx, e.t_obs, false);
+}
+
+bool Navigator::applyDelayed(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m)
+{
+	History& H = *history_;
+	// In-order processing would have applied it after the last IMU sample at
+	// or before t_m and the measurements taken up to t_m applied with it.
+	std::size_t ins = H.end();
+	while (ins > H.first && !(H.at(ins - 1).imu && H.at(ins - 1).t <= t_m)) --ins;
+	if (ins == H.first) return false;  // older than everything kept
+	while (ins < H.end() && !H.at(ins).imu && H.at(ins).t_obs <= t_m) ++ins;
+	// The last checkpoint before that point; later ones are re-taken.
+	std::size_t keep = H.checkpoints.size();
+	while (keep > 0 && H.checkpoints[keep - 1].event > ins) --keep;
+	if (keep == 0) return false;
+	H.checkpoints.resize(keep);
+	restoreLastCheckpoint();
+	for (std::size_t k = H.checkpoints.back().event; k < ins; ++k) replayEvent(k);
+
+	Slot& slot = *slots_[slot_index];
+	SensorStats& st = slot.stats;
+	const FilterContext ctx = context(t_m);
+	std::string why;
+	slot.buffer.clear();
+	const PrepareStatus ps = slot.model->prepare(obs, ctx, slot.buffer, why);
+	std::size_t resume = ins;
+	if (ps == PrepareStatus::Ok)
+	{
+		++st.delayed;
+		applyMeasurements(slot, slot.buffer, ctx, t_m, true);
+		History::Event e;
+		e.t = t_s_;
+		e.slot = slot_index;
+		e.t_obs = t_m;
+		e.ctx = ctx;
+		e.ms = std::move(slot.buffer);
+		H.events.insert(H.events.begin() + static_cast<std::ptrdiff_t>(ins - H.first), std::move(e));
+		resume = ins + 1;
+	}
+	else if (ps == PrepareStatus::Skip)
+		++st.skipped;
+	else
+	{
+		++st.invalid;
+		st.last_problem = why;
+	}
+	for (std::size_t k = resume; k < H.end(); ++k) replayEvent(k);
+	return true;
+}
+
+double Navigator::measurementTime(const Slot& slot, const mrpt::obs::CObservation& obs, double stamp_s) const
+{
+	const double t = slot.model->measurementTime(obs, stamp_s - slot.latency_s);
+	return std::isfinite(t) && t > 0 ? t : std::numeric_limits<double>::quiet_NaN();
 }
 
 void Navigator::initialize()
@@ -409,14 +588,21 @@ FilterContext Navigator::context(double t_obs) const
 	return ctx;
 }
 
-void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
+void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 {
-	const FilterContext ctx = context(t_obs);
-	for (auto& slot : slots_)
+	for (std::size_t i = 0; i < slots_.size(); ++i)
 	{
-		SensorStats& st = slot->stats;
+		Slot& slot = *slots_[i];
+		SensorStats& st = slot.stats;
 		if (st.label != obs.sensorLabel) continue;
-		if (denied(st.label, t_obs))
+		const double t_m = measurementTime(slot, obs, stamp_s);
+		if (std::isnan(t_m))
+		{
+			++st.invalid;
+			st.last_problem = "no valid measurement time";
+			continue;
+		}
+		if (denied(st.label, t_m))
 		{
 			++st.denied;
 			continue;
@@ -426,15 +612,18 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 			++st.before_init;
 			continue;
 		}
-		if (t_obs < t_s_ - late_tolerance_s_)
+		if (t_m < t_s_ - apply_now_within_s_)
 		{
+			// Re-filtered at its time if the history reaches back that far.
+			if (history_ && t_m >= t_s_ - max_delay_s_ && applyDelayed(i, obs, t_m)) continue;
 			++st.late;
-			st.last_problem = "observation older than the filter time";
+			st.last_problem = "observation older than filter.delayed_measurements.max_delay_s";
 			continue;
 		}
+		const FilterContext ctx = context(t_m);
 		std::string why;
-		slot->buffer.clear();
-		const PrepareStatus ps = slot->model->prepare(obs, ctx, slot->buffer, why);
+		slot.buffer.clear();
+		const PrepareStatus ps = slot.model->prepare(obs, ctx, slot.buffer, why);
 		if (ps == PrepareStatus::Skip)
 		{
 			++st.skipped;
@@ -446,56 +635,74 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double t_obs)
 			st.last_problem = why;
 			continue;
 		}
-		for (const Measurement& m : slot->buffer)
+		applyMeasurements(slot, slot.buffer, ctx, t_m, true);
+		if (history_)
 		{
-			if (m.skipped)
+			History::Event e;
+			e.t = t_s_;
+			e.slot = i;
+			e.t_obs = t_m;
+			e.ctx = ctx;
+			e.ms = std::move(slot.buffer);
+			history_->events.push_back(std::move(e));
+		}
+	}
+}
+
+void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx,
+								  double t_obs, bool record)
+{
+	SensorStats& st = slot.stats;
+	for (const Measurement& m : ms)
+	{
+		if (m.skipped)
+		{
+			if (record) ++st.skipped;
+			continue;
+		}
+		const bool recovery = slot.rejecting_since_s >= 0 && t_obs - slot.rejecting_since_s > recovery_after_s_;
+		UpdateResult r = ukf_->update(*slot.model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
+		if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
+		{
+			// Rejected but agreeing with the aid's previous rejections: the
+			// state is off, not the aid. Re-acquire now (rejection_streak.h).
+			// An absolute reference of what the filter integrates without
+			// bound (attitude, position, depth: magnetometer, AHRS, GPS,
+			// pressure) pulls the state back by widening its covariance; a
+			// velocity aid only on the gate boundary, since a consistent
+			// velocity disagreement is as often the aid's (a wrong mounting
+			// or scale), and widening let a DVL mounted 157° off turn the
+			// heading 52° and end 400 m off as 'degraded'.
+			slot.streak.add(t_obs, r.innovation, m.R);
+			if (slot.streak.consistentBias(consistent_rejections_, consistency_probability_))
 			{
-				++st.skipped;
-				continue;
+				// (Plugin states such as a heading bias widen with the state.)
+				constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity | kPluginStates;
+				const bool absolute = (slot.model->uses() & ~kAbsolute) == 0;
+				r = ukf_->update(*slot.model, m, ctx, absolute ? Recovery::State : Recovery::Noise);
 			}
-			const bool recovery = slot->rejecting_since_s >= 0 && t_obs - slot->rejecting_since_s > recovery_after_s_;
-			UpdateResult r = ukf_->update(*slot->model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
-			if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
-			{
-				// Rejected but agreeing with the aid's previous rejections: the
-				// state is off, not the aid. Re-acquire now (rejection_streak.h).
-				// An absolute reference of what the filter integrates without
-				// bound (attitude, position, depth: magnetometer, AHRS, GPS,
-				// pressure) pulls the state back by widening its covariance; a
-				// velocity aid only on the gate boundary, since a consistent
-				// velocity disagreement is as often the aid's (a wrong mounting
-				// or scale), and widening let a DVL mounted 157° off turn the
-				// heading 52° and end 400 m off as 'degraded'.
-				slot->streak.add(t_obs, r.innovation, m.R);
-				if (slot->streak.consistentBias(consistent_rejections_, consistency_probability_))
-				{
-					// (Plugin states such as a heading bias widen with the state.)
-					constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity | kPluginStates;
-					const bool absolute = (slot->model->uses() & ~kAbsolute) == 0;
-					r = ukf_->update(*slot->model, m, ctx, absolute ? Recovery::State : Recovery::Noise);
-				}
-			}
-			if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered) slot->streak.clear();
-			if (on_update) on_update(st.label, t_obs, m, r);
-			health_.onUpdate(st.label, t_obs - t0_s_, r);
-			switch (r.status)
-			{
-				case UpdateStatus::Accepted:
-				case UpdateStatus::Recovered:
-					(r.status == UpdateStatus::Accepted ? st.accepted : st.recovered)++;
-					st.nis_sum += r.nis;
-					st.nis_dim_sum += r.dim;
-					slot->rejecting_since_s = -1;
-					break;
-				case UpdateStatus::Rejected:
-					++st.rejected;
-					if (slot->rejecting_since_s < 0) slot->rejecting_since_s = t_obs;
-					break;
-				case UpdateStatus::Invalid:
-					++st.invalid;
-					st.last_problem = r.why;
-					break;
-			}
+		}
+		if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered) slot.streak.clear();
+		if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered)
+			slot.rejecting_since_s = -1;
+		else if (r.status == UpdateStatus::Rejected && slot.rejecting_since_s < 0)
+			slot.rejecting_since_s = t_obs;
+		if (!record) continue;
+		if (on_update) on_update(st.label, t_obs, m, r);
+		health_.onUpdate(st.label, t_obs - t0_s_, r);
+		switch (r.status)
+		{
+			case UpdateStatus::Accepted:
+			case UpdateStatus::Recovered:
+				(r.status == UpdateStatus::Accepted ? st.accepted : st.recovered)++;
+				st.nis_sum += r.nis;
+				st.nis_dim_sum += r.dim;
+				break;
+			case UpdateStatus::Rejected: ++st.rejected; break;
+			case UpdateStatus::Invalid:
+				++st.invalid;
+				st.last_problem = r.why;
+				break;
 		}
 	}
 }

@@ -75,6 +75,15 @@ void ManifoldUkf::initialize(const NavState& x0, const Covariance& P0)
 	symmetrize(P_);
 }
 
+void ManifoldUkf::restore(const NavState& x, const Covariance& P)
+{
+	if (x.dim() != n_ || P.rows() != n_ || P.cols() != n_)
+		throw std::invalid_argument("ManifoldUkf::restore: a state of " + std::to_string(x.dim()) +
+									" coordinates for a filter of " + std::to_string(n_));
+	x_ = x;
+	P_ = P;
+}
+
 void ManifoldUkf::repairCovariance()
 {
 	// Nearest symmetric positive-definite matrix by eigenvalue clipping.

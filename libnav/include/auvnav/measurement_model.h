@@ -46,8 +46,9 @@ namespace auvnav
 struct FilterContext
 {
 	double t_s = 0;	 //!< filter time [s, Unix epoch]
-	//! When the measurement was taken [s, Unix epoch]: the observation's
-	//! timestamp (the navigator applies it at t_s, within its late tolerance).
+	//! When the measurement was taken [s, Unix epoch] (measurementTime()).
+	//! The navigator applies it at t_s ≤ t_measurement_s, the last IMU sample
+	//! before it, re-filtering if it arrived late (navigator.h).
 	double t_measurement_s = 0;
 	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  //!< latest raw gyro sample [rad/s], IMU axes
 	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();  //!< Earth rate in the navigation frame
@@ -200,6 +201,16 @@ class MeasurementModel
 	/** Where the model's first block starts in NavState::extra (called once,
 	 *  before any update, if stateBlocks() is not empty). */
 	virtual void bindStates(int first_extra_index) noexcept { (void)first_extra_index; }
+	/** When the measurement in `obs` was taken [s, Unix epoch]. `stamp_s` is
+	 *  the navigator's own estimate: the observation's timestamp minus the
+	 *  sensor entry's `latency_s`. Override it when the observation carries
+	 *  its measurement time (a USBL fix's acoustic time). NaN: the observation
+	 *  is invalid. Called once per observation, before prepare. */
+	virtual double measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept
+	{
+		(void)obs;
+		return stamp_s;
+	}
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

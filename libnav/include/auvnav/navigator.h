@@ -7,6 +7,22 @@
  *    observation then goes to the plugins configured for that label (the
  *    accelerometer update). Other observations are applied at the filter's
  *    current time (the latest IMU sample, ≤ one IMU period earlier).
+ *  - Delayed measurements (an acoustic fix arrives seconds after it was
+ *    taken): a measurement's time is its observation's timestamp, minus the
+ *    sensor entry's `latency_s`, or what the plugin reads from the
+ *    observation (MeasurementModel::measurementTime). One older than the
+ *    filter by more than `filter.delayed_measurements.apply_now_within_s` and
+ *    less than `max_delay_s` is applied AT its time by re-filtering: the
+ *    navigator keeps checkpoints of the filter (mean, covariance, gate state)
+ *    every `checkpoint_every_s` and the IMU samples and prepared measurements
+ *    since the oldest; it restores the last checkpoint before the
+ *    measurement, re-predicts and re-applies everything up to it, applies it,
+ *    and re-applies the rest. Plugins prepare each observation once (a
+ *    replay re-applies the prepared measurements), so the result equals
+ *    in-order processing exactly for plugins whose prepare does not read the
+ *    filter's mean or covariance. Statistics, updates.csv and the outputs
+ *    record each update once, when it was first applied. Older ones are
+ *    counted as late.
  *  - Start-up: the first `imu.leveling_s` of accelerometer data give roll and
  *    pitch; heading comes from `filter.initial.heading_deg`; position from the
  *    first GPS fix (`filter.initial.position: gps`) or from `north_m`,
@@ -43,6 +59,9 @@ struct SensorStats
 	std::string label, plugin;
 	std::size_t accepted = 0, recovered = 0, rejected = 0, invalid = 0, skipped = 0, denied = 0, late = 0,
 				before_init = 0;
+	//! Observations applied at their measurement time by re-filtering (also
+	//! counted by their update status).
+	std::size_t delayed = 0;
 	double nis_sum = 0;		 //!< over accepted updates
 	double nis_dim_sum = 0;	 //!< Σ dimensions of those updates (E[NIS] = dim)
 	std::string last_problem;
@@ -95,6 +114,9 @@ class Navigator
 	/** What initialisation still waits for (empty once initialised). */
 	std::string waitingFor() const;
 	std::size_t imuGaps() const { return imu_gaps_; }
+	/** IMU steps re-predicted while re-filtering for delayed measurements
+	 *  (the cost of delays: compare with predictions()). */
+	std::size_t replayedPredictions() const { return replayed_predictions_; }
 
 	/** Names of the state's tangent coordinates: the paper's 43
 	 *  (tangentNames) and "<label>.<block>_<component>" per plugin state. */
@@ -117,9 +139,30 @@ class Navigator
 
    private:
 	struct Slot;
+	struct History;
 	bool handleImu(const mrpt::obs::CObservation& obs);  // false: sample dropped
+	/** The state-changing part of an IMU sample: predict to t with gyro w. */
+	void propagate(const Eigen::Vector3d& w, double t);
+	/** Applies one observation's prepared measurements (gates, recovery);
+	 *  `record`: count them and report them (false when re-filtering). */
+	void applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx, double t_obs,
+						   bool record);
+	/** Applies an observation at its past time t_m by re-filtering. False: no
+	 *  checkpoint old enough (the caller counts it late). */
+	bool applyDelayed(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m);
+	/** Takes a checkpoint before IMU event `event` if checkpoint_every_s has
+	 *  passed since the last one. */
+	void checkpointIfDue(std::size_t event);
+	/** Drops checkpoints and events no delay up to max_delay_s can need. */
+	void trimHistory();
+	/** Restores the filter to the last checkpoint. */
+	void restoreLastCheckpoint();
+	/** Re-applies a recorded event (an IMU prediction or measurements). */
+	void replayEvent(std::size_t event);
+	/** The measurement time of `obs` for a slot (NaN: the plugin says invalid). */
+	double measurementTime(const Slot& slot, const mrpt::obs::CObservation& obs, double stamp_s) const;
 	void initialize();
-	void dispatch(const mrpt::obs::CObservation& obs, double t_obs);
+	void dispatch(const mrpt::obs::CObservation& obs, double stamp_s);
 	/** What a plugin sees besides the state, for an observation at t_obs. */
 	FilterContext context(double t_obs) const;
 	bool denied(const std::string& label, double t_obs) const;
@@ -133,7 +176,12 @@ class Navigator
 	config::Node initial_;
 	std::string imu_label_;
 	Eigen::Vector3d imu_position_b_ = Eigen::Vector3d::Zero();
-	double leveling_s_ = 1.0, max_gap_s_ = 0.5, recovery_after_s_ = 30, late_tolerance_s_ = 0.05;
+	double leveling_s_ = 1.0, max_gap_s_ = 0.5, recovery_after_s_ = 30;
+	// filter.delayed_measurements: applied now within apply_now_within_s,
+	// re-filtered up to max_delay_s (0: never), checkpoints every checkpoint_every_s.
+	double apply_now_within_s_ = 0.05, max_delay_s_ = 10, checkpoint_every_s_ = 0.25;
+	std::unique_ptr<History> history_;
+	std::size_t replayed_predictions_ = 0;
 	int consistent_rejections_ = 5;			// gates.consistent_rejections (0: off)
 	double consistency_probability_ = 0.99;	// gates.consistency_probability
 	bool position_from_gps_ = false;

@@ -115,6 +115,9 @@ class ManifoldUkf
 	/** Sets the state; P0 is x0.dim() square (std::invalid_argument
 	 *  otherwise), and the process model has the same dimension. */
 	void initialize(const NavState& x0, const Covariance& P0);
+	/** Sets mean and covariance of the current dimension, unchanged (a
+	 *  checkpoint taken from state()/covariance(): re-filtering). */
+	void restore(const NavState& x, const Covariance& P);
 	int dim() const { return n_; }
 	const NavState& state() const { return x_; }
 	const Covariance& covariance() const { return P_; }

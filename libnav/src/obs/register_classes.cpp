@@ -5,6 +5,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/obs/CObservationUSBL.h>
 #include <auvnav/obs/register.h>
 #include <mrpt/core/initializer.h>
 
@@ -15,6 +16,7 @@ MRPT_INITIALIZER(registerAllClasses_auvnav_obs)
 	registerClass(CLASS_ID(auvnav::obs::CObservationADCP));
 	registerClass(CLASS_ID(auvnav::obs::CObservationPressure));
 	registerClass(CLASS_ID(auvnav::obs::CObservationThrusters));
+	registerClass(CLASS_ID(auvnav::obs::CObservationUSBL));
 }
 
 void auvnav::obs::registerAllClasses() { registerAllClasses_auvnav_obs(); }

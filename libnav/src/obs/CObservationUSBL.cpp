@@ -1,0 +1,84 @@
+#include <auvnav/obs/CObservationUSBL.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+using namespace auvnav::obs;
+
+IMPLEMENTS_SERIALIZABLE(CObservationUSBL, CObservation, auvnav::obs)
+
+uint8_t CObservationUSBL::serializeGetVersion() const { return 0; }
+
+void CObservationUSBL::serializeTo(mrpt::serialization::CArchive& out) const
+{
+	out << timestamp << sensorLabel << sensorPose << measurement_time << static_cast<uint8_t>(frame);
+	for (double v : position) out << v;
+	for (double v : covariance_ned_m2) out << v;
+	out << slant_range_m << transponder_id;
+}
+
+void CObservationUSBL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
+{
+	switch (version)
+	{
+		case 0:
+		{
+			uint8_t f = 0;
+			in >> timestamp >> sensorLabel >> sensorPose >> measurement_time >> f;
+			// A corrupt byte must not become an enum value no code handles.
+			if (f > static_cast<uint8_t>(UsblFrame::LocalNed))
+				THROW_EXCEPTION_FMT("CObservationUSBL: invalid frame code %u", static_cast<unsigned>(f));
+			frame = static_cast<UsblFrame>(f);
+			for (double& v : position) in >> v;
+			for (double& v : covariance_ned_m2) in >> v;
+			in >> slant_range_m >> transponder_id;
+			break;
+		}
+		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	}
+}
+
+bool CObservationUSBL::hasCovariance() const
+{
+	for (double v : covariance_ned_m2)
+		if (!std::isfinite(v)) return false;
+	return true;
+}
+
+void CObservationUSBL::getDescriptionAsText(std::ostream& o) const
+{
+	CObservation::getDescriptionAsText(o);
+	o << "Transponder pose on vehicle (FRD): " << sensorPose << "\n";
+	o << "Measurement time: "
+	  << (measurement_time == INVALID_TIMESTAMP ? std::string("(not given)")
+												 : mrpt::system::dateTimeLocalToString(measurement_time))
+	  << "\n";
+	o << std::setprecision(10);
+	if (frame == UsblFrame::Geodetic)
+		o << "Latitude [deg]: " << position[0] << "  longitude [deg]: " << position[1] << "  depth [m]: " << position[2]
+		  << "\n";
+	else
+		o << "North, east, down from the origin [m]: " << position[0] << " " << position[1] << " " << position[2]
+		  << "\n";
+	o << "Covariance NED [m^2]:";
+	for (double v : covariance_ned_m2) o << " " << v;
+	o << "\nSlant range [m]: " << slant_range_m << "  transponder: " << transponder_id << "\n";
+}
+
+std::string CObservationUSBL::exportTxtHeader() const
+{
+	return "[MEASUREMENT_TIME_S]  [FRAME]  [POS0]  [POS1]  [POS2]  [C_NN]  [C_EE]  [C_DD]  [SLANT_RANGE_M]  [ID]";
+}
+
+std::string CObservationUSBL::exportTxtDataRow() const
+{
+	std::ostringstream s;
+	s << std::setprecision(12)
+	  << (measurement_time == INVALID_TIMESTAMP ? std::nan("") : mrpt::Clock::toDouble(measurement_time)) << " "
+	  << static_cast<int>(frame) << " " << position[0] << " " << position[1] << " " << position[2] << " "
+	  << covariance_ned_m2[0] << " " << covariance_ned_m2[4] << " " << covariance_ned_m2[8] << " " << slant_range_m
+	  << " " << transponder_id;
+	return s.str();
+}
