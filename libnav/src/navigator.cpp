@@ -207,6 +207,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		slot->stats.plugin = s.string("plugin");
 		slot->latency_s = s.inRange("latency_s", 0, 600, 0.0);
 		s.markFreeForm("config");  // the plugin checks its own keys
+		// Observation libraries the entry declares are the program's to load
+		// before the rawlog is opened (obs_libraries.h); accepted here.
+		if (s.has("obs_libs")) (void)(s.isSequence("obs_libs") ? s.strings("obs_libs").size() : s.string("obs_libs").size());
 		host.load(slot->stats.plugin);	// a plugin that does not load is no config error
 		try
 		{
