@@ -19,6 +19,7 @@
 #include <set>
 #include <fstream>
 #include <memory>
+#include <filesystem>
 #include <sstream>
 
 namespace auvnav::import
@@ -444,8 +445,11 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 			}
 		}
 	}
-	if (!mrpt::system::directoryExists(out_dir) && !mrpt::system::createDirectory(out_dir))
-		throw ImportError(out_dir + ": cannot create the output folder");
+	// With its parents, as every other program's --out.
+	std::error_code ec;
+	std::filesystem::create_directories(out_dir, ec);
+	if (ec || !std::filesystem::is_directory(out_dir))
+		throw ImportError(out_dir + ": cannot create the output folder" + (ec ? ": " + ec.message() : std::string()));
 	std::map<std::string, std::string> units, files;
 	std::vector<std::pair<std::string, std::string>> spec_labels;
 	std::set<std::string> stems_used;	// lower case: "A B" and "A_B" (or "a_b" on a case-blind disk) share no file
