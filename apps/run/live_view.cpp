@@ -45,11 +45,11 @@ void LiveView::onState(const Navigator& nav)
 	refresh();
 }
 
-void LiveView::onFix(double t, const Measurement& m, const UpdateResult& r)
+void LiveView::onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
 {
-	if (m.z.size() != 2) return;
-	impl_->data.gps.push_back(
-		{t, {m.z[0], m.z[1]}, r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
+	if (m.z.size() < 2) return;
+	impl_->data.fixes.push_back(
+		{t, label, {m.z[0], m.z[1]}, r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
 }
 
 void LiveView::refresh(bool force)

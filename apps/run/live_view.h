@@ -18,7 +18,7 @@ class LiveView
 	explicit LiveView(const std::string& title);
 	~LiveView();
 	void onState(const Navigator& nav);
-	void onFix(double t, const Measurement& m, const UpdateResult& r);
+	void onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
 	/** Redraws if a second of wall time passed (or `force`). */
 	void refresh(bool force = false);
 	/** Keeps the window open: `seconds` > 0, or until a key / close when 0. */

@@ -96,9 +96,9 @@ int main(int argc, char** argv)
 
 	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
 	nav->on_predict = [&](const auvnav::Navigator& n) { outputs->onState(n); };
-	std::set<std::string> gps_labels;  // position fixes, for position_fixes.csv
-	for (const auto& s : nav->stats())
-		if (s.plugin == "gps") gps_labels.insert(s.label);
+	// Position fixes of any sensor (GPS, USBL, …), for position_fixes.csv and the view.
+	std::set<std::string> fix_labels;
+	for (const auto& label : nav->positionFixLabels()) fix_labels.insert(label);
 	std::unique_ptr<auvnav::run::LiveView> live;
 	if (view.getValue())
 	{
@@ -125,10 +125,11 @@ int main(int argc, char** argv)
 	};
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
 		outputs->onUpdate(label, t, r);
-		outputs->onAnyUpdate(label, nav->time(), t, r);
-		if (!gps_labels.count(label)) return;
+		// Filter time when made (a re-filtered delayed fix: its arrival) and measurement time.
+		outputs->onAnyUpdate(label, nav->latestTime(), t, r);
+		if (!fix_labels.count(label)) return;
 		outputs->onPositionFix(label, t, m, r);
-		if (live) live->onFix(t, m, r);
+		if (live) live->onFix(label, t, m, r);
 	};
 	double next_progress = 0.5;
 	auvnav::RunCallbacks loop;

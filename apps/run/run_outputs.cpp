@@ -79,7 +79,7 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
 {
-	if (m.z.size() != 2) return;
+	if (m.z.size() < 2) return;	// north, east (a USBL fix may add its depth)
 	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
 						 : r.status == UpdateStatus::Recovered ? "recovered"
 						 : r.status == UpdateStatus::Rejected  ? "rejected"

@@ -12,7 +12,8 @@
  *     NIS and dimension (consistency over time, auvnav-eval);
  *   - states.csv also carries the position and attitude covariances'
  *     off-diagonal terms (cov_pos_*, cov_att_*) for NEES;
- *   - position_fixes.csv: every GPS fix offered to the filter: time, label,
+ *   - position_fixes.csv: every position fix (GPS, USBL: reportsPositionFix)
+ *     offered to the filter: time, label,
  *     north/east [m] and whether the χ² gate accepted it (for auvnav-view);
  *   - health.csv: every change of the divergence monitor's status (health.h):
  *     seconds from the first observation, status, reason;

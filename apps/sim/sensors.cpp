@@ -507,8 +507,7 @@ UsblSim::UsblSim(const config::Node& n, uint32_t seed)
 	ship_n_ = {ship[0], ship[1], n.inRange("transducer_depth_m", 0, 100, 2.0)};
 	if (outlier_max_m_ < outlier_min_m_) n.fail("outlier_max_m", "must be >= outlier_min_m");
 	rng_.randomize(streamSeed(seed, 14));
-	const double b = n.nonNegative("bias_sigma_m", 0.0);
-	bias_ne_m_ = {b * rng_.drawGaussian1D_normalized(), b * rng_.drawGaussian1D_normalized()};
+	bias_ne_m_ = {n.number("bias_north_m", 0.0), n.number("bias_east_m", 0.0)};
 }
 
 auvnav::obs::CObservationUSBL::Ptr UsblSim::sample(const Truth& t, const earth::TangentFrame& frame)

@@ -199,8 +199,8 @@ class GpsSim
 /** A ship's USBL tracking the vehicle's transponder (`usbl:`): the ship holds
  *  station at `ship_position_ne_m` with its transducer `transducer_depth_m`
  *  deep; each ping (`rate_hz`) is lost with `dropout_probability`, else the
- *  fix is the true transponder position plus a constant per-run horizontal
- *  bias (`bias_sigma_m`: the ship's GNSS and alignment), white noise of
+ *  fix is the true transponder position plus a constant horizontal bias
+ *  (`bias_north_m`, `bias_east_m`, config values: the ship's GNSS and alignment), white noise of
  *  σ = hypot(sigma_m, sigma_range_fraction · slant range) per horizontal axis
  *  (`depth_sigma_m` vertically) and, with `outlier_probability`, a gross
  *  error of outlier_min_m..outlier_max_m in a random direction (multipath).

@@ -18,7 +18,8 @@
 int main(int argc, char** argv)
 {
 	TCLAP::CmdLine cmd("MRPT 3D view of an auvnav-run output folder: trajectory, ground truth, 2-sigma ellipsoids, "
-					   "vehicle, GPS fixes (accepted yellow, rejected magenta), seabed.",
+					   "vehicle, position fixes of every fix sensor (GPS, USBL: accepted in the sensor's colour, the first "
+					   "yellow, the second cyan; rejected magenta), seabed.",
 					   ' ', "0.1.0");
 	TCLAP::ValueArg<std::string> run("r", "run", "auvnav-run output folder (states.csv, position_fixes.csv)", true, "",
 									 "DIR", cmd);
@@ -40,8 +41,8 @@ int main(int argc, char** argv)
 		if (!(every.getValue() > 0)) throw std::runtime_error("--ellipsoid-every must be positive");
 		opt.ellipsoid_every_s = every.getValue();
 		const auto scene = auvnav::view::buildScene(data, opt);
-		std::printf("auvnav-view: %zu states, %zu truth rows, %zu GPS fixes\n", data.estimate.size(), data.truth.size(),
-					data.gps.size());
+		std::printf("auvnav-view: %zu states, %zu truth rows, %zu position fixes\n", data.estimate.size(),
+					data.truth.size(), data.fixes.size());
 		if (!save.getValue().empty())
 		{
 			if (!scene->saveToFile(save.getValue())) throw std::runtime_error("cannot write " + save.getValue());

@@ -1,7 +1,6 @@
 #include "scene.h"
 
 #include <auvnav/io/csv_table.h>
-
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CEllipsoid3D.h>
 #include <mrpt/opengl/CFBORender.h>
@@ -10,6 +9,9 @@
 #include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/opengl/CText.h>
 #include <mrpt/opengl/stock_objects.h>
+
+#include <algorithm>
+#include <iterator>
 #include <mrpt/poses/CPose3D.h>
 
 #include <algorithm>
@@ -62,12 +64,13 @@ RunData loadRun(const std::string& dir)
 	if (fs::exists(fixes))
 	{
 		io::CsvTable f(fixes.string());
-		const std::size_t ft = f.column("time_s"), fn = f.column("north_m"), fe = f.column("east_m"),
-						  status = f.column("status");
+		const std::size_t ft = f.column("time_s"), fl = f.column("label"), fn = f.column("north_m"),
+						  fe = f.column("east_m"), status = f.column("status");
 		while (f.next())
 		{
 			const std::string& st = f.text(status);
-			run.gps.push_back({f.number(ft), {f.number(fn), f.number(fe)}, st == "accepted" || st == "recovered"});
+			run.fixes.push_back(
+				{f.number(ft), f.text(fl), {f.number(fn), f.number(fe)}, st == "accepted" || st == "recovered"});
 		}
 	}
 	return run;
@@ -155,16 +158,24 @@ mrpt::opengl::COpenGLScene::Ptr buildScene(const RunData& run, const SceneOption
 		scene->insert(e);
 	}
 
-	// GPS fixes: accepted yellow, rejected magenta, on the surface.
-	if (!run.gps.empty())
+	// Position fixes, one cloud per sensor ("fixes_<label>"), on the surface:
+	// accepted in the sensor's colour (the first yellow, then cyan, orange,
+	// green …), rejected magenta.
+	std::vector<std::string> labels;
+	for (const auto& f : run.fixes)
+		if (std::find(labels.begin(), labels.end(), f.label) == labels.end()) labels.push_back(f.label);
+	static const uint8_t kColours[][3] = {{240, 220, 0}, {0, 210, 230}, {255, 140, 0}, {60, 200, 60}, {200, 200, 200}};
+	for (std::size_t i = 0; i < labels.size(); ++i)
 	{
+		const uint8_t* c = kColours[std::min<std::size_t>(i, std::size(kColours) - 1)];
 		auto pts = CPointCloudColoured::Create();
 		pts->setPointSize(6);
-		for (const auto& f : run.gps)
-			pts->insertPoint({static_cast<float>(f.ne_m.y()), static_cast<float>(f.ne_m.x()), 0.0f,
-							  f.accepted ? uint8_t(240) : uint8_t(230), f.accepted ? uint8_t(220) : uint8_t(0),
-							  f.accepted ? uint8_t(0) : uint8_t(230)});
-		pts->setName("gps_fixes");
+		for (const auto& f : run.fixes)
+			if (f.label == labels[i])
+				pts->insertPoint({static_cast<float>(f.ne_m.y()), static_cast<float>(f.ne_m.x()), 0.0f,
+								  f.accepted ? c[0] : uint8_t(230), f.accepted ? c[1] : uint8_t(0),
+								  f.accepted ? c[2] : uint8_t(230)});
+		pts->setName("fixes_" + labels[i]);
 		scene->insert(pts);
 	}
 

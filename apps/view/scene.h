@@ -25,9 +25,11 @@ struct TrackPoint
 	double seabed_depth_m = NAN;									//!< truth only
 };
 
-struct GpsFix
+/** A position fix offered to the filter by any position sensor (GPS, USBL). */
+struct PositionFix
 {
 	double t = 0;
+	std::string label;	//!< the sensor
 	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();
 	bool accepted = true;
 };
@@ -35,11 +37,11 @@ struct GpsFix
 struct RunData
 {
 	std::vector<TrackPoint> estimate, truth;
-	std::vector<GpsFix> gps;
+	std::vector<PositionFix> fixes;
 };
 
 /** Reads DIR/trajectory.tum and, when present, DIR/states.csv (σ) and
- *  DIR/gps_fixes.csv. Throws std::runtime_error naming file and line. */
+ *  DIR/position_fixes.csv. Throws std::runtime_error naming file and line. */
 RunData loadRun(const std::string& dir);
 /** Reads an auvnav-sim ground_truth.csv (positions, attitude, seabed depth). */
 std::vector<TrackPoint> loadTruth(const std::string& csv);

@@ -297,6 +297,14 @@ std::vector<SensorStats> Navigator::stats() const
 	return out;
 }
 
+std::vector<std::string> Navigator::positionFixLabels() const
+{
+	std::vector<std::string> out;
+	for (const auto& s : slots_)
+		if (s->model->reportsPositionFix()) out.push_back(s->stats.label);
+	return out;
+}
+
 Eigen::Vector3d Navigator::bodyPosition_n() const
 {
 	const NavState& x = ukf_->state();
@@ -387,6 +395,7 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	}
 	if (dt > max_gap_s_) ++imu_gaps_;
 	propagate(w, t);
+	t_latest_s_ = t;
 	++predictions_;
 	++imu_stats_.accepted;
 	if (t_s_ >= next_health_check_s_)
@@ -551,6 +560,7 @@ void Navigator::initialize()
 	x0.setEuclidean(e);
 	ukf_->initialize(x0, P0_);
 	initialized_ = true;
+	t_latest_s_ = t_s_;
 }
 
 std::string Navigator::waitingFor() const

@@ -34,6 +34,7 @@ class GpsModel final : public SafeMeasurementModel
 	GpsModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
+	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }

@@ -38,6 +38,7 @@ class UsblModel final : public SafeMeasurementModel
 
 	uint32_t uses() const noexcept override { return kAttitude | kPosition | (has_bias_ ? kPluginStates : 0u); }
 	double gateProbability() const noexcept override { return gate_probability_; }
+	bool reportsPositionFix() const noexcept override { return true; }
 	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept override;
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override { bias_at_ = has_bias_ ? first_extra_index : -1; }

@@ -1,6 +1,7 @@
 // auvnav-view's scene: contents, the saved scene read back with MRPT's reader
 // (what SceneViewer3D does), and an off-screen render that shows the trajectory.
 #include <gtest/gtest.h>
+#include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CEllipsoid3D.h>
 
@@ -35,7 +36,8 @@ RunData squareRun()
 			q.seabed_depth_m = 12;
 			r.truth.push_back(q);
 		}
-	r.gps = {{0, {0, 0}, true}, {10, {3, 0}, false}};
+	r.fixes = {{0, "GPS", {0, 0}, true}, {10, "GPS", {3, 0}, false}, {200, "USBL", {40, 20}, true},
+			   {202, "USBL", {55, 20}, false}};
 	return r;
 }
 
@@ -55,7 +57,13 @@ TEST(View, SceneHoldsTrajectoryTruthEllipsoidsVehicleGpsAndSeabed)
 	EXPECT_EQ(countNamed(*scene, "ground_truth"), 1u);
 	EXPECT_EQ(countNamed(*scene, "seabed"), 1u);
 	EXPECT_EQ(countNamed(*scene, "vehicle"), 1u);
-	EXPECT_EQ(countNamed(*scene, "gps_fixes"), 1u);
+	EXPECT_EQ(countNamed(*scene, "fixes_GPS"), 1u);
+	EXPECT_EQ(countNamed(*scene, "fixes_USBL"), 1u);
+	const auto usbl = std::dynamic_pointer_cast<mrpt::opengl::CPointCloudColoured>(scene->getByName("fixes_USBL"));
+	ASSERT_TRUE(usbl);
+	ASSERT_EQ(usbl->size(), 2u);
+	EXPECT_FLOAT_EQ(usbl->getPoint3Df(0).x, 20.0f);  // ENU: x = east
+	EXPECT_FLOAT_EQ(usbl->getPoint3Df(0).y, 40.0f);
 	EXPECT_EQ(countNamed(*scene, "two_sigma"), 7u);	// t = 0, 60, ..., 360 of 0..399 s
 	ASSERT_TRUE(scene->getByName("seabed"));
 }
@@ -67,7 +75,7 @@ TEST(View, SavedSceneReadsBackWithMrptsReader)
 	ASSERT_TRUE(scene->saveToFile(file.string()));
 	mrpt::opengl::COpenGLScene back;
 	ASSERT_TRUE(back.loadFromFile(file.string()));
-	for (const char* name : {"estimate", "ground_truth", "seabed", "vehicle", "gps_fixes"})
+	for (const char* name : {"estimate", "ground_truth", "seabed", "vehicle", "fixes_GPS", "fixes_USBL"})
 		EXPECT_EQ(countNamed(back, name), 1u) << name;
 	EXPECT_EQ(countNamed(back, "two_sigma"), countNamed(*scene, "two_sigma"));
 }

@@ -140,6 +140,10 @@ class MeasurementModel
 		(void)obs;
 		return stamp_s;
 	}
+	/** True if z[0], z[1] of this model's measurements are the north and
+	 *  east [m] of a point in the navigation frame (a GNSS or acoustic fix):
+	 *  the host records them (position_fixes.csv) and the viewers draw them. */
+	virtual bool reportsPositionFix() const noexcept { return false; }
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

@@ -99,6 +99,9 @@ class Navigator
 	bool initialized() const { return initialized_; }
 	const ManifoldUkf& filter() const { return *ukf_; }
 	double time() const { return t_s_; }					//!< filter time [s, Unix]
+	//! The latest IMU sample's time [s, Unix]: time() except while
+	//! re-filtering for a delayed measurement (callbacks then see the past).
+	double latestTime() const { return t_latest_s_; }
 	double startTime() const { return t0_s_; }				//!< first observation [s, Unix]
 	const earth::TangentFrame& frame() const { return *frame_; }
 	const Eigen::Vector3d& imuPosition_b() const { return imu_position_b_; }
@@ -124,6 +127,9 @@ class Navigator
 	/** The same for NavState::euclidean()'s stored values (storedNames). */
 	const std::vector<std::string>& storedStateNames() const { return stored_names_; }
 	const std::vector<PluginStateBlock>& pluginStates() const { return plugin_blocks_; }
+	/** Labels of the sensors whose measurements are position fixes
+	 *  (MeasurementModel::reportsPositionFix: GPS, USBL, …). */
+	std::vector<std::string> positionFixLabels() const;
 
 	/** Position of the body origin (CG) and attitude, from the IMU state. */
 	Eigen::Vector3d bodyPosition_n() const;
@@ -193,7 +199,7 @@ class Navigator
 	std::vector<PluginStateBlock> plugin_blocks_;
 
 	bool initialized_ = false;
-	double t_s_ = 0, t0_s_ = -1;
+	double t_s_ = 0, t0_s_ = -1, t_latest_s_ = 0;
 	Eigen::Vector3d omega_ib_b_ = Eigen::Vector3d::Zero();
 	Eigen::Vector3d alpha_b_ = Eigen::Vector3d::Zero();	 // low-pass filtered gyro derivative
 	double alpha_tau_s_ = 0.2;

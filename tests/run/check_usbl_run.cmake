@@ -1,0 +1,58 @@
+# Simulates missions/usbl_sample.yaml (USBL fixes logged 2 s late) and runs
+# auvnav-run on it: the late fixes are re-filtered at their time (summary.json
+# "delayed"), recorded in updates.csv with their measurement time and drawn
+# from position_fixes.csv (label USBL).
+#   cmake -DSIM=<auvnav-sim> -DRUN=<auvnav-run> -DMISSION=<yaml> -DCONFIG=<yaml> -DOUT_DIR=<dir> -P check_usbl_run.cmake
+file(REMOVE_RECURSE "${OUT_DIR}")
+execute_process(COMMAND "${SIM}" "${MISSION}" --seed 1 --out "${OUT_DIR}/sim" RESULT_VARIABLE rc OUTPUT_VARIABLE out
+  ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "USBL +[0-9]+ observations")
+  message(FATAL_ERROR "auvnav-sim failed (${rc}): ${out}${err}")
+endif()
+execute_process(COMMAND "${RUN}" --config "${CONFIG}" --out "${OUT_DIR}/run" --quiet "${OUT_DIR}/sim/usbl_sample.rawlog"
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "auvnav-run exited ${rc}: ${out}${err}")
+endif()
+file(READ "${OUT_DIR}/run/summary.json" summary)
+string(JSON n_sensors LENGTH "${summary}" sensors)
+math(EXPR last "${n_sensors} - 1")
+set(found FALSE)
+foreach(i RANGE ${last})
+  string(JSON label GET "${summary}" sensors ${i} label)
+  if(label STREQUAL "USBL")
+    set(found TRUE)
+    string(JSON delayed GET "${summary}" sensors ${i} delayed)
+    string(JSON accepted GET "${summary}" sensors ${i} accepted)
+    string(JSON late GET "${summary}" sensors ${i} late)
+  endif()
+endforeach()
+if(NOT found)
+  message(FATAL_ERROR "no USBL entry in summary.json")
+endif()
+# ~390 fixes, all 2 s late; the first arrives before any checkpoint (late).
+if(delayed LESS 350 OR accepted LESS 350 OR late GREATER 2)
+  message(FATAL_ERROR "USBL: ${delayed} re-filtered, ${accepted} accepted, ${late} late (expected > 350, > 350, <= 2)")
+endif()
+string(JSON replayed GET "${summary}" replayed_predictions)
+if(replayed LESS 50000)
+  message(FATAL_ERROR "replayed_predictions ${replayed}: 2 s of IMU per fix expected (> 50000)")
+endif()
+file(STRINGS "${OUT_DIR}/run/position_fixes.csv" usbl_fixes REGEX ",USBL,")
+list(LENGTH usbl_fixes n_fixes)
+if(n_fixes LESS 350)
+  message(FATAL_ERROR "position_fixes.csv has ${n_fixes} USBL rows")
+endif()
+# updates.csv: filter time 2 s after the measurement time (within a checkpoint step).
+file(STRINGS "${OUT_DIR}/run/updates.csv" rows REGEX ",USBL,accepted," LIMIT_COUNT 1)
+string(REPLACE "," ";" cols "${rows}")
+list(GET cols 0 t_filter)
+list(GET cols 1 t_measurement)
+string(REGEX REPLACE "\\..*" "" tf "${t_filter}")
+string(REGEX REPLACE "\\..*" "" tm "${t_measurement}")
+math(EXPR lag "${tf} - ${tm}")
+if(lag LESS 1 OR lag GREATER 3)
+  message(FATAL_ERROR "updates.csv: USBL applied at ${t_filter} for a measurement at ${t_measurement}")
+endif()
+message(STATUS "USBL: ${delayed} re-filtered, ${accepted} accepted, ${late} late, ${n_fixes} fixes drawn, "
+  "${replayed} re-predicted IMU steps")
