@@ -14,6 +14,21 @@
 #                          [OUTPUT_DIRECTORY <dir>]   default: CMAKE_LIBRARY_OUTPUT_DIRECTORY, else the current binary dir
 #                          [INSTALL_DESTINATION <dir>])  install the module (and <name>.yaml) there
 #
+# auvnav_add_observation_library(<target> SOURCES <src...> [INSTALL_DESTINATION <dir>])
+#   a SHARED library lib<target>.so with a plugin's own MRPT observation
+#   classes (a CObservation subclass per file, registered in an
+#   MRPT_INITIALIZER): the plugin links it, and the programs that read rawlogs
+#   load it with `--obs-lib lib<target>.so` or the sensor's `obs_libs` config
+#   key (auvnav/obs_libraries.h). Links auvnav::obs (mrpt::obs) PUBLIC.
+#   Install it where the plugin is installed (AUVNAV_PLUGIN_INSTALL_DIR) so
+#   that the programs find it by file name in the plugin path.
+#
+# Install RPATHs (a plugin that links its own observation library must find
+# it once installed; CMake's default install RPATH is empty): the module and
+# the observation library get "$ORIGIN" (a library installed next to them),
+# "$ORIGIN/<relative path to the prefix's libdir>" and the auvnav package's
+# library directory. In-tree plugins set their own (plugins/CMakeLists.txt).
+#
 # The module is lib<...>auvnav_plugin_<name>.so (PREFIX "lib", OUTPUT_NAME
 # auvnav_plugin_<name>): the file name the plugin host looks for when a config
 # names the plugin `<name>`. It links auvnav::nav, is compiled with hidden
@@ -25,6 +40,47 @@ include_guard(GLOBAL)
 # and in the installed package (lib/cmake/auvnav/). A global property, so that
 # the function works whatever directory scope it is called from.
 set_property(GLOBAL PROPERTY AUVNAV_PLUGIN_EXPORTS_MAP "${CMAKE_CURRENT_LIST_DIR}/auvnav_plugin_exports.map")
+
+# The install RPATH for a library installed into <destination> (relative to
+# the prefix, or absolute): see above.
+function(_auvnav_install_rpath out destination)
+  set(rpath "$ORIGIN")
+  if(destination AND NOT IS_ABSOLUTE "${destination}")
+    include(GNUInstallDirs)
+    file(RELATIVE_PATH to_libdir "/prefix/${destination}" "/prefix/${CMAKE_INSTALL_LIBDIR}")
+    string(REGEX REPLACE "/$" "" to_libdir "${to_libdir}")
+    if(to_libdir)
+      list(APPEND rpath "$ORIGIN/${to_libdir}")
+    endif()
+  endif()
+  if(AUVNAV_LIBRARY_DIR)  # set by auvnavConfig.cmake (out-of-tree builds)
+    list(APPEND rpath "${AUVNAV_LIBRARY_DIR}")
+  endif()
+  set(${out} "${rpath}" PARENT_SCOPE)
+endfunction()
+
+function(auvnav_add_observation_library target)
+  cmake_parse_arguments(ARG "" "INSTALL_DESTINATION" "SOURCES" ${ARGN})
+  if(ARG_UNPARSED_ARGUMENTS)
+    message(FATAL_ERROR "auvnav_add_observation_library(${target}): unknown arguments ${ARG_UNPARSED_ARGUMENTS}")
+  endif()
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "auvnav_add_observation_library(${target}): no SOURCES")
+  endif()
+  if(NOT TARGET auvnav::obs)
+    message(FATAL_ERROR "auvnav_add_observation_library(${target}): target auvnav::obs is missing (find_package(auvnav) first)")
+  endif()
+  add_library(${target} SHARED ${ARG_SOURCES})
+  target_link_libraries(${target} PUBLIC auvnav::obs)
+  # --no-undefined: a missing serialization method is a link error here,
+  # not a dlopen failure in the field.
+  target_link_options(${target} PRIVATE "LINKER:--no-undefined")
+  _auvnav_install_rpath(rpath "${ARG_INSTALL_DESTINATION}")
+  set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON INSTALL_RPATH "${rpath}")
+  if(ARG_INSTALL_DESTINATION)
+    install(TARGETS ${target} LIBRARY DESTINATION "${ARG_INSTALL_DESTINATION}")
+  endif()
+endfunction()
 
 function(auvnav_add_plugin_module target)
   cmake_parse_arguments(ARG "" "NAME;CONFIG;OUTPUT_DIRECTORY;INSTALL_DESTINATION" "SOURCES" ${ARGN})
@@ -67,6 +123,8 @@ function(auvnav_add_plugin_module target)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON
     LINK_DEPENDS "${exports_map}")
+  _auvnav_install_rpath(rpath "${ARG_INSTALL_DESTINATION}")
+  set_target_properties(${target} PROPERTIES INSTALL_RPATH "${rpath}")
   set_property(TARGET ${target} PROPERTY AUVNAV_PLUGIN_NAME "${name}")
 
   if(ARG_CONFIG)

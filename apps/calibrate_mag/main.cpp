@@ -180,7 +180,9 @@ int main(int argc, char** argv)
 	    false, 10.0, "DEG", cmd);
 	TCLAP::UnlabeledValueArg<std::string> rawlog("RAWLOG", "Rawlog with the rotation segment.", true, "",
 	                                             "RAWLOG", cmd);
+	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-calibrate-mag")) return *code;
+	if (const auto code = obs_libs.load("auvnav-calibrate-mag")) return *code;
 
 	if (!(from.getValue() >= 0) || !(to.getValue() > from.getValue()))
 	{

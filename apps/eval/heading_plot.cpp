@@ -79,12 +79,15 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> label("", "label", "Magnetometer sensor label. Default: MAG.", false, "MAG", "LABEL", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "Title prefix of the figures.", false, "", "TEXT", cmd);
 	TCLAP::ValueArg<std::string> out("", "out", "Prefix of the PNG files.", true, "", "PREFIX", cmd);
+	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-heading-plot")) return *code;
 	try
 	{
 		auvnav::obs::registerAllClasses();
 		// The magnetometer's calibration from the navigator config.
 		const auto nav = auvnav::config::Node::load(config.getValue());
+		if (const auto code = obs_libs.load("auvnav-heading-plot", auvnav::declaredObservationLibraries(nav)))
+			return *code;
 		Eigen::Vector3d b = Eigen::Vector3d::Zero();
 		Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
 		double decl_deg = 0, sigma_mag_deg = 3;

@@ -3,6 +3,7 @@
 // during DVL dropouts with and without model aiding (dvl_dropout.yaml).
 #include <auvnav/config.h>
 #include <auvnav/io/trajectory.h>
+#include <auvnav/obs_libraries.h>
 #include <auvnav/navigator.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/cli.h>
@@ -123,6 +124,7 @@ int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int ma
 	for (const auto& c : ex.sequence("configurations")) configs.push_back({c.string("name"), c.strings("deny")});
 	ex.checkAllKeysUsed();
 	PluginHost host;  // one for the experiment's runs: each plugin is loaded once
+	loadObservationLibraries(declaredObservationLibraries(nav_cfg), host.searchPaths());
 	{ const Navigator probe(nav_cfg, host); }  // refuses a bad navigator file before the first simulation
 	fs::create_directories(out_dir);
 	std::ofstream runs(fs::path(out_dir) / "dropout_runs.csv");
@@ -204,6 +206,9 @@ int main(int argc, char** argv)
 							   c.number("paper_error_m", NAN)});
 		ex.checkAllKeysUsed();
 		PluginHost host;  // one for the experiment's runs: each plugin is loaded once
+		// The plugins' declared observation libraries (obs_libraries.h), also so
+		// that their `obs_libs` keys count as read.
+		loadObservationLibraries(declaredObservationLibraries(nav_cfg), host.searchPaths());
 		{ const Navigator probe(nav_cfg, host); }  // refuses a bad navigator file before the first simulation
 		fs::create_directories(out.getValue());
 		std::ofstream runs(fs::path(out.getValue()) / "runs.csv");

@@ -18,7 +18,9 @@ int main(int argc, char** argv)
 		' ', AUVNAV_VERSION);
 	TCLAP::ValueArg<std::string> out("", "out", "Folder to write (created).", true, "", "DIR", cmd);
 	TCLAP::UnlabeledValueArg<std::string> rawlog("RAWLOG", "Rawlog to export.", true, "", "RAWLOG", cmd);
+	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-export")) return *code;
+	if (const auto code = obs_libs.load("auvnav-export")) return *code;
 	auvnav::import::ExportReport report;
 	try
 	{

@@ -406,7 +406,14 @@ std::optional<Options> parseCommandLine(int argc, char** argv, int& exit_code)
 	TCLAP::ValueArg<std::string> json(
 	    "", "json", "Also write the summary as JSON to FILE; '-' writes only the JSON, to stdout.", false, "",
 	    "FILE", cmd);
+	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-info"))
+	{
+		exit_code = *code;
+		return std::nullopt;
+	}
+	// Before the rawlog is opened: its classes must be registered to be read.
+	if (const auto code = obs_libs.load("auvnav-info"))
 	{
 		exit_code = *code;
 		return std::nullopt;

@@ -41,6 +41,7 @@ int main(int argc, char** argv)
 	TCLAP::SwitchArg view("", "view", "Live MRPT 3D window of the run (needs a display; xvfb-run works)", cmd);
 	TCLAP::ValueArg<double> view_hold("", "view-hold", "With --view: keep the window S seconds after the run (0: until a key)",
 									  false, 0, "S", cmd);
+	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-run")) return *code;
 	auvnav::obs::registerAllClasses();
 	std::signal(SIGINT, onSignal);
@@ -67,6 +68,10 @@ int main(int argc, char** argv)
 			for (const auto& p : cfg.strings("plugin_paths"))
 				paths.push_back((std::filesystem::path(config.getValue()).parent_path() / p).string());
 		host = std::make_unique<auvnav::PluginHost>(paths);
+		// Observation libraries (--obs-lib, the sensors' obs_libs) before the
+		// plugins, which may link them, and before the rawlog is opened.
+		if (const auto code = obs_libs.load("auvnav-run", auvnav::declaredObservationLibraries(cfg), host->searchPaths()))
+			return *code;
 		nav = std::make_unique<auvnav::Navigator>(cfg, *host);
 		for (const auto& d : deny.getValue())
 		{

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 
+#include "compass.h"
 #include "sensors.h"
 #include "sonar.h"
 
@@ -166,6 +167,16 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 												MagneticField::fromConfig(spec.environment.child("magnetic_field")),
 												vehicle.params().thrusters.size(), seed);
 	}
+	// A compass (compass.h), when the sensors file has one (flatfish_sensors.yaml: disabled).
+	std::unique_ptr<CompassSim> compass;
+	if (enabled("compass", true))
+	{
+		const double declination_rad =
+			spec.environment.has("magnetic_field")
+				? MagneticField::fromConfig(spec.environment.child("magnetic_field")).declination_rad
+				: 0.0;
+		compass = std::make_unique<CompassSim>(sc.child("compass"), declination_rad, seed);
+	}
 	const auto thr_cfg = sc.child("thrusters");
 	const std::string thr_label = thr_cfg.string("label", "THRUSTERS");
 	const double dt = spec.dt_s;
@@ -182,6 +193,9 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	const Schedule mag_s = mag ? Schedule{stepsOf(mag->period_s(), dt, sc.child("magnetometer"), "rate_hz"),
 										  std::lround(mag->offset_s() / dt)}
 							   : Schedule{};
+	const Schedule compass_s = compass ? Schedule{stepsOf(compass->period_s(), dt, sc.child("compass"), "rate_hz"),
+												  std::lround(compass->offset_s() / dt)}
+									   : Schedule{};
 	const Schedule usbl_s = usbl ? Schedule{stepsOf(usbl->period_s(), dt, sc.child("usbl"), "rate_hz"), 0} : Schedule{};
 	const Schedule ctl_s{stepsOf(1.0 / thr_cfg.positive("rate_hz"), dt, thr_cfg, "rate_hz"), 0};
 	const Schedule truth_s{stepsOf(1.0 / spec.ground_truth_rate_hz, dt, spec.mission, "simulation.ground_truth_rate_hz"), 0};
@@ -204,6 +218,7 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	// sensor's section is kept for when it is enabled again: not checked.
 	if (!gps) sc.markFreeForm("gps");
 	if (!mag) sc.markFreeForm("magnetometer");
+	if (!compass) sc.markFreeForm("compass");
 	if (!usbl) sc.markFreeForm("usbl");
 	if (!use_sonar) sc.markFreeForm("sonar");
 
@@ -220,13 +235,14 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 				thr_clk = clockFor("thrusters", ctl_s.every, 36),
 				sonar_clk = use_sonar ? clockFor("sonar", sonar_s.every, 37) : LoggerClock{},
 				mag_clk = mag ? clockFor("magnetometer", mag_s.every, 38) : LoggerClock{},
+				compass_clk = compass ? clockFor("compass", compass_s.every, 41) : LoggerClock{},
 				usbl_clk = usbl ? clockFor("usbl", usbl_s.every, 39) : LoggerClock{};
 	// Every key of the mission, vehicle and sensors files must have been read.
 	spec.mission.checkAllKeysUsed();
 	spec.vehicle.checkAllKeysUsed();
 	spec.sensors.checkAllKeysUsed();
 	double max_jitter_s = 0;
-	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk, &usbl_clk})
+	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk, &compass_clk, &usbl_clk})
 		max_jitter_s = std::max(max_jitter_s, c->maxEarly_s());
 
 	MissionSummary sum;
@@ -329,6 +345,7 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 		if (gps && gps_s.due(k))
 			if (const auto o = gps->sample(truth, frame)) count(o, gps_clk);
 		if (mag && mag_s.due(k)) count(mag->sample(truth), mag_clk);
+		if (compass && compass_s.due(k)) count(compass->sample(truth), compass_clk);
 		// Logged on arrival, after the latency: the pending queue keeps file order.
 		if (usbl && usbl_s.due(k))
 			if (const auto o = usbl->sample(truth, frame)) count(o, usbl_clk);
@@ -371,7 +388,7 @@ MissionSummary runMission(const MissionSpec& spec, uint32_t seed, const std::str
 	}
 	flushBefore(std::numeric_limits<mrpt::Clock::rep>::max());
 	sum.gps_outliers = gps ? gps->outliers() : 0;
-	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk, &usbl_clk})
+	for (const LoggerClock* c : {&imu_clk, &dvl_clk, &adcp_clk, &pres_clk, &gps_clk, &thr_clk, &sonar_clk, &mag_clk, &compass_clk, &usbl_clk})
 	{
 		sum.stamp_duplicates += c->duplicates();
 		sum.stamp_out_of_order += c->outOfOrder();

@@ -172,7 +172,9 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> export_polar("", "export-polar",
 		"Also write each raw polar frame as DIR/frame_<unix time>.png (input for a later PNG-folder run)", false, "", "DIR", cmd);
 	TCLAP::ValueArg<int> every("", "images-every", "Write every Nth annotated fan image (0: none)", false, 1, "N", cmd);
+	const cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-sonar")) return *code;
+	if (const auto code = obs_libs.load("auvnav-sonar")) return *code;
 	try
 	{
 		obs::registerAllClasses();

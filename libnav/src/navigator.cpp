@@ -4,8 +4,10 @@
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <stdexcept>
 
 namespace fs = std::filesystem;
 
@@ -163,6 +165,19 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	(void)in.inRange("heading_deg", -360, 360);
 	(void)in.number("north_m", 0.0), (void)in.number("east_m", 0.0), (void)in.number("depth_m", 0.0);
 
+	if (cfg.has("clock"))
+	{
+		const auto c = cfg.child("clock");
+		max_forward_jump_s_ = c.inRange("max_forward_jump_s", 0.02, 3600, max_forward_jump_s_);
+		max_backward_jump_s_ = c.inRange("max_backward_jump_s", 0.0, 3600, max_backward_jump_s_);
+		const std::string action = c.string("on_jump", "stop");
+		if (action != "stop" && action != "reinitialize")
+			c.fail("on_jump", "expected stop or reinitialize, got '" + action + "'");
+		stop_on_jump_ = action == "stop";
+	}
+	if (max_gap_s_ > max_forward_jump_s_)
+		imu.fail("max_gap_s", "must not exceed clock.max_forward_jump_s (" + std::to_string(max_forward_jump_s_) +
+								  " s): longer steps are clock jumps, not gaps");
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
 	if (cfg.has("gates"))
 	{
@@ -377,6 +392,11 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 		return true;
 	}
 	const double dt = t - t_s_;
+	if (dt > max_forward_jump_s_ || dt < -max_backward_jump_s_)
+	{
+		clockJump(t, dt);
+		return handleImu(obs);	// the first sample of the new initialisation
+	}
 	if (dt <= 0)
 	{
 		++imu_stats_.invalid;
@@ -405,6 +425,32 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	}
 	if (on_predict) on_predict(*this);
 	return true;
+}
+
+void Navigator::clockJump(double t, double dt)
+{
+	char what[256];
+	std::snprintf(what, sizeof what, "IMU '%s' clock jumped by %+.3f s at %.3f s from the start (%.3f -> %.3f s)",
+				  imu_label_.c_str(), dt, t_s_ - t0_s_, t_s_, t);
+	if (stop_on_jump_)
+		throw std::runtime_error(std::string(what) +
+								 "; not predicted through (clock.on_jump: stop; 'reinitialize' starts again)");
+	// Start again from this sample: levelling, then the first fix, as at the start.
+	++clock_jumps_;
+	imu_stats_.last_problem = std::string(what) + "; re-initialised";
+	initialized_ = false;
+	leveling_samples_ = 0;
+	leveling_start_s_ = -1;
+	f_sum_.setZero();
+	w_sum_.setZero();
+	gps_fix_.reset();
+	if (history_) history_ = std::make_unique<History>();
+	for (auto& slot : slots_)
+	{
+		slot->rejecting_since_s = -1;
+		slot->streak.clear();
+	}
+	t_s_ = t_latest_s_ = t;
 }
 
 void Navigator::propagate(const Eigen::Vector3d& w, double t)
@@ -620,6 +666,13 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 		if (!initialized_)
 		{
 			++st.before_init;
+			continue;
+		}
+		if (t_m > t_s_ + max_forward_jump_s_)
+		{
+			// Not a measurement to apply now: a sensor on another clock, or a jump.
+			++st.invalid;
+			st.last_problem = "timestamp " + std::to_string(t_m - t_s_) + " s ahead of the IMU (clock.max_forward_jump_s)";
 			continue;
 		}
 		if (t_m < t_s_ - apply_now_within_s_)

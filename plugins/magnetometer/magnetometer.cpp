@@ -201,7 +201,7 @@ PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, c
 		m.z = m_s_ut;
 		m.R = Eigen::Matrix3d::Identity() * (noise_ut_ * noise_ut_);
 		const Eigen::Quaterniond q_bs(R_bs);
-		m.aux = {q_bs.w(), q_bs.x(), q_bs.y(), q_bs.z(), 0, 0, 0, 0};
+		m.setPayload(MountingRotation{q_bs.w(), q_bs.x(), q_bs.y(), q_bs.z()});
 		m.label = "field";
 	}
 	else
@@ -213,7 +213,7 @@ PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, c
 		// The mean's heading turned by what the field says is missing (D − α).
 		m.z = Eigen::VectorXd::Constant(1, wrapPi(azimuthOf(R_ref, u_b) + declination_rad_ - alpha));
 		m.R = Eigen::MatrixXd::Constant(1, 1, heading_sigma_rad_ * heading_sigma_rad_);
-		m.aux = {u_b.x(), u_b.y(), u_b.z(), 0, 0, 0, 0, 0};
+		m.setPayload(ReferenceDirection{u_b.x(), u_b.y(), u_b.z()});
 		m.label = "heading";
 	}
 	out.push_back(std::move(m));
@@ -226,14 +226,16 @@ bool MagnetometerModel::doPredict(const NavState& x, const Measurement& m, const
 	if (mode_ == Mode::Vector)
 	{
 		if (z_pred.size() != 3) return false;
-		const Eigen::Quaterniond q_bs(m.aux[0], m.aux[1], m.aux[2], m.aux[3]);
+		const auto& q = m.payload<MountingRotation>();
+		const Eigen::Quaterniond q_bs(q.w, q.x, q.y, q.z);
 		z_pred =
 		    predictedReading_s(x.R_nb, q_bs.normalized().toRotationMatrix(), m_n_ut_, b_hard_ut_, S_soft_);
 	}
 	else
 	{
 		if (z_pred.size() != 1) return false;
-		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(m.aux[0], m.aux[1], m.aux[2]));
+		const auto& u = m.payload<ReferenceDirection>();
+		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(u.x, u.y, u.z));
 		if (bias_at_ >= 0)
 		{
 			if (x.extra.size() <= bias_at_) return false;  // declared but not in this state

@@ -36,7 +36,8 @@
  *  heading mode without a filter mean.
  *
  *  h reads only the attitude: uses() = kAttitude. h is pure: R_bs (vector
- *  mode) or u_b (heading mode) travel in Measurement::aux.
+ *  mode) or u_b (heading mode) travel in the Measurement's payload
+ *  (MountingRotation, ReferenceDirection).
  *
  *  Optional plugin-owned state (heading mode; `states: {heading_bias: …}`,
  *  state_block_config.h): a heading bias b [rad], h = heading + b. Thruster
@@ -63,6 +64,18 @@ Eigen::Vector3d earthField_n(double total_ut, double declination_rad, double inc
 Eigen::Vector3d predictedReading_s(const Eigen::Matrix3d& R_nb, const Eigen::Matrix3d& R_bs,
                                    const Eigen::Vector3d& m_n_ut, const Eigen::Vector3d& b_hard_ut,
                                    const Eigen::Matrix3d& S_soft);
+
+/** Payloads of the two modes' measurements (Measurement::payload): the
+ *  sensor-to-body rotation R_bs as a unit quaternion (vector mode), and the
+ *  level reference direction u_b in body axes (heading mode). */
+struct MountingRotation
+{
+	double w = 1, x = 0, y = 0, z = 0;
+};
+struct ReferenceDirection
+{
+	double x = 0, y = 0, z = 0;
+};
 
 class MagnetometerModel final : public SafeMeasurementModel
 {

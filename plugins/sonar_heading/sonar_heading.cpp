@@ -112,8 +112,7 @@ PrepareStatus SonarHeadingModel::doPrepare(const mrpt::obs::CObservation& obs, c
 		m.z = Eigen::VectorXd::Constant(1, d.bearing_rad);
 		m.R = Eigen::MatrixXd::Constant(1, 1, d.sigma_bearing_rad * d.sigma_bearing_rad + sigma_floor_rad_ * sigma_floor_rad_);
 		m.tag = a.pole;
-		m.aux[0] = pole.ne_m.x();
-		m.aux[1] = pole.ne_m.y();
+		m.setPayload(PolePosition{pole.ne_m.x(), pole.ne_m.y()});
 		m.label = "bearing";
 		out.push_back(m);
 	}
@@ -124,7 +123,8 @@ bool SonarHeadingModel::doPredict(const NavState& x, const Measurement& m, const
 								  Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 1) return false;
-	z_pred[0] = predictedBearing(x, sonar_.position_b, sonar_.mount_yaw_rad, Eigen::Vector2d(m.aux[0], m.aux[1]));
+	const auto& pole = m.payload<PolePosition>();
+	z_pred[0] = predictedBearing(x, sonar_.position_b, sonar_.mount_yaw_rad, Eigen::Vector2d(pole.north_m, pole.east_m));
 	return std::isfinite(z_pred[0]);
 }
 

@@ -31,6 +31,13 @@ namespace auvnav::plugins
 double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double mount_yaw_rad,
 						const Eigen::Vector2d& pole_ne);
 
+/** What a bearing measurement carries to h (Measurement::payload): the
+ *  associated pole's position in the navigation frame [m]. */
+struct PolePosition
+{
+	double north_m = 0, east_m = 0;
+};
+
 class SonarHeadingModel final : public SafeMeasurementModel
 {
    public:

@@ -112,3 +112,40 @@ TEST(ImportRoundTrip, SimExportImportRunGivesTheSameTrajectory)
 	EXPECT_TRUE(slurp(d / "run_original" / "states.csv") == slurp(d / "run_imported" / "states.csv"))
 		<< "states.csv differ";
 }
+
+TEST(ImportRoundTrip, UsblFixesKeepTheirMeasurementTimeThroughCsv)
+{
+	// auvnav-sim (USBL 1 s late) → auvnav-export → auvnav-import → auvnav-run:
+	// the fixes come back with their measurement time (re-filtered again) and
+	// the run is the same.
+	const fs::path d = scratch("usbl");
+	ASSERT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_usbl_mission.yaml --seed 2 --out " +
+					  (d / "sim").string(),
+				  d / "sim.log"),
+			  0)
+		<< slurp(d / "sim.log");
+	const fs::path original = d / "sim" / "short_usbl.rawlog";
+	ASSERT_EQ(run(kBin + "/auvnav-export " + original.string() + " --out " + (d / "csv").string(), d / "export.log"), 0)
+		<< slurp(d / "export.log");
+	const std::string csv = slurp(d / "csv" / "USBL.csv");
+	ASSERT_THAT(csv, ::testing::StartsWith("t_s,measurement_time_s,latitude_deg,"));
+	ASSERT_EQ(run(kBin + "/auvnav-import --spec " + kSource + "/config/import/auvnav_export.yaml --out " +
+					  (d / "imported.rawlog").string() + " " + (d / "csv").string(),
+				  d / "import.log"),
+			  0)
+		<< slurp(d / "import.log");
+	const std::string run_cmd = kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out ";
+	ASSERT_EQ(run(run_cmd + (d / "run_original").string() + " " + original.string(), d / "run1.log"), 0)
+		<< slurp(d / "run1.log");
+	ASSERT_EQ(run(run_cmd + (d / "run_imported").string() + " " + (d / "imported.rawlog").string(), d / "run2.log"), 0)
+		<< slurp(d / "run2.log");
+	const std::string summary = slurp(d / "run_imported" / "summary.json");
+	const auto at = summary.find("\"label\": \"USBL\"");
+	ASSERT_NE(at, std::string::npos) << summary;
+	const auto delayed = summary.find("\"delayed\": ", at);
+	ASSERT_NE(delayed, std::string::npos);
+	EXPECT_GT(std::atoi(summary.c_str() + delayed + 11), 50) << summary.substr(at, 300);
+	const double diff = maxPositionDifference(d / "run_original" / "trajectory.tum", d / "run_imported" / "trajectory.tum");
+	std::printf("USBL CSV round trip: max position difference %.3g m\n", diff);
+	EXPECT_LE(diff, 1e-9);
+}

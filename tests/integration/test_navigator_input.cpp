@@ -216,3 +216,92 @@ TEST(NavigatorInput, FixLabelNamingNoSensorIsAConfigError)
 		EXPECT_NE(std::string(e.what()).find("'GNSS'"), std::string::npos) << e.what();
 	}
 }
+
+TEST(NavigatorInput, ForwardClockJumpStopsWithAClearErrorByDefault)
+{
+	for (double jump : {3600.0, 1e9})
+	{
+		Fixture f;
+		const std::size_t preds = f.nav->predictions();
+		try
+		{
+			f.nav->process(*imuAt(f.t + jump));
+			ADD_FAILURE() << "a " << jump << " s jump was predicted through";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("clock jumped by +"), std::string::npos) << e.what();
+			EXPECT_NE(std::string(e.what()).find("clock.on_jump"), std::string::npos) << e.what();
+		}
+		EXPECT_EQ(f.nav->predictions(), preds);	 // not one blind step
+		EXPECT_TRUE(f.nav->filter().state().allFinite());
+	}
+}
+
+TEST(NavigatorInput, ClockJumpsReinitialiseWhenConfiguredAndNothingAfterThemIsLost)
+{
+	for (double jump : {3600.0, -3600.0, 1e9})
+	{
+		config::Node cfg = config::Node::load(kConfig);
+		cfg.set("filter.initial.position", "config");
+		cfg.set("clock.on_jump", "reinitialize");
+		PluginHost host;
+		Navigator nav(cfg, host);
+		double t = kT0;
+		for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));
+		ASSERT_TRUE(nav.initialized());
+		const std::size_t preds = nav.predictions();
+		t += jump;
+		nav.process(*imuAt(t));
+		EXPECT_EQ(nav.clockJumps(), 1u) << jump;
+		EXPECT_FALSE(nav.initialized()) << jump;  // levelling again
+		EXPECT_NE(nav.imuStats().last_problem.find("re-initialised"), std::string::npos) << nav.imuStats().last_problem;
+		for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));
+		// Initialised again after the levelling second, predicting from the new clock on.
+		EXPECT_TRUE(nav.initialized()) << jump;
+		EXPECT_GT(nav.predictions(), preds + 40) << jump;
+		EXPECT_NEAR(nav.time(), t, 1e-6) << jump;
+		EXPECT_TRUE(nav.filter().state().allFinite());
+		EXPECT_LT(nav.filter().state().p_n.head<2>().norm(), 1.0) << jump;	// no hour of blind drift
+		// Readings on the new clock are used.
+		nav.process(*pressureAt(t, 101325 + 1025 * 9.782 * (2.0 + 0.3)));
+		EXPECT_EQ(statsOf(nav.stats(), "PRESSURE", "pressure").accepted, 1u) << jump;
+	}
+}
+
+TEST(NavigatorInput, ASmallBackwardStepDropsTheSampleAndAReadingFromTheFutureIsRefused)
+{
+	Fixture f;
+	const std::size_t preds = f.nav->predictions();
+	f.nav->process(*imuAt(f.t - 0.5));	// within clock.max_backward_jump_s: dropped
+	EXPECT_EQ(f.nav->predictions(), preds);
+	EXPECT_EQ(f.nav->imuStats().invalid, 1u);
+	const NavState before = f.nav->filter().state();
+	f.nav->process(*pressureAt(f.t + 3600, 101325 + 1025 * 9.782 * (20.0 + 0.3)));
+	const auto& s = statsOf(f.nav->stats(), "PRESSURE", "pressure");
+	EXPECT_EQ(s.invalid, 1u);
+	EXPECT_NE(s.last_problem.find("ahead of the IMU"), std::string::npos) << s.last_problem;
+	EXPECT_TRUE(f.nav->filter().state().p_n == before.p_n);
+}
+
+TEST(NavigatorInput, BadClockConfigIsRefusedWithTheKey)
+{
+	PluginHost host;
+	for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+			 {"clock.on_jump", "ignore"}, {"clock.max_forward_jump_s", "0"}, {"clock.max_forward_jump_s", "0.2"}})
+	{
+		config::Node cfg = config::Node::load(kConfig);
+		cfg.set(key, value);
+		try
+		{
+			Navigator nav(cfg, host);
+			ADD_FAILURE() << key << "=" << value << " accepted";
+		}
+		catch (const config::ConfigError& e)
+		{
+			// 0.2 s is shorter than imu.max_gap_s (0.5 s): named there.
+			const std::string name = value == "0.2" ? "max_gap_s" : key.substr(key.rfind('.') + 1);
+			EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+		}
+	}
+}

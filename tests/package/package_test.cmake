@@ -3,16 +3,25 @@
 #     (programs, libraries, plugins + YAML, headers, config, CMake package) and
 #     that the installed auvnav-run loads the installed libraries;
 #  2. configure, build and unit-test share/examples/compass_plugin against it
-#     (find_package(auvnav), auvnav_add_plugin_module);
-#  3. build tests/package/rawlog_generator against it and write a 20 s rawlog
-#     (IMU, pressure, compass);
+#     (find_package(auvnav), auvnav_add_observation_library for its own class
+#     CObservationCompass, auvnav_add_plugin_module);
+#  3. write a 20 s rawlog (IMU, pressure, compass in the example's own class)
+#     with the example's make_compass_rawlog; the installed auvnav-info reads
+#     it only with --obs-lib;
 #  4. run the INSTALLED auvnav-run with the installed default configuration,
 #     its core plugins found by name in the installed plugin directory, plus
-#     the compass plugin by path; expect exit 0, accepted compass updates and
-#     the heading pulled to the compass's;
-#  5. install the example into the same prefix and run again with `plugin: compass`.
+#     the compass plugin by path (and its observation library through the
+#     sensor's obs_libs); expect exit 0, accepted compass updates, the heading
+#     pulled to the compass's and, with `states:`, the plugin's own state
+#     COMPASS.heading_bias in states.csv;
+#  5. install the example into the same prefix (plugin RUNPATH not empty) and
+#     run again with `plugin: compass`;
+#  6. the hello world of the example's README: the installed auvnav-sim on the
+#     installed compass_hello mission (a simulated compass), the installed
+#     auvnav-run with the installed compass_hello.yaml: the compass updates.
 #   cmake -DBUILD_DIR=<auvnav build> -DSOURCE_DIR=<auvnav source> -DWORK_DIR=<scratch>
 #         -DLIBDIR=<CMAKE_INSTALL_LIBDIR> -DCXX_COMPILER=<c++> [-DBUILD_TYPE=Release] -P package_test.cmake
+cmake_minimum_required(VERSION 3.22)  # policies of this CMake (IN_LIST in if())
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR LIBDIR CXX_COMPILER)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "package_test.cmake: ${var} is not set")
@@ -51,7 +60,13 @@ foreach(f
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_gps.so ${LIBDIR}/auvnav/plugins/gps.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_magnetometer.so ${LIBDIR}/auvnav/plugins/magnetometer.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_ahrs.so ${LIBDIR}/auvnav/plugins/ahrs.yaml
-    bin/auvnav-calibrate-mag
+    bin/auvnav-calibrate-mag bin/auvnav-export bin/auvnav-import bin/auvnav-sonar bin/auvnav-eval
+    bin/auvnav-view bin/auvnav-experiment bin/auvnav-heading-plot
+    share/auvnav/sample/sample.rawlog share/auvnav/sample/ground_truth.csv share/auvnav/sample/ground_truth.tum
+    share/auvnav/config/compass_hello.yaml share/auvnav/config/missions/compass_hello.yaml
+    share/auvnav/examples/compass_plugin/CObservationCompass.h
+    share/auvnav/examples/compass_plugin/make_compass_rawlog.cpp
+    include/auvnav/obs_libraries.h
     include/auvnav/navigator.h include/auvnav/plugin_api.h include/auvnav/plugin_host.h
     include/auvnav/measurement_model.h include/auvnav/obs/CObservationDVL.h include/auvnav/obs/register.h
     include/auvnav/io/rawlog.h include/auvnav/testing/model_checks.h
@@ -84,6 +99,8 @@ if(LDD)
   endforeach()
 endif()
 run("installed auvnav-info --help" COMMAND "${prefix}/bin/auvnav-info" --help)
+run("installed auvnav-info on the installed sample" COMMAND "${prefix}/bin/auvnav-info"
+  "${prefix}/share/auvnav/sample/sample.rawlog")
 
 # --- 2. the out-of-tree example plugin
 set(common_args -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=${BUILD_TYPE}
@@ -103,18 +120,26 @@ endif()
 run("compass unit tests" COMMAND ${CMAKE_CTEST_COMMAND} --test-dir "${compass_build}" --output-on-failure
   OUTPUT_VARIABLE out)
 message("${out}")
-if(NOT out MATCHES "100% tests passed, 0 tests failed out of ([0-9]+)" OR CMAKE_MATCH_1 LESS 5)
+if(NOT out MATCHES "100% tests passed, 0 tests failed out of ([0-9]+)" OR CMAKE_MATCH_1 LESS 15)
   message(FATAL_ERROR "the compass unit tests did not all run")
 endif()
 
-# --- 3. a rawlog with IMU, pressure and compass data, from a program built against the package
-set(gen_build "${WORK_DIR}/rawlog_generator")
-run("configure the rawlog generator"
-  COMMAND ${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/package/rawlog_generator" -B "${gen_build}" ${common_args})
-run("build the rawlog generator" COMMAND ${CMAKE_COMMAND} --build "${gen_build}")
+# --- 3. a rawlog with IMU, pressure and compass data in the example's own class
+set(compass_obs_lib "${compass_build}/libcompass_obs.so")
 set(rawlog "${WORK_DIR}/compass.rawlog")
 set(true_heading_deg 20)
-run("write the rawlog" COMMAND "${gen_build}/make_compass_rawlog" "${rawlog}" 20 ${true_heading_deg} -12.975)
+run("write the rawlog" COMMAND "${compass_build}/make_compass_rawlog" "${rawlog}" 20 ${true_heading_deg} -12.975)
+# The installed auvnav-info cannot read the class without its library (exit 2,
+# naming the class and --obs-lib), and lists it with --obs-lib.
+execute_process(COMMAND "${prefix}/bin/auvnav-info" "${rawlog}" RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT rc EQUAL 2 OR NOT out MATCHES "CObservationCompass.*--obs-lib")
+  message(FATAL_ERROR "auvnav-info without --obs-lib: exit ${rc}, expected 2 naming the class and --obs-lib:\n${out}")
+endif()
+run("installed auvnav-info --obs-lib" COMMAND "${prefix}/bin/auvnav-info" --obs-lib "${compass_obs_lib}" "${rawlog}"
+  OUTPUT_VARIABLE out)
+if(NOT out MATCHES "COMPASS +compass_example::CObservationCompass +200 ")
+  message(FATAL_ERROR "auvnav-info --obs-lib does not list the 200 compass observations:\n${out}")
+endif()
 
 # --- 4. the installed navigator with the installed default config + the compass by path
 # The configs are written into a copy of the installed config directory, so that
@@ -144,11 +169,17 @@ foreach(core inertial pressure)
     message(FATAL_ERROR "the installed flatfish.yaml's sensors do not list the core plugin ${core}:\n${sensors}")
   endif()
 endforeach()
-# run_navigator(<tag> <plugin spec in the config>): writes WORK_DIR/config/<tag>.yaml (the
-# installed flatfish.yaml plus a COMPASS sensor served by <plugin spec>), runs the
-# installed auvnav-run on the rawlog into WORK_DIR/<tag>/ and checks the outcome.
-function(run_navigator tag plugin_spec)
-  set(compass_item "\n${indent}- label: COMPASS\n${indent}  plugin: ${plugin_spec}\n${indent}  config: {sigma_deg: 2, declination_deg: 0}")
+# run_navigator(<tag> <plugin spec in the config> <obs_libs> [WITH_STATE]): writes
+# WORK_DIR/config/<tag>.yaml (the installed flatfish.yaml plus a COMPASS sensor
+# served by <plugin spec>, declaring <obs_libs>, with the heading-bias state if
+# WITH_STATE), runs the installed auvnav-run on the rawlog into WORK_DIR/<tag>/
+# and checks the outcome.
+function(run_navigator tag plugin_spec obs_libs)
+  set(states "")
+  if("WITH_STATE" IN_LIST ARGN)
+    set(states ", states: {heading_bias: {sigma_deg: 3, process: constant}}")
+  endif()
+  set(compass_item "\n${indent}- label: COMPASS\n${indent}  plugin: ${plugin_spec}\n${indent}  obs_libs: [${obs_libs}]\n${indent}  config: {sigma_deg: 2, declination_deg: 0${states}}")
   set(config "${config_dir}/${tag}.yaml")
   file(WRITE "${config}" "${head}${sensors}${compass_item}${tail}")
   set(out_dir "${WORK_DIR}/${tag}")
@@ -204,17 +235,89 @@ function(run_navigator tag plugin_spec)
   if(NOT yaw_int MATCHES "^(18|19|20|21)$")
     message(FATAL_ERROR "${tag}: final heading ${yaw} deg is not within 2 deg of the compass's ${true_heading_deg} deg")
   endif()
+  # The plugin's own state: in states.csv, its sigma not above the initial 3 deg.
+  if("WITH_STATE" IN_LIST ARGN)
+    check_state_column("${tag}" "${out_dir}/states.csv" 0.05236)   # 3 deg
+  endif()
 endfunction()
 
-# By path, straight from the example's build tree.
-run_navigator(run_by_path "${compass_module}")
+# check_state_column(<tag> <states.csv> <max sigma rad>): the compass's
+# heading_bias and its sigma are columns, with numbers on the last row, the
+# sigma at most the given one (its initial sigma: a constant state's sigma
+# never grows).
+function(check_state_column tag csv max_sigma_rad)
+  file(STRINGS "${csv}" rows)
+  list(GET rows 0 header)
+  list(GET rows -1 final)
+  string(REPLACE "," ";" header "${header}")
+  string(REPLACE "," ";" final "${final}")
+  list(FIND header "COMPASS.heading_bias" bias_col)
+  list(FIND header "sigma_COMPASS.heading_bias" sigma_col)
+  if(bias_col EQUAL -1 OR sigma_col EQUAL -1)
+    message(FATAL_ERROR "${tag}: states.csv has no COMPASS.heading_bias / sigma_COMPASS.heading_bias column:\n${header}")
+  endif()
+  list(GET final ${bias_col} bias)
+  list(GET final ${sigma_col} sigma)
+  message(STATUS "${tag}: final COMPASS.heading_bias ${bias} (sigma ${sigma}) [states.csv units]")
+  if(NOT bias MATCHES "^-?[0-9]" OR NOT sigma MATCHES "^[0-9]")
+    message(FATAL_ERROR "${tag}: COMPASS.heading_bias '${bias}', sigma '${sigma}' are not numbers")
+  endif()
+  # states.csv gives plugin states in SI (rad); if() compares numbers as doubles.
+  if(sigma GREATER max_sigma_rad)
+    message(FATAL_ERROR "${tag}: sigma of COMPASS.heading_bias ${sigma} rad is above its initial ${max_sigma_rad} rad")
+  endif()
+endfunction()
+
+# By path, straight from the example's build tree, with its observation
+# library declared by path, and its own state.
+run_navigator(run_by_path "${compass_module}" "${compass_obs_lib}" WITH_STATE)
 
 # --- 5. installed next to the core plugins (the example's INSTALL_DESTINATION),
 # the compass is found by name like them.
 run("install the compass example" COMMAND ${CMAKE_COMMAND} --install "${compass_build}" --prefix "${prefix}")
-foreach(f libauvnav_plugin_compass.so compass.yaml)
+foreach(f libauvnav_plugin_compass.so compass.yaml libcompass_obs.so)
   if(NOT EXISTS "${plugin_dir}/${f}")
     message(FATAL_ERROR "the example did not install ${plugin_dir}/${f}")
   endif()
 endforeach()
-run_navigator(run_by_name compass)
+# The installed plugin links its own observation library: its RUNPATH must
+# find it there ($ORIGIN), not be empty (CMake's default install RPATH).
+find_program(READELF readelf)
+if(READELF)
+  run("readelf" COMMAND ${READELF} -d "${plugin_dir}/libauvnav_plugin_compass.so" OUTPUT_VARIABLE dyn)
+  if(NOT dyn MATCHES "\\((RUNPATH|RPATH)\\)[^\n]*\\[\\$ORIGIN[]:]")
+    message(FATAL_ERROR "the installed compass plugin has no \$ORIGIN RUNPATH:\n${dyn}")
+  endif()
+  if(NOT dyn MATCHES "NEEDED[^\n]*libcompass_obs\\.so")
+    message(FATAL_ERROR "the installed compass plugin does not link libcompass_obs.so:\n${dyn}")
+  endif()
+endif()
+if(LDD)
+  run("ldd installed plugin" COMMAND ${LDD} "${plugin_dir}/libauvnav_plugin_compass.so" OUTPUT_VARIABLE ldd_out)
+  if(NOT ldd_out MATCHES "libcompass_obs\\.so => ${plugin_dir}/libcompass_obs\\.so")
+    message(FATAL_ERROR "the installed compass plugin does not resolve its installed libcompass_obs.so:\n${ldd_out}")
+  endif()
+endif()
+# Installed next to the plugins, the library is found by its file name.
+run("installed auvnav-info --obs-lib by name" COMMAND "${prefix}/bin/auvnav-info" --obs-lib libcompass_obs.so "${rawlog}")
+run_navigator(run_by_name compass libcompass_obs.so)
+
+# --- 6. the hello world (share/examples/compass_plugin/README.md): simulate the
+# compass_hello mission with the installed simulator (a compass in
+# CObservationIMU IMU_YAW) and run the installed navigator with the installed
+# compass_hello.yaml, which names the installed plugin and its state.
+set(hello "${WORK_DIR}/hello")
+run("installed auvnav-sim compass_hello" COMMAND "${prefix}/bin/auvnav-sim"
+  "${prefix}/share/auvnav/config/missions/compass_hello.yaml" --seed 1 --out "${hello}" OUTPUT_VARIABLE out)
+message("${out}")
+if(NOT out MATCHES "COMPASS +[1-9][0-9]+ observations")
+  message(FATAL_ERROR "the simulator wrote no compass observations")
+endif()
+run("installed auvnav-run compass_hello" COMMAND "${prefix}/bin/auvnav-run" --quiet
+  --config "${prefix}/share/auvnav/config/compass_hello.yaml" --out "${hello}/run" "${hello}/compass_hello.rawlog"
+  OUTPUT_VARIABLE out)
+message("${out}")
+if(NOT out MATCHES "COMPASS +compass +[1-9][0-9]+ ")
+  message(FATAL_ERROR "hello world: the compass accepted no update")
+endif()
+check_state_column(hello "${hello}/run/states.csv" 0.05236)   # 3 deg

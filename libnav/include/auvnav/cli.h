@@ -12,7 +12,12 @@
  *  --version and after a parse error (and prints the whole usage for the
  *  latter); the programs returned 0 for both. parse() below tells them apart
  *  and reports an error as one line on stderr.
+ *
+ *  ObsLibOption: the `--obs-lib LIB` option (repeatable) of every program
+ *  that reads rawlogs; see obs_libraries.h.
  */
+#include <auvnav/obs_libraries.h>
+#include <auvnav/plugin_host.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <iostream>
@@ -80,4 +85,44 @@ inline std::optional<int> parse(TCLAP::CmdLine& cmd, int argc, char** argv, cons
 	}
 	return output->failed ? kExitUsage : kExitOk;
 }
+
+/** `--obs-lib LIB` (repeatable): observation libraries to load before a
+ *  rawlog is read (obs_libraries.h). Construct it with the other arguments,
+ *  call load() after parse() and before opening the rawlog. */
+class ObsLibOption
+{
+   public:
+	explicit ObsLibOption(TCLAP::CmdLine& cmd)
+		: arg_("", "obs-lib",
+			   "Load an observation-class library (MRPT CObservation subclasses a plugin defines) before reading "
+			   "the rawlog: a path, or a file name searched in the plugin path and by the dynamic loader "
+			   "(repeatable)",
+			   false, "LIB", cmd)
+	{
+	}
+	/** Loads the given libraries plus `declared` (e.g. a navigator config's
+	 *  declaredObservationLibraries()), searching `search_dirs` (default: the
+	 *  plugin host's). Returns kExitBadInput after printing
+	 *  "PROGRAM: error: cannot load observation library 'LIB' ..." if one fails. */
+	std::optional<int> load(const std::string& program, const std::vector<std::string>& declared = {},
+							std::optional<std::vector<std::string>> search_dirs = std::nullopt) const
+	{
+		try
+		{
+			const std::vector<std::string> dirs = search_dirs ? *search_dirs : PluginHost().searchPaths();
+			loadObservationLibraries(arg_.getValue(), dirs);
+			loadObservationLibraries(declared, dirs);
+		}
+		catch (const std::exception& e)
+		{
+			std::cerr << program << ": error: " << e.what() << "\n";
+			return kExitBadInput;
+		}
+		return std::nullopt;
+	}
+	const std::vector<std::string>& values() const { return arg_.getValue(); }
+
+   private:
+	mutable TCLAP::MultiArg<std::string> arg_;  // TCLAP's getValue() is not const
+};
 }  // namespace auvnav::cli

@@ -34,7 +34,10 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstddef>
+#include <new>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace auvnav
@@ -66,13 +69,81 @@ struct FilterContext
 	const Covariance* covariance = nullptr;
 };
 
+/** Typed, plugin-private data that travels with one Measurement from
+ *  `prepare` to `predict` (a lever arm, a beam direction, a landmark).
+ *
+ *  Contract: fixed storage inside the Measurement (kCapacity bytes, aligned
+ *  for double and Eigen's fixed-size types): no heap allocation, copied with
+ *  the Measurement. T must be trivially copyable, fit, and be no more aligned
+ *  than the storage (static_assert). The plugin writes it in `prepare` with
+ *  `m.setPayload(T{...})` (or `m.payload<T>() = ...`) and reads it in
+ *  `predict` with `m.payload<T>()`; reading a T that was not written gives
+ *  the bytes of a zero-initialised or previously written payload, so a
+ *  plugin uses one T per measurement kind (the tag can tell kinds apart). */
+class MeasurementPayload
+{
+   public:
+	static constexpr std::size_t kCapacity = 128;  //!< bytes: 16 doubles
+	static constexpr std::size_t kAlignment = 16;
+
+	template <class T>
+	static constexpr void check()
+	{
+		static_assert(std::is_trivially_copyable_v<T>, "a measurement payload must be trivially copyable");
+		static_assert(sizeof(T) <= kCapacity, "a measurement payload must fit MeasurementPayload::kCapacity");
+		static_assert(alignof(T) <= kAlignment, "a measurement payload must not need more than 16-byte alignment");
+	}
+	template <class T>
+	T& as() noexcept
+	{
+		check<T>();
+		return *std::launder(reinterpret_cast<T*>(bytes_));
+	}
+	template <class T>
+	const T& as() const noexcept
+	{
+		check<T>();
+		return *std::launder(reinterpret_cast<const T*>(bytes_));
+	}
+	template <class T>
+	T& set(const T& value) noexcept
+	{
+		check<T>();
+		return *::new (static_cast<void*>(bytes_)) T(value);
+	}
+
+   private:
+	alignas(kAlignment) unsigned char bytes_[kCapacity] = {};
+};
+
 /** One measurement for the filter. Sized by the plugin in `prepare`. */
 struct Measurement
 {
 	Eigen::VectorXd z;	//!< measured value, dimension m
 	Eigen::MatrixXd R;	//!< noise covariance (m × m), SPD
 	int tag = 0;		//!< plugin-private (e.g. ADCP cell index)
-	std::array<double, 8> aux{};  //!< plugin-private numbers h needs (e.g. cell distance)
+	//! Plugin-private numbers h needs (e.g. cell distance). Kept for existing
+	//! plugins; new code uses the typed payload below.
+	std::array<double, 8> aux{};
+	//! Plugin-private typed data for h (see MeasurementPayload): e.g.
+	//! `struct Pole { double north_m, east_m; };` written with
+	//! `m.setPayload(Pole{n, e})` in prepare, read with `m.payload<Pole>()` in predict.
+	MeasurementPayload payload_storage;
+	template <class T>
+	T& payload() noexcept
+	{
+		return payload_storage.as<T>();
+	}
+	template <class T>
+	const T& payload() const noexcept
+	{
+		return payload_storage.as<T>();
+	}
+	template <class T>
+	T& setPayload(const T& value) noexcept
+	{
+		return payload_storage.set(value);
+	}
 	std::string label;	//!< optional sub-name for statistics (e.g. "cell")
 	//! A part of the observation that is not applied (e.g. an ADCP cell below
 	//! the seabed): counted as skipped; z and R may be empty.

@@ -38,6 +38,14 @@
  *    the covariance: ok, degraded, diverged, or not_initialized (finish()).
  *  - Bad input never reaches the state: non-finite or absent IMU data,
  *    duplicate or backward timestamps, NaN measurements are counted and dropped.
+ *  - Clock jumps: an IMU sample more than `clock.max_forward_jump_s` after
+ *    the last one, or more than `clock.max_backward_jump_s` before it, is a
+ *    jump of the log's clock, not a gap to predict through: `clock.on_jump:
+ *    stop` (default) ends the run with an error naming it (process() throws
+ *    std::runtime_error); `reinitialize` starts the filter again (levelling,
+ *    first fix) from that sample on. Smaller backward steps drop the sample.
+ *    Any other observation more than max_forward_jump_s ahead of the filter
+ *    is refused as invalid (a sensor on another clock).
  */
 #include <auvnav/config.h>
 #include <auvnav/earth.h>
@@ -117,6 +125,8 @@ class Navigator
 	/** What initialisation still waits for (empty once initialised). */
 	std::string waitingFor() const;
 	std::size_t imuGaps() const { return imu_gaps_; }
+	/** IMU clock jumps handled by re-initialising (clock.on_jump: reinitialize). */
+	std::size_t clockJumps() const { return clock_jumps_; }
 	/** IMU steps re-predicted while re-filtering for delayed measurements
 	 *  (the cost of delays: compare with predictions()). */
 	std::size_t replayedPredictions() const { return replayed_predictions_; }
@@ -188,6 +198,12 @@ class Navigator
 	double apply_now_within_s_ = 0.05, max_delay_s_ = 10, checkpoint_every_s_ = 0.25;
 	std::unique_ptr<History> history_;
 	std::size_t replayed_predictions_ = 0;
+	// clock: jumps of the IMU's time beyond these are not predicted through.
+	double max_forward_jump_s_ = 10, max_backward_jump_s_ = 1;
+	bool stop_on_jump_ = true;
+	std::size_t clock_jumps_ = 0;
+	/** A jump of the IMU clock by dt at t: throws (stop) or restarts initialisation. */
+	void clockJump(double t, double dt);
 	int consistent_rejections_ = 5;			// gates.consistent_rejections (0: off)
 	double consistency_probability_ = 0.99;	// gates.consistency_probability
 	bool position_from_gps_ = false;

@@ -5,6 +5,7 @@
 #include <auvnav/obs/CObservationADCP.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/obs/CObservationUSBL.h>
 #include <auvnav/obs/CObservationThrusters.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -51,6 +52,7 @@ std::string classOf(const mrpt::obs::CObservation& o)
 	if (dynamic_cast<const auvnav::obs::CObservationPressure*>(&o)) return "pressure";
 	if (dynamic_cast<const auvnav::obs::CObservationThrusters*>(&o)) return "thrusters";
 	if (dynamic_cast<const mrpt::obs::CObservationImage*>(&o)) return "image";
+	if (dynamic_cast<const auvnav::obs::CObservationUSBL*>(&o)) return "usbl";
 	return "";
 }
 
@@ -120,6 +122,9 @@ std::string header(const std::string& cls, std::size_t n)
 	}
 	else if (cls == "image")
 		h << "file,ncols,nrows,fx,fy,cx,cy,camera_name,";
+	else if (cls == "usbl")
+		h << "measurement_time_s,latitude_deg,longitude_deg,depth_m,north_m,east_m,down_m,cov_nn,cov_ne,cov_nd,cov_en,"
+			 "cov_ee,cov_ed,cov_dn,cov_de,cov_dd,slant_range_m,transponder_id,";
 	h << kPoseColumns;
 	return h.str();
 }
@@ -133,6 +138,21 @@ std::string imuRow(const mrpt::obs::CObservationIMU& o)
 	std::string row;
 	for (auto i : idx) row += (o.has(i) ? exact(o.get(i)) : std::string()) + ",";
 	return row + poseCells(o.sensorPose);
+}
+
+/** Geodetic fixes fill latitude/longitude/depth, local ones north/east/down;
+ *  the other three cells stay empty (the importer picks the filled set). */
+std::string usblRow(const auvnav::obs::CObservationUSBL& o)
+{
+	const bool geo = o.frame == auvnav::obs::UsblFrame::Geodetic;
+	auto cell = [](double v) { return std::isnan(v) ? std::string() : exact(v); };
+	std::string row = (o.measurement_time == INVALID_TIMESTAMP ? std::string()
+																: formatSeconds7(*fromMrptTimeChecked(o.measurement_time))) +
+					  ",";
+	for (int i = 0; i < 3; ++i) row += (geo ? cell(o.position[i]) : std::string()) + ",";
+	for (int i = 0; i < 3; ++i) row += (geo ? std::string() : cell(o.position[i])) + ",";
+	for (double c : o.covariance_ned_m2) row += cell(c) + ",";
+	return row + cell(o.slant_range_m) + "," + std::to_string(o.transponder_id) + "," + poseCells(o.sensorPose);
 }
 
 std::string gpsRow(const mrpt::obs::CObservationGPS& o)
@@ -317,6 +337,20 @@ std::string sensorSpec(const std::string& label, const std::string& cls, const s
 	else if (cls == "thrusters")
 		s << "    effort: {count: {field: thruster_count}, field: 'effort_{i}', unit: " << thruster_unit
 		  << "}   # per thruster: N (force) or rpm\n";
+	else if (cls == "usbl")
+		s << "    measurement_time: {field: measurement_time_s, unit: s, optional: true}   # when the fix was taken "
+			 "(UNIX; empty: use latency_s)\n"
+			 "    latitude: {field: latitude_deg, unit: deg, optional: true}   # geodetic fix, or ...\n"
+			 "    longitude: {field: longitude_deg, unit: deg, optional: true}\n"
+			 "    depth: {field: depth_m, unit: m, optional: true}\n"
+			 "    north: {field: north_m, unit: m, optional: true}   # ... north/east/down from the navigation origin\n"
+			 "    east: {field: east_m, unit: m, optional: true}\n"
+			 "    down: {field: down_m, unit: m, optional: true}\n"
+			 "    position_covariance: {fields: [cov_nn, cov_ne, cov_nd, cov_en, cov_ee, cov_ed, cov_dn, cov_de, cov_dd], "
+			 "unit: 'm^2', optional: true}   # NED, row-major (empty: none)\n"
+			 "    slant_range: {field: slant_range_m, unit: m, optional: true}\n"
+			 "    transponder_id: {field: transponder_id}\n"
+		  << poseSpec();
 	else if (cls == "image")
 		s << "    file: {field: file}   # PNG, relative to the CSV's folder\n"
 			 "    camera: {ncols: {field: ncols}, nrows: {field: nrows}, fx: {field: fx}, fy: {field: fy}, cx: {field: cx}, "
@@ -331,7 +365,7 @@ std::vector<std::pair<std::string, std::string>> simulatorLabels()
 	// The simulator's write order at equal stamps (apps/sim/mission.cpp), which
 	// the importer keeps for equal stamps.
 	return {{"THRUSTERS", "thrusters"}, {"IMU", "imu"},		   {"DVL", "dvl"}, {"ADCP", "adcp"},
-			{"SONAR", "image"},			{"PRESSURE", "pressure"}, {"GPS", "gps"}};
+			{"SONAR", "image"},			{"PRESSURE", "pressure"}, {"GPS", "gps"},	 {"USBL", "usbl"}};
 }
 
 namespace
@@ -472,6 +506,8 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
 		}
 		else if (const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(o.get()))
 			row += exact(p->pressure_pa) + "," + exact(p->temperature_c) + "," + poseCells(p->sensorPose);
+		else if (const auto* u = dynamic_cast<const auvnav::obs::CObservationUSBL*>(o.get()))
+			row += usblRow(*u);
 		else if (const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(o.get()))
 			row += dvlRow(*d, l.max_array);
 		else if (const auto* a = dynamic_cast<const auvnav::obs::CObservationADCP*>(o.get()))

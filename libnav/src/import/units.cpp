@@ -53,6 +53,10 @@ const std::vector<Unit>& table()
 		{"rpm", UnitKind::RotationSpeed, 1},
 		{"1", UnitKind::Dimensionless, 1},
 		{"m^2/s^2", UnitKind::VelocitySquared, 1},
+		{"m^2", UnitKind::LengthSquared, 1},
+		{"s", UnitKind::Time, 1},
+		{"ms", UnitKind::Time, 1e-3},
+		{"us", UnitKind::Time, 1e-6},
 	};
 	return units;
 }
@@ -74,6 +78,8 @@ const char* kindName(UnitKind k)
 		case UnitKind::RotationSpeed: return "a rotation speed";
 		case UnitKind::Dimensionless: return "dimensionless";
 		case UnitKind::VelocitySquared: return "a velocity variance";
+		case UnitKind::LengthSquared: return "a position variance";
+		case UnitKind::Time: return "a time";
 	}
 	return "?";
 }

@@ -10,6 +10,21 @@ namespace auvnav::io
 {
 namespace
 {
+/** The "Message:" line of an MRPT exception report (which also holds a
+ *  stack trace), or the first line of any other text. */
+std::string mrptMessage(const std::string& what)
+{
+	std::istringstream lines(what);
+	for (std::string line; std::getline(lines, line);)
+	{
+		const auto m = line.find("Message:");
+		if (m == std::string::npos) continue;
+		const auto start = line.find_first_not_of(' ', m + 8);
+		if (start != std::string::npos) return line.substr(start);
+	}
+	return what.substr(0, what.find('\n'));
+}
+
 [[noreturn]] void throwTruncated(const std::string& path, std::size_t index, uint64_t offset)
 {
 	std::ostringstream msg;
@@ -66,6 +81,17 @@ mrpt::obs::CObservation::Ptr RawlogReader::next()
 			// not CExceptionEOF: being at the end of the file means truncation.
 			if (file_.checkEOF()) throwTruncated(path_, objects_read_, offset);
 			std::ostringstream msg;
+			const std::string what = e.what();
+			if (what.find("not registered") != std::string::npos)
+			{
+				// Garbage bytes or, far likelier in a well-formed file, a class
+				// from an observation library nobody loaded (obs_libraries.h).
+				msg << path_ << ": cannot read object #" << objects_read_ << " at byte " << offset
+					<< " (uncompressed): " << mrptMessage(what)
+					<< " (a corrupt rawlog, or a class whose observation library is not loaded: load it with "
+					   "--obs-lib LIB, or obs_libs in the sensor's config entry)";
+				throw RawlogError(msg.str());
+			}
 			msg << path_ << ": corrupt rawlog: cannot read object #" << objects_read_
 				<< " at byte " << offset << " (uncompressed): " << e.what();
 			throw RawlogError(msg.str());

@@ -2,7 +2,10 @@
 #include "compass.h"
 
 #include <auvnav/plugin_api.h>
+#include <auvnav/state_block_config.h>
 #include <mrpt/obs/CObservationIMU.h>
+
+#include "CObservationCompass.h"
 
 #include <cmath>
 
@@ -21,6 +24,13 @@ CompassModel::CompassModel(const auvnav::config::Node& cfg, const std::string& l
 {
 	if (sigma_rad_ > M_PI / 2) cfg.fail("sigma_deg", "a compass sigma above 90 deg carries no heading information");
 	if (!(gate_probability_ > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
+	if (cfg.has("states"))
+	{
+		const auto st = cfg.child("states");
+		st.allowOnly({"heading_bias"});
+		if (st.has("heading_bias"))
+			blocks_.push_back(auvnav::stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
+	}
 }
 
 double CompassModel::wrapAngle(double a)
@@ -43,18 +53,24 @@ auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs
 {
 	using mrpt::obs::CObservationIMU;
 	out.clear();
-	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
-	if (!imu)
+	double heading = 0;
+	if (const auto* c = dynamic_cast<const CObservationCompass*>(&obs))
+		heading = c->heading_rad;
+	else if (const auto* imu = dynamic_cast<const CObservationIMU*>(&obs))
 	{
-		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
+		if (!imu->has(mrpt::obs::IMU_YAW))
+		{
+			why = "CObservationIMU without IMU_YAW (magnetic heading)";
+			return auvnav::PrepareStatus::Invalid;
+		}
+		heading = imu->get(mrpt::obs::IMU_YAW);
+	}
+	else
+	{
+		why = std::string("expected compass_example::CObservationCompass or mrpt::obs::CObservationIMU, got ") +
+			  obs.GetRuntimeClass()->className;
 		return auvnav::PrepareStatus::Invalid;
 	}
-	if (!imu->has(mrpt::obs::IMU_YAW))
-	{
-		why = "CObservationIMU without IMU_YAW (magnetic heading)";
-		return auvnav::PrepareStatus::Invalid;
-	}
-	const double heading = imu->get(mrpt::obs::IMU_YAW);
 	if (!std::isfinite(heading))
 	{
 		why = "non-finite heading";
@@ -72,7 +88,13 @@ bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measuremen
 							 const auvnav::FilterContext& /*ctx*/, Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 1) return false;
-	z_pred[0] = yawOf(x.R_nb);
+	double bias = 0;
+	if (bias_at_ >= 0)
+	{
+		if (x.extra.size() <= bias_at_) return false;  // declared, but not in this state
+		bias = x.extra[bias_at_];
+	}
+	z_pred[0] = wrapAngle(yawOf(x.R_nb) + bias);
 	return true;
 }
 
@@ -80,4 +102,5 @@ bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measuremen
 
 // The plugin's entry point: the only symbol libauvnav_plugin_compass.so exports.
 AUVNAV_PLUGIN(compass_example::CompassModel, "compass", "1.0.0",
-			  "Magnetic compass heading (CObservationIMU IMU_YAW) on the attitude; example out-of-tree plugin")
+			  "Magnetic compass heading (own CObservationCompass, or CObservationIMU IMU_YAW) on the attitude, "
+			  "optional heading-bias state; example out-of-tree plugin")

@@ -3,13 +3,22 @@
  *  Example out-of-tree auvnav plugin "compass": a magnetic-compass heading
  *  update on the attitude.
  *
- *  Observation: mrpt::obs::CObservationIMU with IMU_YAW set: the magnetic
- *  heading [rad], clockwise from magnetic north seen from above (the yaw of
- *  the body FRD frame in the NED frame). Other IMU fields are ignored.
+ *  Observation: the plugin's own class compass_example::CObservationCompass
+ *  (heading_rad; CObservationCompass.h, in libcompass_obs.so), or an
+ *  mrpt::obs::CObservationIMU with IMU_YAW set (what auvnav-sim's compass
+ *  writes). Both carry the magnetic heading [rad], clockwise from magnetic
+ *  north seen from above (the yaw of the body FRD frame in the NED frame).
  *
- *      z = wrap(IMU_YAW + declination)          (1) [rad], true heading
- *      h = atan2(R_nb(1,0), R_nb(0,0))           yaw of R_nb (Z-Y-X Euler angles)
+ *      z = wrap(heading + declination)          (1) [rad], true heading
+ *      h = atan2(R_nb(1,0), R_nb(0,0)) + b       yaw of R_nb (Z-Y-X Euler angles)
  *      r = wrap(z − h)                           wrap to (−π, π]
+ *
+ *  b is the plugin's own state "heading_bias" [rad] when the config has
+ *  `states: {heading_bias: {sigma_deg: …}}` (auvnav/state_block_config.h;
+ *  the compass's deviation: hard iron, mounting), else 0. The navigator
+ *  appends it after the paper's 43 states (states.csv: COMPASS.heading_bias)
+ *  and propagates it with the declared process; h reads it at
+ *  x.extra[first index given by bindStates].
  *
  *  The compass is assumed aligned with the body axes (a mounting yaw offset
  *  can be folded into declination_deg). Near ±90° pitch the yaw is
@@ -17,6 +26,7 @@
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
+#include <auvnav/state.h>
 
 #include <Eigen/Core>
 #include <string>
@@ -28,7 +38,12 @@ class CompassModel final : public auvnav::SafeMeasurementModel
    public:
 	CompassModel(const auvnav::config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return auvnav::kAttitude; }
+	uint32_t uses() const noexcept override
+	{
+		return auvnav::kAttitude | (blocks_.empty() ? 0u : static_cast<uint32_t>(auvnav::kPluginStates));
+	}
+	std::vector<auvnav::StateBlockSpec> stateBlocks() const override { return blocks_; }
+	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 	/** r = wrap(z − z_pred) into (−π, π]: the boxminus of the circle. */
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
@@ -53,5 +68,7 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	double declination_rad_ = 0;
 	double sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
+	std::vector<auvnav::StateBlockSpec> blocks_;  // the heading bias, if configured
+	int bias_at_ = -1;							  // its index in NavState::extra (bindStates)
 };
 }  // namespace compass_example

@@ -1,18 +1,22 @@
 // Unit tests of the example "compass" plugin with the auvnav plugin SDK
 // (auvnav/testing/model_checks.h): the model contract on random states, the
-// angle wrapping, invalid input, a filter update across ±180°, and the built
-// module loading through the navigator's plugin host.
+// angle wrapping, invalid input, a filter update across ±180°, the built
+// module loading through the navigator's plugin host, the plugin's own
+// observation class and its own state (heading bias).
 #include <auvnav/plugin_host.h>
 #include <auvnav/testing/model_checks.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/io/CMemoryStream.h>
 #include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/serialization/CArchive.h>
 
 #include <cmath>
 #include <fstream>
 #include <sstream>
 
+#include "CObservationCompass.h"
 #include "compass.h"
 
 using compass_example::CompassModel;
@@ -210,4 +214,84 @@ TEST(Compass, ModuleLoadsThroughThePluginHost)
 	{
 		EXPECT_NE(std::string(e.what()).find("sigma_deg"), std::string::npos) << e.what();
 	}
+}
+
+// --- The plugin's own observation class (CObservationCompass, libcompass_obs).
+
+TEST(Compass, OwnClassRoundTripsThroughMrptSerialization)
+{
+	compass_example::CObservationCompass c;
+	c.sensorLabel = "COMPASS";
+	c.timestamp = mrpt::Clock::fromDouble(1492693200.25);
+	c.heading_rad = -2.5;
+	c.sensorPose = mrpt::poses::CPose3D(0.4, 0, -0.1, 0, 0, 0);
+	mrpt::io::CMemoryStream buf;
+	mrpt::serialization::archiveFrom(buf).WriteObject(&c);
+	buf.Seek(0);
+	// Read back through MRPT's class registry, as a rawlog reader does.
+	const auto obj = mrpt::serialization::archiveFrom(buf).ReadObject();
+	const auto back = std::dynamic_pointer_cast<compass_example::CObservationCompass>(obj);
+	ASSERT_TRUE(back) << obj->GetRuntimeClass()->className;
+	EXPECT_EQ(back->sensorLabel, "COMPASS");
+	EXPECT_EQ(back->timestamp, c.timestamp);
+	EXPECT_DOUBLE_EQ(back->heading_rad, -2.5);
+	EXPECT_DOUBLE_EQ(back->sensorPose.x(), 0.4);
+}
+
+TEST(Compass, ReadsItsOwnClassLikeTheImuYaw)
+{
+	at::TestContext tc;
+	CompassModel model(configText("{declination_deg: 10}"), "COMPASS");
+	compass_example::CObservationCompass c;
+	c.heading_rad = 30 * kDeg;
+	std::vector<auvnav::Measurement> own, imu;
+	std::string why;
+	ASSERT_EQ(model.prepare(c, tc.ctx(), own, why), auvnav::PrepareStatus::Ok) << why;
+	ASSERT_EQ(model.prepare(*compassObs(30 * kDeg), tc.ctx(), imu, why), auvnav::PrepareStatus::Ok) << why;
+	ASSERT_EQ(own.size(), 1u);
+	EXPECT_NEAR(own[0].z[0], 40 * kDeg, 1e-12);
+	EXPECT_EQ(own[0].z[0], imu[0].z[0]);
+	EXPECT_TRUE(at::IsWellFormed(model, c, tc.ctx(), at::RandomNavState(4)));
+}
+
+// --- The plugin's own state (heading_bias).
+
+TEST(Compass, HeadingBiasStateIsDeclaredAndRead)
+{
+	at::TestContext tc;
+	CompassModel model(configText("states: {heading_bias: {sigma_deg: 3, process: constant}}"), "COMPASS");
+	const auto blocks = model.stateBlocks();
+	ASSERT_EQ(blocks.size(), 1u);
+	EXPECT_EQ(blocks[0].name, "heading_bias");
+	EXPECT_EQ(blocks[0].dimension(), 1);
+	EXPECT_NEAR(blocks[0].sigma[0], 3 * kDeg, 1e-15);
+	EXPECT_EQ(blocks[0].process, auvnav::StateProcess::RandomConstant);
+	EXPECT_TRUE(model.uses() & auvnav::kPluginStates);
+	model.bindStates(2);  // after 2 coordinates of another plugin
+
+	std::vector<auvnav::Measurement> out;
+	std::string why;
+	ASSERT_EQ(model.prepare(*compassObs(0), tc.ctx(), out, why), auvnav::PrepareStatus::Ok) << why;
+	auvnav::NavState x;
+	x.R_nb = at::rotationYpr(50 * kDeg, 0, 0);
+	x.extra.resize(3);
+	x.extra << 0.7, -0.7, 4 * kDeg;
+	EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], 54 * kDeg, 1e-12);
+	x.extra.resize(2);	// the state the model was bound into is missing: h refuses
+	Eigen::VectorXd z(1);
+	EXPECT_FALSE(model.predict(x, out[0], tc.ctx(), z));
+}
+
+TEST(Compass, WithoutStatesConfigThereIsNoState)
+{
+	const CompassModel m(configText("{}"), "COMPASS");
+	EXPECT_TRUE(m.stateBlocks().empty());
+	EXPECT_FALSE(m.uses() & auvnav::kPluginStates);
+}
+
+TEST(Compass, MisspelledStateKeysAreRefused)
+{
+	for (const char* bad : {"states: {heading_bais: {sigma_deg: 3}}", "states: {heading_bias: {sigma: 3}}",
+							"states: {heading_bias: {sigma_deg: 3, process: walk}}"})
+		EXPECT_THROW(CompassModel(configText(bad), "COMPASS"), auvnav::config::ConfigError) << bad;
 }

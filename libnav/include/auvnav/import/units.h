@@ -37,7 +37,9 @@ enum class UnitKind
 	Force,
 	RotationSpeed,
 	Dimensionless,
-	VelocitySquared
+	VelocitySquared,
+	LengthSquared,
+	Time
 };
 
 struct Unit

@@ -1,16 +1,20 @@
 // make_compass_rawlog OUT.rawlog [SECONDS] [HEADING_DEG] [LATITUDE_DEG]
 //
-// A small synthetic rawlog for the package test: a vehicle at rest at the
-// surface with heading HEADING_DEG, seen by a perfect IMU at 100 Hz (label IMU:
-// Earth rate and normal gravity at LATITUDE_DEG), a pressure sensor at 5 Hz
-// (PRESSURE, 0.3 m below the centre of gravity, which floats 0.25 m deep) and a
-// magnetic compass at 10 Hz (COMPASS: CObservationIMU with IMU_YAW only, zero
-// declination). Built against the INSTALLED auvnav package (auvnav::nav for
-// the Earth model and RawlogWriter, auvnav::obs for the pressure class).
+// A small synthetic rawlog with the example's own observation class: a vehicle
+// at rest at the surface with heading HEADING_DEG, seen by a perfect IMU at
+// 100 Hz (label IMU: Earth rate and normal gravity at LATITUDE_DEG), a pressure
+// sensor at 5 Hz (PRESSURE, 0.3 m below the centre of gravity, which floats
+// 0.25 m deep) and the compass at 10 Hz (COMPASS: compass_example::
+// CObservationCompass, zero declination). Built against the installed auvnav
+// package (auvnav::nav for the Earth model and RawlogWriter, auvnav::obs for
+// the pressure class) and libcompass_obs (the compass class): what a driver
+// or converter that records your sensor into a rawlog looks like.
 #include <auvnav/earth.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <mrpt/obs/CObservationIMU.h>
+
+#include "CObservationCompass.h"
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -69,10 +73,10 @@ int main(int argc, char** argv)
 			}
 			if (k % 10 == 5)
 			{
-				auto c = mrpt::obs::CObservationIMU::Create();
+				auto c = compass_example::CObservationCompass::Create();
 				c->sensorLabel = "COMPASS";
 				c->timestamp = stamp;
-				c->set(IMU_YAW, heading);
+				c->heading_rad = heading;
 				writer.write(*c);
 			}
 		}
