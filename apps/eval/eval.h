@@ -8,6 +8,7 @@
  */
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,12 @@ struct Evaluation
 /** Reads RUN/states.csv (and RUN/nis.csv if present) and the truth CSV;
  *  keeps one sample per `every_s`. Throws std::runtime_error naming file/line. */
 Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s = 1.0);
+
+/** The sample of the first state at or after `after_truth_start_s` seconds
+ *  after the truth's first row (every state, no subsampling); nullopt if
+ *  there is none or no truth there. auvnav-experiment takes its error at the
+ *  same instant (the first prediction at or after the end of the denial). */
+std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s);
 
 /** Two-sided 95 % bounds of the mean of `runs` independent χ²(dof) values. */
 std::pair<double, double> chi2MeanBounds(int dof, int runs, double probability = 0.95);

@@ -225,6 +225,16 @@ std::string monteCarlo(const std::vector<Evaluation>& evs, double settle_s, cons
 	}
 	return buf;
 }
+/** The --at line: the horizontal error at one instant. */
+std::string errorAt(const std::string& run, const std::string& truth, double after_start_s)
+{
+	const auto s = sampleAt(run, truth, after_start_s);
+	if (!s) throw std::runtime_error(run + "/states.csv: no state with truth at or after " + std::to_string(after_start_s) + " s");
+	char line[256];
+	std::snprintf(line, sizeof line, "Horizontal error at %.3f s after the truth's start: %.6f m (state at %.6f)\n",
+				  after_start_s, s->pos_err_ned.head<2>().norm(), s->t);
+	return line;
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -236,6 +246,7 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> out("o", "out", "Output folder", true, "", "DIR", cmd);
 	TCLAP::ValueArg<double> every("", "every", "Seconds between evaluated samples", false, 1.0, "S", cmd);
 	TCLAP::ValueArg<double> settle("", "settle", "Monte Carlo: also report the NEES fractions from S seconds after the start (after the initial alignment)", false, 0.0, "S", cmd);
+	TCLAP::ValueArg<double> at("", "at", "Also report the first run's horizontal error at the first state S seconds or more after the truth's first row (as auvnav-experiment measures it: give it initialization_s + denial_s; needs a state per prediction, e.g. auvnav-run --set outputs.rate_hz=1000)", false, NAN, "S", cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-eval")) return *code;
 	try
 	{
@@ -252,6 +263,7 @@ int main(int argc, char** argv)
 		std::vector<std::string> figures;
 		std::string md = "# Evaluation of " + r.front() + "\n\n" + singleRun(evs.front(), out.getValue(), figures);
 		if (evs.size() > 1) md += "\n## Monte Carlo\n\n" + monteCarlo(evs, settle.getValue(), out.getValue(), figures);
+		if (!std::isnan(at.getValue())) md += "\n" + errorAt(r.front(), tr.front(), at.getValue());
 		md += "\nFigures:";
 		for (const auto& f : figures) md += " " + f;
 		md += "\n";

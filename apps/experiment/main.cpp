@@ -2,11 +2,12 @@
 // missions (config/experiments/denial_table.yaml) and compares the drift
 // during DVL dropouts with and without model aiding (dvl_dropout.yaml).
 #include <auvnav/config.h>
-#include <auvnav/io/rawlog.h>
+#include <auvnav/io/trajectory.h>
 #include <auvnav/obs_libraries.h>
 #include <auvnav/navigator.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/cli.h>
+#include <auvnav/rawlog_run.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,7 +18,6 @@
 #include <iostream>
 #include <numeric>
 
-#include "ground_truth.h"
 #include "mission.h"
 
 namespace fs = std::filesystem;
@@ -39,9 +39,10 @@ struct Outcome
 };
 
 /** Runs the navigator on `rawlog` with the denial and returns the error and
- *  2σ at the end of the denial window. */
+ *  2σ at the end of the denial window: at the first prediction at or after
+ *  it, against the truth interpolated there (io::at, as auvnav-eval does). */
 Outcome runOne(const config::Node& nav_cfg, PluginHost& host, const fs::path& rawlog,
-			   const std::vector<sim::TruthRow>& truth, const Configuration& c, double init_s, double denial_s)
+			   const io::Trajectory& truth, const Configuration& c, double init_s, double denial_s)
 {
 	Navigator nav(nav_cfg, host);
 	DenialWindow w;
@@ -53,14 +54,13 @@ Outcome runOne(const config::Node& nav_cfg, PluginHost& host, const fs::path& ra
 	Outcome o;
 	nav.on_predict = [&](const Navigator& n) {
 		if (!std::isnan(o.error_m) || n.time() < t_eval) return;
-		const auto& tr = sim::truthAt(truth, n.time());
+		const auto tr = io::at(truth, n.time());
 		o.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
 		const auto& P = n.filter().covariance();
 		// 2σ horizontal: twice the root of the summed north/east variances.
 		o.two_sigma_m = 2 * std::sqrt(P(idx::pos, idx::pos) + P(idx::pos + 1, idx::pos + 1));
 	};
-	io::RawlogReader reader(rawlog.string());
-	while (auto obs = reader.next()) nav.process(*obs);
+	runRawlog(nav, rawlog.string()).rethrow();
 	return o;
 }
 /** Position drift during DVL dropouts of one run: the horizontal error vector
@@ -74,7 +74,7 @@ struct DropoutDrift
 };
 
 DropoutDrift runDropouts(const config::Node& nav_cfg, PluginHost& host, const fs::path& rawlog,
-						 const std::vector<sim::TruthRow>& truth, const std::vector<std::string>& deny, double from_s,
+						 const io::Trajectory& truth, const std::vector<std::string>& deny, double from_s,
 						 const std::string& dvl_label, double min_gap_s)
 {
 	Navigator nav(nav_cfg, host);
@@ -94,7 +94,7 @@ DropoutDrift runDropouts(const config::Node& nav_cfg, PluginHost& host, const fs
 			if (st.label == dvl_label) accepted = st.accepted + st.recovered;
 		if (accepted == last_accepted || n.time() < t_from) return;
 		last_accepted = accepted;
-		const Eigen::Vector2d e = (n.bodyPosition_n() - sim::truthAt(truth, n.time()).p_n).head<2>();
+		const Eigen::Vector2d e = (n.bodyPosition_n() - io::at(truth, n.time()).p_n).head<2>();
 		if (!std::isnan(t_last) && n.time() - t_last >= min_gap_s)
 		{
 			d.drift_m += (e - e_last).norm();
@@ -104,13 +104,12 @@ DropoutDrift runDropouts(const config::Node& nav_cfg, PluginHost& host, const fs
 		t_last = n.time();
 		e_last = e;
 	};
-	io::RawlogReader reader(rawlog.string());
-	while (auto obs = reader.next()) nav.process(*obs);
+	runRawlog(nav, rawlog.string()).rethrow();
 	return d;
 }
 
 /** The DVL-dropout comparison (config/experiments/dvl_dropout.yaml). */
-int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int max_seeds)
+int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int max_seeds, bool keep_rawlogs)
 {
 	const auto spec = sim::MissionSpec::load(ex.filePath("mission"));
 	const auto nav_cfg = config::Node::load(ex.filePath("navigator"));
@@ -124,7 +123,7 @@ int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int ma
 	std::vector<Configuration> configs;
 	for (const auto& c : ex.sequence("configurations")) configs.push_back({c.string("name"), c.strings("deny")});
 	ex.checkAllKeysUsed();
-	static PluginHost host;
+	PluginHost host;  // one for the experiment's runs: each plugin is loaded once
 	loadObservationLibraries(declaredObservationLibraries(nav_cfg), host.searchPaths());
 	{ const Navigator probe(nav_cfg, host); }  // refuses a bad navigator file before the first simulation
 	fs::create_directories(out_dir);
@@ -135,7 +134,7 @@ int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int ma
 	{
 		const fs::path dir = fs::path(out_dir) / ("seed_" + std::to_string(seed));
 		const auto summary = sim::runMission(spec, seed, dir.string());
-		const auto truth = sim::readTruth(dir / "ground_truth.csv");
+		const auto truth = io::readGroundTruth(dir / "ground_truth.csv");
 		for (std::size_t i = 0; i < configs.size(); ++i)
 		{
 			const DropoutDrift d =
@@ -150,7 +149,7 @@ int dropoutExperiment(const config::Node& ex, const std::string& out_dir, int ma
 						configs[i].name.c_str(), d.gaps, d.gap_s, d.drift_m, 60 * d.rate());
 			std::fflush(stdout);
 		}
-		fs::remove(summary.rawlog_path);
+		if (!keep_rawlogs) fs::remove(summary.rawlog_path);
 	}
 	std::ostringstream md;
 	md << "| Filter measurements used | DVL gaps | time without DVL | drift during the gaps | drift rate |\n"
@@ -182,13 +181,15 @@ int main(int argc, char** argv)
 	TCLAP::UnlabeledValueArg<std::string> exp_file("experiment", "Experiment YAML", true, "", "EXPERIMENT.yaml", cmd);
 	TCLAP::ValueArg<std::string> out("o", "out", "Output directory", true, "", "DIR", cmd);
 	TCLAP::ValueArg<int> seeds("n", "seeds", "Use only the first N seeds of the file", false, 0, "N", cmd);
+	TCLAP::SwitchArg keep_rawlogs("", "keep-rawlogs", "Keep each seed's simulated rawlog in DIR/seed_N (to rerun or evaluate a run)", cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-experiment")) return *code;
 	try
 	{
 		obs::registerAllClasses();
 		const auto ex = config::Node::load(exp_file.getValue());
 		const std::string kind = ex.string("kind", "denial_table");
-		if (kind == "dvl_dropout") return dropoutExperiment(ex, out.getValue(), seeds.getValue());
+		if (kind == "dvl_dropout")
+			return dropoutExperiment(ex, out.getValue(), seeds.getValue(), keep_rawlogs.getValue());
 		if (kind != "denial_table")
 			throw std::runtime_error(exp_file.getValue() + ": kind '" + kind +
 									 "' is neither 'denial_table' nor 'dvl_dropout'");
@@ -204,7 +205,7 @@ int main(int argc, char** argv)
 			configs.push_back({c.string("name"), c.strings("deny"), c.number("paper_uncertainty_2sigma_m", NAN),
 							   c.number("paper_error_m", NAN)});
 		ex.checkAllKeysUsed();
-		static PluginHost host;
+		PluginHost host;  // one for the experiment's runs: each plugin is loaded once
 		// The plugins' declared observation libraries (obs_libraries.h), also so
 		// that their `obs_libs` keys count as read.
 		loadObservationLibraries(declaredObservationLibraries(nav_cfg), host.searchPaths());
@@ -217,7 +218,7 @@ int main(int argc, char** argv)
 		{
 			const fs::path dir = fs::path(out.getValue()) / ("seed_" + std::to_string(seed));
 			const auto summary = sim::runMission(spec, seed, dir.string());
-			const auto truth = sim::readTruth(dir / "ground_truth.csv");
+			const auto truth = io::readGroundTruth(dir / "ground_truth.csv");
 			for (std::size_t i = 0; i < configs.size(); ++i)
 			{
 				const Outcome o = runOne(nav_cfg, host, summary.rawlog_path, truth, configs[i], init_s, denial_s);
@@ -229,7 +230,7 @@ int main(int argc, char** argv)
 							o.error_m, o.two_sigma_m);
 				std::fflush(stdout);
 			}
-			fs::remove(summary.rawlog_path);  // keep the truth, drop the bulky log
+			if (!keep_rawlogs.getValue()) fs::remove(summary.rawlog_path);  // keep the truth, drop the bulky log
 		}
 		std::ostringstream md;
 		md << "| Filter measurements used | 2σ uncertainty after " << denial_s << " s (mean) | error after "

@@ -4,6 +4,7 @@
 //
 // Exit codes: 0 success, 1 usage or output error, 2 unreadable/corrupt rawlog
 // (the summary of what was read before the error is still printed).
+#include <auvnav/io/json.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationADCP.h>
 #include <auvnav/obs/CObservationDVL.h>
@@ -318,82 +319,50 @@ void printSummary(const LogSummary& log, std::ostream& out)
 
 // -------------------------------------------------------------------- JSON
 
-std::string jsonString(const std::string& s)
+// Per-class facts as extra members of the sensor's object.
+void addFacts(const SensorSummary& s, auvnav::io::Json& j)
 {
-	std::ostringstream o;
-	o << '"';
-	for (const unsigned char c : s)
-	{
-		if (c == '"' || c == '\\')
-			o << '\\' << c;
-		else if (c == '\n')
-			o << "\\n";
-		else if (c < 0x20)
-			o << "\\u" << std::hex << std::setw(4) << std::setfill('0') << int(c) << std::dec;
-		else
-			o << c;
-	}
-	o << '"';
-	return o.str();
-}
-
-std::string jsonNumber(double v)
-{
-	if (!std::isfinite(v)) return "null";  // JSON has no NaN/Inf
-	std::ostringstream o;
-	o << std::setprecision(12) << v;
-	return o.str();
-}
-
-// Per-class facts as extra JSON members (each preceded by ",\n").
-std::string jsonFacts(const SensorSummary& s, const std::string& indent)
-{
-	const auto member = [&](const char* key, const std::string& value)
-	{ return ",\n" + indent + jsonString(key) + ": " + value; };
-	if (isClass(s, "auvnav::obs::CObservationDVL"))
-		return member("bottom_lock_fraction", jsonNumber(bottomLockFraction(s)));
-	if (isClass(s, "auvnav::obs::CObservationADCP"))
-		return member("mean_valid_cells_per_profile", jsonNumber(meanValidCells(s)));
+	if (isClass(s, "auvnav::obs::CObservationDVL")) j["bottom_lock_fraction"] = bottomLockFraction(s);
+	if (isClass(s, "auvnav::obs::CObservationADCP")) j["mean_valid_cells_per_profile"] = meanValidCells(s);
 	if (isClass(s, "auvnav::obs::CObservationPressure"))
-		return member("depth_min_m", jsonNumber(s.depth_min_m)) +
-		       member("depth_max_m", jsonNumber(s.depth_max_m));
-	if (isClass(s, "mrpt::obs::CObservationGPS")) return member("gps_fixes", std::to_string(s.gps_fixes));
+	{
+		j["depth_min_m"] = s.depth_min_m;
+		j["depth_max_m"] = s.depth_max_m;
+	}
+	if (isClass(s, "mrpt::obs::CObservationGPS")) j["gps_fixes"] = s.gps_fixes;
 	if (isClass(s, "auvnav::obs::CObservationThrusters"))
-		return member("thruster_count_min", std::to_string(s.thrusters_min)) +
-		       member("thruster_count_max", std::to_string(s.thrusters_max));
-	return "";
+	{
+		j["thruster_count_min"] = s.thrusters_min;
+		j["thruster_count_max"] = s.thrusters_max;
+	}
 }
 
-void writeJsonSensor(const LogSummary& log, const SensorSummary& s, std::ostream& out)
+auvnav::io::Json sensorJson(const LogSummary& log, const SensorSummary& s)
 {
-	const std::string in = "      ";
-	out << "    {\n"
-	    << in << "\"label\": " << jsonString(s.label) << ",\n"
-	    << in << "\"class\": " << jsonString(s.class_name) << ",\n"
-	    << in << "\"count\": " << s.count << ",\n"
-	    << in << "\"first_s\": " << jsonNumber(secondsSinceStart(log, s.earliest)) << ",\n"
-	    << in << "\"last_s\": " << jsonNumber(secondsSinceStart(log, s.latest)) << ",\n"
-	    << in << "\"mean_rate_hz\": " << jsonNumber(meanRate_hz(s)) << ",\n"
-	    << in << "\"timestamps_backwards\": " << s.backwards << ",\n"
-	    << in << "\"timestamps_duplicated\": " << s.duplicates << jsonFacts(s, in) << "\n"
-	    << "    }";
+	auvnav::io::Json j;
+	j["label"] = s.label;
+	j["class"] = s.class_name;
+	j["count"] = s.count;
+	j["first_s"] = secondsSinceStart(log, s.earliest);
+	j["last_s"] = secondsSinceStart(log, s.latest);
+	j["mean_rate_hz"] = meanRate_hz(s);
+	j["timestamps_backwards"] = s.backwards;
+	j["timestamps_duplicated"] = s.duplicates;
+	addFacts(s, j);
+	return j;
 }
 
 void writeJson(const LogSummary& log, std::ostream& out)
 {
-	out << "{\n"
-	    << "  \"file\": " << jsonString(log.path) << ",\n"
-	    << "  \"complete\": " << (log.error.empty() ? "true" : "false") << ",\n"
-	    << "  \"error\": " << (log.error.empty() ? "null" : jsonString(log.error)) << ",\n"
-	    << "  \"observations\": " << log.observations << ",\n"
-	    << "  \"actions_skipped\": " << log.actions_skipped << ",\n"
-	    << "  \"sensors\": [";
-	for (std::size_t i = 0; i < log.sensors.size(); ++i)
-	{
-		out << (i ? ",\n" : "\n");
-		writeJsonSensor(log, log.sensors[i], out);
-	}
-	out << (log.sensors.empty() ? "]\n" : "\n  ]\n") << "}\n";
+	auvnav::io::Json j;
+	j["file"] = log.path;
+	j["complete"] = log.error.empty();
+	j["error"] = log.error.empty() ? auvnav::io::Json() : auvnav::io::Json(log.error);
+	j["observations"] = log.observations;
+	j["actions_skipped"] = log.actions_skipped;
+	j["sensors"] = auvnav::io::Json::array();
+	for (const auto& s : log.sensors) j["sensors"].push_back(sensorJson(log, s));
+	out << auvnav::io::jsonText(j);
 }
 
 // Returns false (after telling stderr why) if the file cannot be written.

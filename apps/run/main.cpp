@@ -1,8 +1,8 @@
 // auvnav-run: the navigator on an MRPT rawlog. See README.md.
-#include <auvnav/io/rawlog.h>
 #include <auvnav/navigator.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/cli.h>
+#include <auvnav/rawlog_run.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -49,10 +49,10 @@ int main(int argc, char** argv)
 	const auto t0 = std::chrono::steady_clock::now();
 	auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
 
+	std::unique_ptr<auvnav::PluginHost> host;  // declared before nav: outlives the models
 	std::unique_ptr<auvnav::Navigator> nav;
 	std::unique_ptr<auvnav::run::RunOutputs> outputs;
 	bool write_updates = true;
-	auvnav::PluginHost* host_ptr = nullptr;
 	try
 	{
 		auto cfg = auvnav::config::Node::load(config.getValue());
@@ -67,13 +67,12 @@ int main(int argc, char** argv)
 		if (cfg.has("plugin_paths"))
 			for (const auto& p : cfg.strings("plugin_paths"))
 				paths.push_back((std::filesystem::path(config.getValue()).parent_path() / p).string());
-		static auvnav::PluginHost host(paths);	// outlives the models
-		host_ptr = &host;
+		host = std::make_unique<auvnav::PluginHost>(paths);
 		// Observation libraries (--obs-lib, the sensors' obs_libs) before the
 		// plugins, which may link them, and before the rawlog is opened.
-		if (const auto code = obs_libs.load("auvnav-run", auvnav::declaredObservationLibraries(cfg), host.searchPaths()))
+		if (const auto code = obs_libs.load("auvnav-run", auvnav::declaredObservationLibraries(cfg), host->searchPaths()))
 			return *code;
-		nav = std::make_unique<auvnav::Navigator>(cfg, host);
+		nav = std::make_unique<auvnav::Navigator>(cfg, *host);
 		for (const auto& d : deny.getValue())
 		{
 			auvnav::DenialWindow w;
@@ -99,7 +98,6 @@ int main(int argc, char** argv)
 		std::cerr << "auvnav-run: error: " << e.what() << "\n";
 		return 2;
 	}
-	(void)host_ptr;
 
 	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
 	nav->on_predict = [&](const auvnav::Navigator& n) { outputs->onState(n); };
@@ -138,30 +136,18 @@ int main(int argc, char** argv)
 		outputs->onPositionFix(label, t, m, r);
 		if (live) live->onFix(label, t, m, r);
 	};
-	std::string error;
 	double next_progress = 0.5;
-	try
-	{
-		auvnav::io::RawlogReader reader(rawlog.getValue());
-		while (!g_stop)
-		{
-			const auto obs = reader.next();
-			if (!obs) break;
-			nav->process(*obs);
-			if (progress && wall() > next_progress)
-			{
-				next_progress = wall() + 0.5;
-				const double data_s = nav->time() - nav->startTime();
-				std::fprintf(stderr, "\r  %8.1f s of data processed, %6.0fx real time   ", data_s, data_s / wall());
-			}
-		}
-	}
-	catch (const std::exception& e)
-	{
-		error = e.what();
-	}
+	auvnav::RunCallbacks loop;
+	loop.stop = [] { return g_stop != 0; };
+	loop.on_observation = [&](const auvnav::Navigator& n) {
+		if (!progress || wall() <= next_progress) return;
+		next_progress = wall() + 0.5;
+		const double data_s = n.time() - n.startTime();
+		std::fprintf(stderr, "\r  %8.1f s of data processed, %6.0fx real time   ", data_s, data_s / wall());
+	};
+	// A rawlog error ends the run but not the outputs: reported below, exit 2.
+	const std::string error = auvnav::runRawlog(*nav, rawlog.getValue(), loop).error;
 	if (progress) std::fprintf(stderr, "\r%60s\r", "");
-	nav->finish();
 	outputs->flush();
 	outputs->writeSummary(*nav, wall(), g_stop != 0, rawlog.getValue(), error);
 

@@ -1,5 +1,6 @@
 #include "run_outputs.h"
 
+#include <auvnav/io/json.h>
 #include <auvnav/state.h>
 
 #include <Eigen/Geometry>
@@ -15,22 +16,6 @@ namespace auvnav::run
 namespace
 {
 constexpr double kRad2Deg = 180.0 / M_PI;
-
-std::string jsonEscape(const std::string& s)
-{
-	std::string o;
-	for (char c : s)
-	{
-		if (c == '"' || c == '\\') o += '\\';
-		if (static_cast<unsigned char>(c) < 0x20)
-		{
-			o += ' ';
-			continue;
-		}
-		o += c;
-	}
-	return o;
-}
 
 std::string num(double v)
 {
@@ -174,50 +159,45 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 							  const std::string& error) const
 {
 	const double data_s = nav.startTime() > 0 ? nav.time() - nav.startTime() : 0.0;
-	std::ostringstream j;
-	j << "{\n  \"rawlog\": \"" << jsonEscape(rawlog) << "\",\n";
-	j << "  \"completed\": " << (interrupted || !error.empty() ? "false" : "true") << ",\n";
-	if (!error.empty()) j << "  \"error\": \"" << jsonEscape(error) << "\",\n";
-	j << "  \"initialized\": " << (nav.initialized() ? "true" : "false") << ",\n";
+	io::Json j;
+	j["rawlog"] = rawlog;
+	j["completed"] = !interrupted && error.empty();
+	if (!error.empty()) j["error"] = error;
+	j["initialized"] = nav.initialized();
 	const auto& h = nav.health();
-	j << "  \"status\": \"" << navStatusName(h.status()) << "\",\n";
-	j << "  \"status_reason\": \"" << jsonEscape(h.reason()) << "\",\n";
-	j << "  \"worst_status\": \"" << navStatusName(h.worst()) << "\",\n";
-	j << "  \"worst_status_reason\": \"" << jsonEscape(h.worstReason()) << "\",\n";
-	j << "  \"worst_status_since_s\": " << num(h.worstSince_s()) << ",\n";
-	j << "  \"data_duration_s\": " << num(data_s) << ",\n";
-	j << "  \"wall_time_s\": " << num(wall_s) << ",\n";
-	j << "  \"real_time_factor\": " << num(wall_s > 0 ? data_s / wall_s : 0) << ",\n";
-	j << "  \"predictions\": " << nav.predictions() << ",\n";
-	j << "  \"imu_gaps\": " << nav.imuGaps() << ",\n";
-	j << "  \"replayed_predictions\": " << nav.replayedPredictions() << ",\n";
-	j << "  \"cholesky_repairs\": " << nav.filter().choleskyRepairs() << ",\n";
-	j << "  \"sensors\": [\n";
-	const auto stats = nav.stats();
-	for (std::size_t i = 0; i < stats.size(); ++i)
-	{
-		const auto& s = stats[i];
-		j << "    {\"label\": \"" << jsonEscape(s.label) << "\", \"plugin\": \"" << jsonEscape(s.plugin)
-		  << "\", \"accepted\": " << s.accepted << ", \"recovered\": " << s.recovered
-		  << ", \"rejected\": " << s.rejected << ", \"invalid\": " << s.invalid << ", \"skipped\": " << s.skipped
-		  << ", \"denied\": " << s.denied << ", \"late\": " << s.late << ", \"delayed\": " << s.delayed
-		  << ", \"before_init\": " << s.before_init
-		  << ", \"mean_nis_per_dim\": " << num(s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN)
-		  << ", \"last_problem\": \"" << jsonEscape(s.last_problem) << "\"}" << (i + 1 < stats.size() ? "," : "")
-		  << "\n";
-	}
-	j << "  ],\n  \"final_sigma\": {";
-	const auto& names = names_;
+	j["status"] = navStatusName(h.status());
+	j["status_reason"] = h.reason();
+	j["worst_status"] = navStatusName(h.worst());
+	j["worst_status_reason"] = h.worstReason();
+	j["worst_status_since_s"] = h.worstSince_s();
+	j["data_duration_s"] = data_s;
+	j["wall_time_s"] = wall_s;
+	j["real_time_factor"] = wall_s > 0 ? data_s / wall_s : 0;
+	j["predictions"] = nav.predictions();
+	j["imu_gaps"] = nav.imuGaps();
+	j["replayed_predictions"] = nav.replayedPredictions();
+	j["cholesky_repairs"] = nav.filter().choleskyRepairs();
+	j["sensors"] = io::Json::array();
+	for (const auto& s : nav.stats())
+		j["sensors"].push_back({{"label", s.label},
+								{"plugin", s.plugin},
+								{"accepted", s.accepted},
+								{"recovered", s.recovered},
+								{"rejected", s.rejected},
+								{"invalid", s.invalid},
+								{"skipped", s.skipped},
+								{"denied", s.denied},
+								{"late", s.late},
+								{"delayed", s.delayed},
+								{"before_init", s.before_init},
+								{"mean_nis_per_dim", s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN},
+								{"last_problem", s.last_problem}});
+	io::Json sigma = io::Json::object();
 	const auto& P = nav.filter().covariance();
-	for (int i = 0; i < static_cast<int>(names.size()) && i < P.rows(); ++i)
-		j << (i ? ", " : "") << "\"" << names[i] << "\": " << num(nav.initialized() ? std::sqrt(std::max(P(i, i), 0.0)) : NAN);
-	j << "}\n}\n";
-	const fs::path tmp = fs::path(dir_) / "summary.json.tmp";
-	{
-		std::ofstream f(tmp);
-		f << j.str();
-	}
-	fs::rename(tmp, fs::path(dir_) / "summary.json");
+	for (int i = 0; i < static_cast<int>(names_.size()) && i < P.rows(); ++i)
+		sigma[names_[i]] = nav.initialized() ? std::sqrt(std::max(P(i, i), 0.0)) : NAN;
+	j["final_sigma"] = sigma;
+	io::writeJsonAtomically(fs::path(dir_) / "summary.json", j);
 }
 
 }  // namespace auvnav::run

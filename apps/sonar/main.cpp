@@ -7,6 +7,7 @@
 // annotated fan images DIR/fan_NNNNNN.png and, with --truth, DIR/score.md;
 // --export-polar DIR2 also saves the raw frames as PNGs (a PNG-folder input).
 #include <auvnav/io/rawlog.h>
+#include <auvnav/io/trajectory.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/sonar/frame.h>
 #include <auvnav/sonar/pipeline.h>
@@ -24,7 +25,6 @@
 #include <regex>
 
 #include "scoring.h"
-#include "trajectory.h"
 
 namespace fs = std::filesystem;
 using namespace auvnav;
@@ -32,6 +32,7 @@ using namespace auvnav;
 namespace
 {
 constexpr double kDeg = M_PI / 180;
+constexpr double kMaxTrajectoryGap_s = 2.0;  // no pose interpolated across a longer gap
 
 struct Frame
 {
@@ -180,8 +181,8 @@ int main(int argc, char** argv)
 		const auto cfg_file = config::Node::load(config.getValue());
 		const auto cfg = sonar::SonarConfig::fromConfig(cfg_file);
 		cfg_file.checkAllKeysUsed();
-		std::optional<sonarapp::TumTrajectory> trajectory;
-		if (!traj.getValue().empty()) trajectory = sonarapp::TumTrajectory::load(traj.getValue());
+		std::optional<auvnav::io::Trajectory> trajectory;
+		if (!traj.getValue().empty()) trajectory = auvnav::io::readTum(traj.getValue());
 		std::optional<sonarapp::SonarTruth> sim_truth;
 		if (!truth.getValue().empty()) sim_truth = sonarapp::SonarTruth::load(truth.getValue());
 		fs::create_directories(out.getValue());
@@ -196,7 +197,7 @@ int main(int argc, char** argv)
 			std::optional<sonar::SonarPose> pose;
 			double nav_heading = NAN;
 			if (trajectory)
-				if (const auto p = trajectory->at(f.t))
+				if (const auto p = auvnav::io::interpolate(*trajectory, f.t, kMaxTrajectoryGap_s))
 				{
 					const Eigen::Matrix3d R = p->q_nb.toRotationMatrix();
 					pose = sonar::sonarPose(cfg, p->p_n, R, P, cfg.heading_sigma_rad);

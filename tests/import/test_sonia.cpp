@@ -7,6 +7,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -177,17 +178,15 @@ TrackExtent runNavigator(const fs::path& rawlog, const fs::path& out)
 	return e;
 }
 
+//! summary.json: the count `what` (accepted, rejected, ...) of the sensor labelled DVL; 0 if none.
 std::size_t dvlCount(const fs::path& summary, const std::string& what)
 {
-	// summary.json: the DVL sensor's entry holds "accepted": N, "rejected": N.
 	std::ifstream f(summary);
-	std::stringstream ss;
-	ss << f.rdbuf();
-	const std::string s = ss.str();
-	const auto at = s.find("\"label\": \"DVL\"");
-	if (at == std::string::npos) return 0;
-	const auto k = s.find("\"" + what + "\": ", at);
-	return k == std::string::npos ? 0 : std::stoul(s.substr(k + what.size() + 4));
+	const auto j = nlohmann::json::parse(f, nullptr, false);
+	if (j.is_discarded() || !j.contains("sensors")) return 0;
+	for (const auto& sensor : j["sensors"])
+		if (sensor.value("label", "") == "DVL") return sensor.value(what, std::size_t{0});
+	return 0;
 }
 }  // namespace
 
@@ -255,22 +254,21 @@ std::string fileText(const fs::path& p)
 	return ss.str();
 }
 
-//! summary.json: the value of "key": "..." at the top level (the first occurrence).
+//! summary.json: the top-level string `key` ("" if absent or not JSON).
 std::string jsonString(const std::string& s, const std::string& key)
 {
-	const auto k = s.find("\"" + key + "\": \"");
-	if (k == std::string::npos) return "";
-	const auto b = k + key.size() + 5;
-	return s.substr(b, s.find('"', b) - b);
+	const auto j = nlohmann::json::parse(s, nullptr, false);
+	return j.is_object() ? j.value(key, std::string()) : std::string();
 }
 
-//! summary.json: a sensor entry's count ("label": L, ..., "plugin": P, ..., "what": N).
+//! summary.json: the count `what` of the sensor entry with this label and plugin (-1 if none).
 long sensorCount(const std::string& s, const std::string& label, const std::string& plugin, const std::string& what)
 {
-	const auto at = s.find("{\"label\": \"" + label + "\", \"plugin\": \"" + plugin + "\"");
-	if (at == std::string::npos) return -1;
-	const auto k = s.find("\"" + what + "\": ", at);
-	return k == std::string::npos ? -1 : std::stol(s.substr(k + what.size() + 4));
+	const auto j = nlohmann::json::parse(s, nullptr, false);
+	if (!j.is_object() || !j.contains("sensors")) return -1;
+	for (const auto& sensor : j["sensors"])
+		if (sensor.value("label", "") == label && sensor.value("plugin", "") == plugin) return sensor.value(what, -1L);
+	return -1;
 }
 }  // namespace
 

@@ -4,7 +4,6 @@
 
 #include <unistd.h>
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -24,12 +23,13 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 {
 	auto cfg = config::Node::load(config_file);
 	for (const auto& [k, v] : overrides) cfg.set(k, v);
-	static PluginHost host;
+	PluginHost host;  // outlives nav (declared first): the models keep their libraries loaded
 	Navigator nav(cfg, host);
 	for (const auto& d : denials) nav.addDenial(d);
 	RunResult res;
 	double next_row = 0;
-	nav.on_predict = [&](const Navigator& n) {
+	RunCallbacks callbacks;
+	callbacks.on_predict = [&](const Navigator& n) {
 		if (n.time() < next_row) return;
 		next_row = std::floor(n.time()) + 1.0;
 		EstimateRow r;
@@ -41,14 +41,12 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 		r.P_att = P.block<3, 3>(idx::att, idx::att);
 		res.rows.push_back(r);
 	};
-	const auto t0 = std::chrono::steady_clock::now();
-	io::RawlogReader reader(rawlog);
-	while (auto o = reader.next()) nav.process(*o);
-	res.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-	res.data_s = nav.time() - nav.startTime();
-	res.stats = nav.stats();
+	const RunSummary run = runRawlog(nav, rawlog, callbacks);
+	run.rethrow();
+	res.wall_s = run.wall_s;
+	res.data_s = run.data_s;
+	res.stats = run.stats;
 	res.repairs = nav.filter().choleskyRepairs();
-	nav.finish();
 	res.status = nav.health().status();
 	res.worst = nav.health().worst();
 	res.status_reason = nav.health().reason();

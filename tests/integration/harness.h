@@ -3,7 +3,9 @@
 // in-process, and line the estimate up with the ground truth.
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
+#include <auvnav/io/trajectory.h>
 #include <auvnav/navigator.h>
+#include <auvnav/rawlog_run.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -11,13 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "ground_truth.h"
-
 namespace auvnav::test
 {
-using sim::readTruth;
-using sim::TruthRow;
-using sim::truthAt;
+// The ground truth through libnav's one reader (auvnav/io/trajectory.h), as
+// auvnav-experiment and auvnav-eval read it.
+using TruthRow = io::TrajectoryPoint;
+inline std::vector<TruthRow> readTruth(const std::filesystem::path& csv) { return io::readGroundTruth(csv); }
+/** The truth interpolated at t (clamped to the ends). */
+inline TruthRow truthAt(const std::vector<TruthRow>& truth, double t) { return io::at(truth, t); }
 
 struct EstimateRow
 {
@@ -39,7 +42,9 @@ struct RunResult
 	std::string status_reason;
 };
 
-/** Runs the navigator with config `config_file` plus `overrides` (KEY=VALUE). */
+/** Runs the navigator with config `config_file` plus `overrides` (KEY=VALUE)
+ *  over the rawlog through libnav's run loop (rawlog_run.h); a rawlog or
+ *  navigator error is rethrown. */
 RunResult runNavigator(const std::string& config_file, const std::string& rawlog,
 					   const std::vector<std::pair<std::string, std::string>>& overrides,
 					   const std::vector<DenialWindow>& denials = {});

@@ -49,7 +49,7 @@ SquareOutcome runSquare(unsigned seed)
 	auto cfg = config::Node::load(kConfig);
 	cfg.set("filter.initial.heading_deg", fmt(true_heading0 / kDeg + 10.0));
 	cfg.set("filter.initial.heading_sigma_deg", "30");
-	static PluginHost host;
+	PluginHost host;
 	Navigator nav(cfg, host);
 	DenialWindow gps_off;  // GPS before diving only
 	gps_off.labels = {"GPS"};
@@ -68,8 +68,7 @@ SquareOutcome runSquare(unsigned seed)
 		const auto& tr = truthAt(truth, n.time());
 		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
-	io::RawlogReader reader((dir / "square_5x50m.rawlog").string());
-	while (auto o = reader.next()) nav.process(*o);
+	runRawlog(nav, (dir / "square_5x50m.rawlog").string()).rethrow();
 	EXPECT_TRUE(recorded);
 	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;
 	fs::remove_all(dir);

@@ -319,7 +319,7 @@ Outcome runMode(const Mode& mode, unsigned seed)
 	const double t0 = truth.front().t_unix;
 
 	auto cfg = config::Node::load(kRepo + "/config/flatfish.yaml");
-	static PluginHost host;
+	PluginHost host;
 	Navigator nav(cfg, host);
 	// Inertial + DVL + pressure, GPS until the dive: the DVL is the only
 	// velocity aid, so its mode is what the error depends on. With GPS denied
@@ -346,15 +346,11 @@ Outcome runMode(const Mode& mode, unsigned seed)
 		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
 		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
-	const auto t_start = std::chrono::steady_clock::now();
-	io::RawlogReader reader((dir / (spec.name + ".rawlog")).string());
-	while (!recorded)
-	{
-		const auto o = reader.next();
-		if (!o) break;
-		nav.process(*o);
-	}
-	out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+	RunCallbacks until_recorded;
+	until_recorded.stop = [&] { return recorded; };
+	const RunSummary run = runRawlog(nav, (dir / (spec.name + ".rawlog")).string(), until_recorded);
+	run.rethrow();
+	out.wall_s = run.wall_s;
 	EXPECT_TRUE(at_dive && recorded);
 	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;
 	for (const auto& st : nav.stats())

@@ -36,17 +36,16 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 		const fs::path dir = test::simulate("config/missions/square_5x50m.yaml", seed);
 		auto cfg = config::Node::load(repo + "/config/flatfish.yaml");
 		cfg.set("filter.vehicle_model_file", prior_file.string());
-		static PluginHost host;
+		PluginHost host;
 		Navigator nav(cfg, host);
 		nav.addDenial({{"GPS"}, 1240.0, 1e9});	// GPS only before the dive
-		io::RawlogReader reader((dir / "square_5x50m.rawlog").string());
 		double sigma0 = -1;
-		while (auto o = reader.next())
-		{
-			nav.process(*o);
-			if (sigma0 < 0 && nav.initialized())
-				sigma0 = std::sqrt(nav.filter().covariance()(idx::damping_lin, idx::damping_lin));
-		}
+		RunCallbacks first_sigma;
+		first_sigma.on_observation = [&](const Navigator& n) {
+			if (sigma0 < 0 && n.initialized())
+				sigma0 = std::sqrt(n.filter().covariance()(idx::damping_lin, idx::damping_lin));
+		};
+		runRawlog(nav, (dir / "square_5x50m.rawlog").string(), first_sigma).rethrow();
 		const double estimate = physicalSub(nav.filter().state().Dl_sub)(0, 0);
 		const double sigma = std::sqrt(nav.filter().covariance()(idx::damping_lin, idx::damping_lin));
 		const bool ok = std::abs(estimate - truth) < std::abs(prior - truth) && sigma < sigma0;

@@ -107,8 +107,7 @@ Outcome runSquare(const fs::path& dir, bool states)
 			out.sigma[i] = std::sqrt(C(idx::extra + i, idx::extra + i));
 		}
 	};
-	io::RawlogReader reader((dir / "square_5x50m.rawlog").string());
-	while (auto o = reader.next()) nav.process(*o);
+	runRawlog(nav, (dir / "square_5x50m.rawlog").string()).rethrow();
 	EXPECT_TRUE(recorded);
 	EXPECT_NE(nav.health().status(), NavStatus::Diverged);
 	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;

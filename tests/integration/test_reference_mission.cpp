@@ -19,7 +19,7 @@ TEST(ReferenceMission, FastFilterMatchesTheDenseReferenceOnTheSampleMission)
 {
 	const std::string repo = AUVNAV_SOURCE_DIR;
 	auto cfg = config::Node::load(repo + "/config/flatfish.yaml");
-	static PluginHost host;
+	PluginHost host;  // declared first: outlives the navigator and the models
 	Navigator nav(cfg, host);  // used for start-up (levelling, GPS start) only
 	// Models to drive both filters by hand, from the same configuration.
 	std::map<std::string, ModelPtr> models;

@@ -134,8 +134,7 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 		sum2 += e * e;
 		++n;
 	};
-	io::RawlogReader reader((dir / "usbl_sample.rawlog").string());
-	while (auto o = reader.next()) nav.process(*o);
+	runRawlog(nav, (dir / "usbl_sample.rawlog").string()).rethrow();
 	ASSERT_EQ(nav.pluginStates().size(), 1u);
 	const int at = nav.pluginStates()[0].offset;
 	const Eigen::Vector2d b = nav.filter().state().extra.segment<2>(at - idx::core_dim);

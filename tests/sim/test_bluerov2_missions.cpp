@@ -14,7 +14,7 @@
 #include <iterator>
 #include <map>
 
-#include "ground_truth.h"
+#include <auvnav/io/trajectory.h>
 #include "mission.h"
 #include "sensors.h"
 
@@ -108,7 +108,7 @@ TEST(BlueRov2Missions, PoolSquareRunsWithMagnetometerDvlAndDepthOnlyAndJitteredS
 	EXPECT_EQ(s.stamp_duplicates + s.stamp_out_of_order, 0u);  // off by default
 
 	// The start is the first truth row; the square's corners are visited.
-	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	const auto truth = io::readGroundTruth(d / "ground_truth.csv");
 	ASSERT_FALSE(truth.empty());
 	EXPECT_NEAR(truth.front().p_n.x(), 2, 1e-6);
 	EXPECT_NEAR(truth.front().p_n.y(), 2, 1e-6);
@@ -186,7 +186,7 @@ TEST(BlueRov2Missions, LawnmowerSurveyIsAboutTwentyMinutesAtTenMetres)
 	EXPECT_GT(s.submerged_distance_m, 450);    // ten 45 m lines and nine 5 m steps
 	EXPECT_GT(s.observations.at("GPS"), 30u);  // surface phases only
 	EXPECT_GT(double(s.dvl_locked) / s.dvl_total, 0.95);
-	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	const auto truth = io::readGroundTruth(d / "ground_truth.csv");
 	EXPECT_NEAR(yawOf(truth.front().q_nb), -20 * kDeg, 1e-6);
 	fs::remove_all(d);
 }
@@ -203,7 +203,7 @@ TEST(BlueRov2Missions, TransitIsALongStraightLineAtFifteenMetres)
 	// Straight: the leg runs from where the vehicle is when it gets under way
 	// (it drifts with the current while floating and diving) to the target;
 	// until 5 m before the target the truth stays within 1.5 m of that line.
-	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	const auto truth = io::readGroundTruth(d / "ground_truth.csv");
 	const Eigen::Vector2d target(848.5, 848.5);
 	std::size_t i0 = 0;
 	while (i0 + 1 < truth.size() && truth[i0].p_n.z() < 14) ++i0;  // dived
@@ -314,7 +314,7 @@ TEST(BlueRov2Missions, MagnetometerHeadingInThePoolRawlogMatchesTheTruth)
 	const auto spec = sim::MissionSpec::load(missionFile("bluerov2_pool_square"));
 	const fs::path d = scratch("maghead");
 	const auto s = sim::runMission(spec, 6, d.string());
-	const auto truth = sim::readTruth(d / "ground_truth.csv");
+	const auto truth = io::readGroundTruth(d / "ground_truth.csv");
 	const auto mag = spec.sensors.child("magnetometer");
 	const Eigen::Vector3d hard_ut = mag.vector3("hard_iron_ut");
 	const auto si = mag.numbers("soft_iron");
@@ -331,7 +331,7 @@ TEST(BlueRov2Missions, MagnetometerHeadingInThePoolRawlogMatchesTheTruth)
 		    100.0 * Eigen::Vector3d(imu->get(mrpt::obs::IMU_MAG_X), imu->get(mrpt::obs::IMU_MAG_Y),
 		                            imu->get(mrpt::obs::IMU_MAG_Z));
 		const double t = mrpt::Clock::toDouble(o->timestamp);
-		const auto& row = sim::truthAt(truth, t);
+		const auto& row = io::at(truth, t);
 		const Eigen::Matrix3d R_nb = row.q_nb.toRotationMatrix();
 		const double yaw = std::atan2(R_nb(1, 0), R_nb(0, 0));
 		// Level the body-axes field with the true roll and pitch: R_z(yaw)ᵀ R_nb.

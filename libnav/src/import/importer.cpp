@@ -2,6 +2,7 @@
 #include <auvnav/import/csv_source.h>
 #include <auvnav/import/importer.h>
 #include <auvnav/import/time_format.h>
+#include <auvnav/io/json.h>
 #include <auvnav/io/rawlog.h>
 #include <mrpt/system/filesystem.h>
 
@@ -677,31 +678,6 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 
 namespace
 {
-std::string jsonEscape(const std::string& s)
-{
-	std::string o;
-	for (char c : s)
-	{
-		switch (c)
-		{
-			case '"': o += "\\\""; break;
-			case '\\': o += "\\\\"; break;
-			case '\n': o += "\\n"; break;
-			case '\t': o += "\\t"; break;
-			default:
-				if (static_cast<unsigned char>(c) < 0x20)
-				{
-					char b[8];
-					std::snprintf(b, sizeof b, "\\u%04x", c);
-					o += b;
-				}
-				else
-					o += c;
-		}
-	}
-	return o;
-}
-
 std::string num(double v, int prec = 6)
 {
 	if (!std::isfinite(v)) return "null";
@@ -716,40 +692,43 @@ double spanSeconds(const SensorReport& s) { return s.has_span ? static_cast<doub
 
 std::string ImportReport::toJson() const
 {
-	std::ostringstream o;
-	o << "{\n  \"spec\": \"" << jsonEscape(spec_path) << "\",\n  \"output\": \"" << jsonEscape(out_rawlog)
-	  << "\",\n  \"completed\": " << (completed ? "true" : "false") << ",\n  \"error\": "
-	  << (error.empty() ? "null" : "\"" + jsonEscape(error) + "\"") << ",\n  \"written\": " << written
-	  << ",\n  \"reorder_window_s\": " << num(reorder_window_s) << ",\n  \"sensors\": [";
-	for (std::size_t i = 0; i < sensors.size(); ++i)
+	using io::Json;
+	Json j;
+	j["spec"] = spec_path;
+	j["output"] = out_rawlog;
+	j["completed"] = completed;
+	j["error"] = error.empty() ? Json() : Json(error);
+	j["written"] = written;
+	j["reorder_window_s"] = reorder_window_s;
+	j["sensors"] = Json::array();
+	for (const auto& s : sensors)
 	{
-		const auto& s = sensors[i];
-		o << (i ? "," : "") << "\n    {\"label\": \"" << jsonEscape(s.label) << "\", \"class\": \""
-		  << jsonEscape(s.observation_class) << "\", \"source\": \"" << jsonEscape(s.source)
-		  << "\",\n     \"rows_read\": " << s.rows_read << ", \"written\": " << s.written
-		  << ", \"rejected\": " << s.rejected << ", \"rejected_by_reason\": {";
-		bool first = true;
+		Json by_reason = Json::object();
 		for (const auto& [reason, n] : s.rejected_by_reason)
-		{
-			o << (first ? "" : ", ") << "\"" << jsonEscape(reason) << "\": {\"count\": " << n << ", \"first\": \""
-			  << jsonEscape(s.first_rejected_where.at(reason)) << "\"}";
-			first = false;
-		}
-		o << "},\n     \"first_time_s\": " << (s.has_span ? num(s.first_ns * 1e-9, 17) : "null")
-		  << ", \"last_time_s\": " << (s.has_span ? num(s.last_ns * 1e-9, 17) : "null")
-		  << ", \"span_s\": " << num(spanSeconds(s)) << ", \"median_rate_hz\": " << num(s.median_rate_hz)
-		  << ",\n     \"repeated_stamps\": " << s.repeated_stamps << ", \"backward_stamps\": " << s.backward_stamps
-		  << ", \"reordered\": " << s.reordered << ", \"gaps\": " << s.gaps
-		  << ", \"largest_gap_s\": " << num(s.largest_gap_s) << ", \"largest_gap_at_s\": " << num(s.largest_gap_at_s, 17)
-		  << ", \"clock_jumps\": " << s.clock_jumps << ", \"clock_jump_notes\": [";
-		for (std::size_t k = 0; k < s.clock_jump_notes.size(); ++k)
-			o << (k ? ", " : "") << "\"" << jsonEscape(s.clock_jump_notes[k]) << "\"";
-		o << "], \"notes\": [";
-		for (std::size_t k = 0; k < s.notes.size(); ++k) o << (k ? ", " : "") << "\"" << jsonEscape(s.notes[k]) << "\"";
-		o << "]}";
+			by_reason[reason] = {{"count", n}, {"first", s.first_rejected_where.at(reason)}};
+		const Json no_time;	// null: no observation written
+		j["sensors"].push_back({{"label", s.label},
+								{"class", s.observation_class},
+								{"source", s.source},
+								{"rows_read", s.rows_read},
+								{"written", s.written},
+								{"rejected", s.rejected},
+								{"rejected_by_reason", by_reason},
+								{"first_time_s", s.has_span ? Json(s.first_ns * 1e-9) : no_time},
+								{"last_time_s", s.has_span ? Json(s.last_ns * 1e-9) : no_time},
+								{"span_s", spanSeconds(s)},
+								{"median_rate_hz", s.median_rate_hz},
+								{"repeated_stamps", s.repeated_stamps},
+								{"backward_stamps", s.backward_stamps},
+								{"reordered", s.reordered},
+								{"gaps", s.gaps},
+								{"largest_gap_s", s.largest_gap_s},
+								{"largest_gap_at_s", s.largest_gap_at_s},
+								{"clock_jumps", s.clock_jumps},
+								{"clock_jump_notes", s.clock_jump_notes},
+								{"notes", s.notes}});
 	}
-	o << "\n  ]\n}\n";
-	return o.str();
+	return io::jsonText(j);
 }
 
 std::string ImportReport::toMarkdown() const

@@ -25,6 +25,8 @@ class CsvTable
 		std::size_t i = 0;
 		for (std::string name; std::getline(ss, name, ',');) col_[name] = i++;
 	}
+	/** Whether the header names the column. */
+	bool has(const std::string& name) const { return col_.count(name) > 0; }
 	/** Index of a required column. */
 	std::size_t column(const std::string& name) const
 	{
