@@ -546,32 +546,11 @@ bool Navigator::applyDelayed(std::size_t slot_index, const mrpt::obs::CObservati
 	restoreLastCheckpoint();
 	for (std::size_t k = H.checkpoints.back().event; k < ins; ++k) replayEvent(k);
 
-	Slot& slot = *slots_[slot_index];
-	SensorStats& st = slot.stats;
-	const FilterContext ctx = context(t_m);
-	std::string why;
-	slot.buffer.clear();
-	const PrepareStatus ps = slot.model->prepare(obs, ctx, slot.buffer, why);
 	std::size_t resume = ins;
-	if (ps == PrepareStatus::Ok)
+	if (prepareAndApply(slot_index, obs, t_m, ins))
 	{
-		++st.delayed;
-		applyMeasurements(slot, slot.buffer, ctx, t_m, true);
-		History::Event e;
-		e.t = t_s_;
-		e.slot = slot_index;
-		e.t_obs = t_m;
-		e.ctx = ctx;
-		e.ms = std::move(slot.buffer);
-		H.events.insert(H.events.begin() + static_cast<std::ptrdiff_t>(ins - H.first), std::move(e));
+		++slots_[slot_index]->stats.delayed;
 		resume = ins + 1;
-	}
-	else if (ps == PrepareStatus::Skip)
-		++st.skipped;
-	else
-	{
-		++st.invalid;
-		st.last_problem = why;
 	}
 	for (std::size_t k = resume; k < H.end(); ++k) replayEvent(k);
 	return true;
@@ -686,33 +665,40 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 			st.last_problem = "observation older than filter.delayed_measurements.max_delay_s";
 			continue;
 		}
-		const FilterContext ctx = context(t_m);
-		std::string why;
-		slot.buffer.clear();
-		const PrepareStatus ps = slot.model->prepare(obs, ctx, slot.buffer, why);
-		if (ps == PrepareStatus::Skip)
-		{
-			++st.skipped;
-			continue;
-		}
-		if (ps == PrepareStatus::Invalid)
-		{
-			++st.invalid;
-			st.last_problem = why;
-			continue;
-		}
-		applyMeasurements(slot, slot.buffer, ctx, t_m, true);
-		if (history_)
-		{
-			History::Event e;
-			e.t = t_s_;
-			e.slot = i;
-			e.t_obs = t_m;
-			e.ctx = ctx;
-			e.ms = std::move(slot.buffer);
-			history_->events.push_back(std::move(e));
-		}
+		prepareAndApply(i, obs, t_m, history_ ? history_->end() : 0);
 	}
+}
+
+bool Navigator::prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m, std::size_t at)
+{
+	Slot& slot = *slots_[slot_index];
+	SensorStats& st = slot.stats;
+	const FilterContext ctx = context(t_m);
+	std::string why;
+	slot.buffer.clear();
+	const PrepareStatus ps = slot.model->prepare(obs, ctx, slot.buffer, why);
+	if (ps == PrepareStatus::Skip)
+	{
+		++st.skipped;
+		return false;
+	}
+	if (ps == PrepareStatus::Invalid)
+	{
+		++st.invalid;
+		st.last_problem = why;
+		return false;
+	}
+	applyMeasurements(slot, slot.buffer, ctx, t_m, true);
+	if (!history_) return true;
+	History::Event e;
+	e.t = t_s_;
+	e.slot = slot_index;
+	e.t_obs = t_m;
+	e.ctx = ctx;
+	e.ms = std::move(slot.buffer);
+	auto& events = history_->events;
+	events.insert(events.begin() + static_cast<std::ptrdiff_t>(at - history_->first), std::move(e));
+	return true;
 }
 
 void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx,

@@ -166,6 +166,11 @@ class Navigator
 	/** Applies an observation at its past time t_m by re-filtering. False: no
 	 *  checkpoint old enough (the caller counts it late). */
 	bool applyDelayed(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m);
+	/** Prepares `obs` for slot `slot_index` at measurement time t_m on the
+	 *  current state and applies it, counting a Skip or Invalid; true when
+	 *  measurements were applied. With a history, they are moved into the
+	 *  event inserted at absolute index `at` (the end for in-order ones). */
+	bool prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m, std::size_t at);
 	/** Takes a checkpoint before IMU event `event` if checkpoint_every_s has
 	 *  passed since the last one. */
 	void checkpointIfDue(std::size_t event);
