@@ -69,6 +69,7 @@ void ManifoldUkf::initialize(const NavState& x0, const Covariance& P0)
 									std::to_string(P0.cols()) + ", process model " + std::to_string(model_.dim()));
 	n_ = x0.dim();
 	w_ = UtWeights::make(n_, ut_);
+	variance_floor_ = (1e-12 * P0.diagonal()).cwiseMax(1e-30);
 	L_.setZero(n_, n_);
 	x_ = x0;
 	P_ = P0;
@@ -84,16 +85,34 @@ void ManifoldUkf::restore(const NavState& x, const Covariance& P)
 	P_ = P;
 }
 
+void repairCovariance(Covariance& P, const TangentVector& variance_floor)
+{
+	symmetrize(P);
+	TangentVector sigma(P.rows());
+	for (int i = 0; i < P.rows(); ++i)
+	{
+		if (!(std::isfinite(P(i, i)) && P(i, i) > 0))
+		{
+			// Nothing to keep: decorrelate the state and give it its floor.
+			P.row(i).setZero();
+			P.col(i).setZero();
+			P(i, i) = variance_floor[i];
+		}
+		sigma[i] = std::sqrt(P(i, i));
+	}
+	Covariance C = sigma.cwiseInverse().asDiagonal() * P * sigma.cwiseInverse().asDiagonal();
+	Eigen::SelfAdjointEigenSolver<Covariance> es(C);
+	const TangentVector ev = es.eigenvalues().cwiseMax(1e-9);
+	C = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
+	// Unit diagonal again: a congruence by a positive diagonal keeps C PD.
+	const TangentVector d = C.diagonal().cwiseSqrt().cwiseInverse();
+	P = (sigma.cwiseProduct(d)).asDiagonal() * C * (sigma.cwiseProduct(d)).asDiagonal();
+	symmetrize(P);
+}
+
 void ManifoldUkf::repairCovariance()
 {
-	// Nearest symmetric positive-definite matrix by eigenvalue clipping.
-	symmetrize(P_);
-	Eigen::SelfAdjointEigenSolver<Covariance> es(P_);
-	TangentVector ev = es.eigenvalues();
-	const double floor = std::max(1e-15, 1e-12 * ev.cwiseAbs().maxCoeff());
-	ev = ev.cwiseMax(floor);
-	P_ = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
-	symmetrize(P_);
+	auvnav::repairCovariance(P_, variance_floor_);
 	++repairs_;
 }
 

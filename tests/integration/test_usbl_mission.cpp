@@ -81,7 +81,8 @@ void print(const char* what, unsigned seed, const Figures& f)
 
 void checkSeed(unsigned seed)
 {
-	const Figures immediate = run(simulate(kMission, seed, {{"usbl.latency_s", "0"}}, "_lat0"));
+	const fs::path immediate_dir = simulate(kMission, seed, {{"usbl.latency_s", "0"}}, "_lat0");
+	const Figures immediate = run(immediate_dir);
 	const fs::path late_dir = simulate(kMission, seed, {}, "_lat2");
 	const Figures handled = run(late_dir);
 	const fs::path untimed_dir = simulate(kMission, seed, {{"usbl.report_measurement_time", "false"}}, "_untimed");
@@ -102,6 +103,7 @@ void checkSeed(unsigned seed)
 	// ... and measurably better than ignoring the latency.
 	EXPECT_GT(ignored.rms_m, 2.0 * handled.rms_m) << "seed " << seed;
 	EXPECT_LT(handled.final_m, handled.two_sigma_m * 1.5) << "seed " << seed;
+	fs::remove_all(immediate_dir);
 	fs::remove_all(late_dir);
 	fs::remove_all(untimed_dir);
 }

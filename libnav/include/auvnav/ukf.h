@@ -107,6 +107,14 @@ struct UpdateResult
 	Eigen::VectorXd innovation;	 //!< ν = z ⊟ z̄, once the innovation covariance was formed
 };
 
+/** Makes a symmetric P positive definite without changing any state's
+ *  variance: eigenvalue clipping of the correlation matrix D⁻¹PD⁻¹
+ *  (D = diag(σ), floor 1e-9) renormalised to unit diagonal, so a repair
+ *  changes correlations only and a large variance (position, m²) cannot
+ *  inflate a small one (a gyro bias). A variance that is not positive and
+ *  finite is first set to variance_floor(i) (> 0). */
+void repairCovariance(Covariance& P, const TangentVector& variance_floor);
+
 class ManifoldUkf
 {
    public:
@@ -159,6 +167,7 @@ class ManifoldUkf
 	Eigen::MatrixXd z_sigma_;
 	std::array<NavState, 2 * idx::adcp_bias + 1> sigma_scratch_;	 // prediction sigma points
 	std::size_t repairs_ = 0;
+	TangentVector variance_floor_;	// 1e-12 × the initial variances (repairCovariance)
 };
 
 }  // namespace auvnav
