@@ -105,8 +105,8 @@ void repairCovariance(Covariance& P, const TangentVector& variance_floor)
 	const TangentVector ev = es.eigenvalues().cwiseMax(1e-9);
 	C = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
 	// Unit diagonal again: a congruence by a positive diagonal keeps C PD.
-	const TangentVector d = C.diagonal().cwiseSqrt().cwiseInverse();
-	P = (sigma.cwiseProduct(d)).asDiagonal() * C * (sigma.cwiseProduct(d)).asDiagonal();
+	const TangentVector scale = sigma.cwiseQuotient(C.diagonal().cwiseSqrt());
+	P = scale.asDiagonal() * C * scale.asDiagonal();
 	symmetrize(P);
 }
 
