@@ -23,10 +23,10 @@
 
 namespace
 {
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 1;
-constexpr int kExitInput = 2;
-constexpr int kExitRefused = 3;
+using auvnav::cli::kExitOk;
+using auvnav::cli::kExitUsage;
+constexpr int kExitInput = auvnav::cli::kExitBadInput;
+constexpr int kExitRefused = auvnav::cli::kExitNoResult;  // a fit the readings do not support
 
 std::string join(const std::vector<std::string>& v)
 {
@@ -222,8 +222,7 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-calibrate-mag: error: " << e.what() << "\n";
-		return kExitInput;
+		return auvnav::cli::fail("auvnav-calibrate-mag", e.what());
 	}
 	if (s.raw_ut.empty())
 	{

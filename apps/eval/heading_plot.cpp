@@ -264,7 +264,6 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-heading-plot: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-heading-plot", e.what());
 	}
 }

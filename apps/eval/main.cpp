@@ -272,8 +272,7 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-eval: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-eval", e.what());
 	}
-	return 0;
+	return auvnav::cli::kExitOk;
 }

@@ -260,8 +260,7 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-experiment: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-experiment", e.what());
 	}
 	return 0;
 }

@@ -28,13 +28,14 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-export: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-export", e.what());
 	}
+	if (report.sensors.empty())  // an empty log: nothing to export is not a success
+		return auvnav::cli::fail("auvnav-export", rawlog.getValue() + ": no observations exported (an empty rawlog?)");
 	std::cout << "auvnav-export: " << rawlog.getValue() << " -> " << out.getValue() << "\n";
 	for (const auto& s : report.sensors)
 		std::cout << "  " << s.label << " (" << s.observation_class << "): " << s.rows << " rows in " << s.file << "\n";
 	for (const auto& [reason, n] : report.skipped_by_reason) std::cout << "  skipped " << n << " × " << reason << "\n";
 	std::cout << "  import spec: " << report.spec_file << "\n";
-	return 0;
+	return auvnav::cli::kExitOk;
 }

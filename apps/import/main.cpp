@@ -17,9 +17,8 @@
 
 namespace
 {
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 1;
-constexpr int kExitBadInput = 2;
+using auvnav::cli::kExitBadInput;
+using auvnav::cli::kExitOk;
 
 std::string withoutRawlogSuffix(const std::string& out)
 {
@@ -68,8 +67,7 @@ int main(int argc, char** argv)
 		}
 		catch (const std::exception& e)
 		{
-			std::cerr << "auvnav-import: error: " << e.what() << "\n";
-			return kExitBadInput;
+			return auvnav::cli::fail("auvnav-import", e.what());
 		}
 	}
 
@@ -87,12 +85,18 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		report.error = e.what();
-		std::cerr << "auvnav-import: error: " << e.what() << "\n";
+		report.error = auvnav::oneLineReason(e.what());
+		auvnav::cli::fail("auvnav-import", e.what());
 		// A rawlog cut short by an error must not pass for the whole log; a
 		// file the import never opened (an input, an earlier rawlog) is kept.
 		if (report.output_created) std::remove(opt.out_rawlog.c_str());
 		rc = kExitBadInput;
+	}
+	if (rc == kExitOk && report.written == 0)
+	{
+		// Every row rejected (--lenient) or no rows at all: not a rawlog to pass on.
+		rc = auvnav::cli::fail("auvnav-import", "no observations written (rows read: see the report)");
+		if (report.output_created) std::remove(opt.out_rawlog.c_str());
 	}
 	if (!report.sensors.empty())
 	{

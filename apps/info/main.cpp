@@ -29,9 +29,9 @@
 
 namespace
 {
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 1;
-constexpr int kExitBadRawlog = 2;
+using auvnav::cli::kExitOk;
+using auvnav::cli::kExitUsage;
+constexpr int kExitBadRawlog = auvnav::cli::kExitBadInput;
 
 // Depth from absolute pressure with a fixed sea-water model; good enough for a
 // summary (the navigator uses its configured density and atmosphere).
@@ -151,38 +151,6 @@ void addObservation(LogSummary& log, const mrpt::obs::CObservation& obs)
 	++log.observations;
 }
 
-std::string trimmed(const std::string& s)
-{
-	const auto b = s.find_first_not_of(" \t\r\n");
-	const auto e = s.find_last_not_of(" \t\r\n");
-	return b == std::string::npos ? "" : s.substr(b, e - b + 1);
-}
-
-// RawlogError texts embed MRPT exception reports ("==== MRPT exception ====",
-// "Message:", "Location:", call stacks, nested "Original exception:"), which
-// is too much for a one-line error. Keep our own context (before the first
-// report) and MRPT's innermost "Message:", which names the root cause.
-std::string conciseError(const std::string& what)
-{
-	const auto report_at = what.find("==== MRPT exception ====");
-	std::string cause;
-	if (report_at != std::string::npos)
-	{
-		std::istringstream lines(what.substr(report_at));
-		for (std::string line; std::getline(lines, line);)
-		{
-			const auto m = line.find("Message:");
-			if (m != std::string::npos && !trimmed(line.substr(m + 8)).empty())
-				cause = trimmed(line.substr(m + 8));
-		}
-	}
-	std::string text = trimmed(what.substr(0, report_at));
-	if (!cause.empty()) text += " " + cause;
-	std::replace(text.begin(), text.end(), '\n', ' ');
-	std::replace(text.begin(), text.end(), '\r', ' ');
-	return text;
-}
-
 // Reads the whole file; a RawlogError ends the reading and is recorded in
 // `log.error` so that what was read so far can still be reported.
 void summarise(LogSummary& log)
@@ -199,7 +167,7 @@ void summarise(LogSummary& log)
 	}
 	catch (const auvnav::io::RawlogError& e)
 	{
-		log.error = conciseError(e.what());
+		log.error = auvnav::oneLineReason(e.what());
 	}
 }
 
@@ -437,10 +405,9 @@ int main(int argc, char** argv)
 	const bool json_ok = options->json.empty() || writeJsonFile(log, options->json);
 	std::cout.flush();  // the error line must come after the summary
 
-	if (!log.error.empty())
-	{
-		std::cerr << "auvnav-info: error: " << log.error << "\n";
-		return kExitBadRawlog;
-	}
+	if (!log.error.empty()) return auvnav::cli::fail("auvnav-info", log.error, kExitBadRawlog);
+	// An empty file reads as a clean empty log (rawlog.h), but it is no dataset.
+	if (log.observations == 0 && log.actions_skipped == 0)
+		return auvnav::cli::fail("auvnav-info", log.path + ": no observations (an empty rawlog)", kExitBadRawlog);
 	return json_ok ? kExitOk : kExitUsage;
 }

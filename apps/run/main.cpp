@@ -17,9 +17,15 @@
 
 namespace
 {
-volatile std::sig_atomic_t g_stop = 0;
-void onSignal(int) { g_stop = 1; }
+volatile std::sig_atomic_t g_stop = 0;  // the signal that asked the run to stop, or 0
+void onSignal(int signal) { g_stop = signal; }
+
+// Output files go to the kernel at least this often (wall time): a killed run
+// loses at most this much of its outputs, in whole lines (run_outputs.h).
+constexpr double kFlushEvery_s = 1.0;
 }  // namespace
+
+namespace cli = auvnav::cli;
 
 int main(int argc, char** argv)
 {
@@ -53,6 +59,7 @@ int main(int argc, char** argv)
 	std::unique_ptr<auvnav::Navigator> nav;
 	std::unique_ptr<auvnav::run::RunOutputs> outputs;
 	bool write_updates = true;
+	double summary_every_s = 5.0;  // outputs.summary_every_s (README: summary.json)
 	try
 	{
 		auto cfg = auvnav::config::Node::load(config.getValue());
@@ -89,14 +96,23 @@ int main(int argc, char** argv)
 		}
 		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
 		write_updates = cfg.has("outputs") ? cfg.child("outputs").boolean("updates_csv", true) : true;
+		if (cfg.has("outputs")) summary_every_s = cfg.child("outputs").inRange("summary_every_s", 0.1, 3600, summary_every_s);
 		cfg.checkAllKeysUsed();	 // the navigator checked its sections; this adds plugin_paths and outputs
 		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
 															   nav->storedStateNames(), write_updates);
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-run: error: " << e.what() << "\n";
-		return 2;
+		return cli::fail("auvnav-run", e.what());
+	}
+	// From here on summary.json exists: "completed": false until the last rewrite.
+	try
+	{
+		outputs->writeSummary(*nav, wall(), auvnav::run::RunOutputs::Phase::Running, rawlog.getValue(), "");
+	}
+	catch (const std::exception& e)
+	{
+		return cli::fail("auvnav-run", e.what());
 	}
 
 	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
@@ -113,8 +129,7 @@ int main(int argc, char** argv)
 		}
 		catch (const std::exception& e)
 		{
-			std::cerr << "auvnav-run: error: " << e.what() << "\n";
-			return 2;
+			return cli::fail("auvnav-run", e.what());
 		}
 		nav->on_predict = [&](const auvnav::Navigator& n) {
 			outputs->onState(n);
@@ -136,20 +151,42 @@ int main(int argc, char** argv)
 		outputs->onPositionFix(label, t, m, r);
 		if (live) live->onFix(label, t, m, r);
 	};
-	double next_progress = 0.5;
+	double next_progress = 0.5, next_flush = kFlushEvery_s, next_summary = summary_every_s;
 	auvnav::RunCallbacks loop;
 	loop.stop = [] { return g_stop != 0; };
 	loop.on_observation = [&](const auvnav::Navigator& n) {
-		if (!progress || wall() <= next_progress) return;
+		const double now = wall();
+		if (now >= next_flush)
+		{
+			outputs->flush();
+			next_flush = now + kFlushEvery_s;
+		}
+		if (now >= next_summary)
+		{
+			outputs->flush();  // the summary never runs ahead of the files
+			outputs->writeSummary(n, now, auvnav::run::RunOutputs::Phase::Running, rawlog.getValue(), "");
+			next_summary = now + summary_every_s;
+		}
+		if (!progress || now <= next_progress) return;
 		next_progress = wall() + 0.5;
 		const double data_s = n.time() - n.startTime();
 		std::fprintf(stderr, "\r  %8.1f s of data processed, %6.0fx real time   ", data_s, data_s / wall());
 	};
-	// A rawlog error ends the run but not the outputs: reported below, exit 2.
-	const std::string error = auvnav::runRawlog(*nav, rawlog.getValue(), loop).error;
+	// A rawlog error (also: an empty or IMU-less log, a clock jump) ends the
+	// run but not the outputs: reported below, exit 2.
+	const std::string error = auvnav::oneLineReason(auvnav::runRawlog(*nav, rawlog.getValue(), loop).error);
 	if (progress) std::fprintf(stderr, "\r%60s\r", "");
-	outputs->flush();
-	outputs->writeSummary(*nav, wall(), g_stop != 0, rawlog.getValue(), error);
+	try
+	{
+		outputs->flush();
+		outputs->writeSummary(*nav, wall(),
+							  g_stop ? auvnav::run::RunOutputs::Phase::Interrupted : auvnav::run::RunOutputs::Phase::Ended,
+							  rawlog.getValue(), error);
+	}
+	catch (const std::exception& e)	 // a full disk, a folder removed under the run
+	{
+		return cli::fail("auvnav-run", e.what());
+	}
 
 	const double data_s = nav->time() - nav->startTime();
 	std::printf("auvnav-run: %.1f s of data in %.2f s (%.0fx real time)%s\n", data_s, wall(), data_s / wall(),
@@ -179,21 +216,23 @@ int main(int argc, char** argv)
 	std::printf("  status: %s%s%s\n", auvnav::navStatusName(health.status()), health.reason().empty() ? "" : " (",
 				health.reason().empty() ? "" : (health.reason() + ")").c_str());
 	std::fflush(stdout);
-	if (!error.empty())
+	if (!error.empty()) return cli::fail("auvnav-run", error);
+	// Exit codes (cli.h, README): a signal first (the outputs are partial
+	// whatever the status), then the status: 0 ok or degraded, 3 never
+	// initialised, 4 diverged.
+	if (g_stop)
 	{
-		std::fprintf(stderr, "auvnav-run: error: %s\n", error.c_str());
-		return 2;
+		std::fprintf(stderr, "auvnav-run: interrupted by signal %d (summary.json: completed false)\n", int(g_stop));
+		return cli::kExitSignalBase + g_stop;
 	}
-	// Exit codes (README): 0 ok or degraded, 1 usage, 2 config/input error,
-	// 3 never initialised, 4 diverged. An interrupted run keeps its status.
 	switch (health.status())
 	{
 		case auvnav::NavStatus::NotInitialized:
 			std::fprintf(stderr, "auvnav-run: %s\n", health.reason().c_str());
-			return 3;
+			return cli::kExitNotInitialized;
 		case auvnav::NavStatus::Diverged:
 			std::fprintf(stderr, "auvnav-run: diverged: %s\n", health.reason().c_str());
-			return 4;
-		default: return 0;
+			return cli::kExitDiverged;
+		default: return cli::kExitOk;
 	}
 }

@@ -4,6 +4,7 @@
 #include <auvnav/state.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -24,6 +25,14 @@ std::string num(double v)
 	std::snprintf(b, sizeof b, "%.10g", v);
 	return b;
 }
+
+/** A reason as one CSV field's text: a plugin's message may hold newlines. */
+std::string oneLine(std::string text)
+{
+	std::replace(text.begin(), text.end(), '\n', ' ');
+	std::replace(text.begin(), text.end(), '\r', ' ');
+	return text;
+}
 }  // namespace
 
 RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
@@ -31,50 +40,44 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 	: dir_(dir), names_(std::move(tangent_names)), stored_names_(std::move(stored_names)), period_s_(1.0 / rate_hz)
 {
 	fs::create_directories(dir);
-	tum_.open(fs::path(dir) / "trajectory.tum");
-	csv_.open(fs::path(dir) / "states.csv");
-	fixes_.open(fs::path(dir) / "position_fixes.csv");
-	if (!tum_ || !csv_ || !fixes_) throw std::runtime_error("cannot write outputs in " + dir);
-	fixes_ << "time_s,label,north_m,east_m,status\n";
-	tum_ << "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)\n";
-	const auto& names = names_;
-	const auto& stored = stored_names_;
-	csv_ << "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
-	for (std::size_t i = 3; i < stored.size(); ++i) csv_ << ',' << stored[i];
-	csv_ << ",body_n_m,body_e_m,body_d_m";
-	for (const auto& n : names) csv_ << ",sigma_" << n;
+	const auto file = [&](const char* name) { return (fs::path(dir) / name).string(); };
+	tum_ = io::LineFile(file("trajectory.tum"));
+	csv_ = io::LineFile(file("states.csv"));
+	fixes_ = io::LineFile(file("position_fixes.csv"));
+	fixes_.line("time_s,label,north_m,east_m,status");
+	tum_.line("# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)");
+	std::string header = "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
+	for (std::size_t i = 3; i < stored_names_.size(); ++i) header += ',' + stored_names_[i];
+	header += ",body_n_m,body_e_m,body_d_m";
+	for (const auto& n : names_) header += ",sigma_" + n;
 	// Off-diagonal covariances of position and attitude (for NEES in auvnav-eval).
-	csv_ << ",cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed";
-	csv_ << '\n';
-	nis_.open(fs::path(dir) / "nis.csv");
-	if (!nis_) throw std::runtime_error("cannot write outputs in " + dir);
-	nis_ << "time_s,label,updates,nis_sum,dim_sum\n";
-	health_.open(fs::path(dir) / "health.csv");
-	if (!health_) throw std::runtime_error("cannot write outputs in " + dir);
-	health_ << "time_s,status,reason\n";
-	health_.flush();
+	header += ",cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed";
+	csv_.line(header);
+	nis_ = io::LineFile(file("nis.csv"));
+	nis_.line("time_s,label,updates,nis_sum,dim_sum");
+	health_ = io::LineFile(file("health.csv"));
+	health_.line("time_s,status,reason");
 	if (updates_csv)
 	{
-		updates_.open(fs::path(dir) / "updates.csv");
-		if (!updates_) throw std::runtime_error("cannot write outputs in " + dir);
-		updates_ << "time_s,measurement_time_s,sensor,status,nis,dim,why\n";
+		updates_ = io::LineFile(file("updates.csv"));
+		updates_.line("time_s,measurement_time_s,sensor,status,nis,dim,why");
 	}
+	flush();  // the headers: a run killed before its first row still names its columns
 }
 
 void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s,
 							 const UpdateResult& r)
 {
-	if (!updates_.is_open()) return;
+	if (!updates_.isOpen()) return;
 	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
 						 : r.status == UpdateStatus::Recovered ? "recovered"
 						 : r.status == UpdateStatus::Rejected  ? "rejected"
 															   : "invalid";
 	const bool has_nis = r.status != UpdateStatus::Invalid || r.nis > 0;
 	char line[320];
-	std::snprintf(line, sizeof line, "%.6f,%.6f,%s,%s,%.6g,%d,\"%s\"\n", t_filter_s, t_measurement_s, label.c_str(), status,
-				  has_nis ? r.nis : NAN, r.dim, r.status == UpdateStatus::Accepted ? "" : r.why);
-	updates_ << line;
-	if (++update_rows_ % 500 == 0) updates_.flush();
+	std::snprintf(line, sizeof line, "%.6f,%.6f,%s,%s,%.6g,%d,\"%s\"", t_filter_s, t_measurement_s, label.c_str(), status,
+				  has_nis ? r.nis : NAN, r.dim, r.status == UpdateStatus::Accepted ? "" : oneLine(r.why ? r.why : "").c_str());
+	updates_.line(line);
 }
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
@@ -85,23 +88,24 @@ void RunOutputs::onPositionFix(const std::string& label, double t, const Measure
 						 : r.status == UpdateStatus::Rejected  ? "rejected"
 															   : "invalid";
 	char line[256];
-	std::snprintf(line, sizeof line, "%.3f,%s,%.3f,%.3f,%s\n", t, label.c_str(), m.z[0], m.z[1], status);
-	fixes_ << line;
-	fixes_.flush();
+	std::snprintf(line, sizeof line, "%.3f,%s,%.3f,%.3f,%s", t, label.c_str(), m.z[0], m.z[1], status);
+	fixes_.line(line);
+	fixes_.flush();  // rare (GPS, USBL), and what a person watching a run reads
 }
 
 void RunOutputs::onState(const Navigator& nav)
 {
 	const double t = nav.time();
+	if (t < last_t_) last_t_ = -1e300;	// the clock went back (a jump, clock.on_jump: reinitialize)
 	if (t - last_t_ < period_s_ - 1e-9) return;
 	last_t_ = t;
 	const NavState& x = nav.filter().state();
 	const Eigen::Quaterniond q(x.R_nb);
 	const Eigen::Vector3d p = nav.bodyPosition_n();
 	char line[256];
-	std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", t, p.x(), p.y(), p.z(), q.x(), q.y(),
+	std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", t, p.x(), p.y(), p.z(), q.x(), q.y(),
 				  q.z(), q.w());
-	tum_ << line;
+	tum_.line(line);
 	const Eigen::Matrix3d& R = x.R_nb;
 	const double roll = std::atan2(R(2, 1), R(2, 2)) * kRad2Deg;
 	const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0)) * kRad2Deg;
@@ -117,20 +121,20 @@ void RunOutputs::onState(const Navigator& nav)
 	const auto& P = nav.filter().covariance();
 	for (int i = 0; i < P.rows(); ++i) s << ',' << std::sqrt(std::max(P(i, i), 0.0));
 	for (int b : {idx::pos, idx::att}) s << ',' << P(b, b + 1) << ',' << P(b, b + 2) << ',' << P(b + 1, b + 2);
-	csv_ << s.str() << '\n';
-	if (++rows_ % 50 == 0) flush();
+	csv_.line(s.str());
+	++rows_;
 }
 
 void RunOutputs::onUpdate(const std::string& label, double t, const UpdateResult& r)
 {
 	if (r.status != UpdateStatus::Accepted && r.status != UpdateStatus::Recovered) return;
-	if (t - nis_t0_ >= 1.0)
+	if (t - nis_t0_ >= 1.0 || t < nis_t0_)  // a new second, or the clock went back (as in onState)
 	{
 		for (const auto& [l, a] : nis_acc_)
 		{
 			char line[256];
-			std::snprintf(line, sizeof line, "%.3f,%s,%zu,%.6g,%zu\n", nis_t0_, l.c_str(), a.n, a.nis, a.dim);
-			nis_ << line;
+			std::snprintf(line, sizeof line, "%.3f,%s,%zu,%.6g,%zu", nis_t0_, l.c_str(), a.n, a.nis, a.dim);
+			nis_.line(line);
 		}
 		nis_acc_.clear();
 		nis_t0_ = std::floor(t);
@@ -144,24 +148,28 @@ void RunOutputs::onUpdate(const std::string& label, double t, const UpdateResult
 void RunOutputs::flush()
 {
 	nis_.flush();
-	if (updates_.is_open()) updates_.flush();
+	if (updates_.isOpen()) updates_.flush();
 	tum_.flush();
 	csv_.flush();
+	fixes_.flush();
+	health_.flush();
 }
 
 void RunOutputs::onHealthChange(double t_s, NavStatus status, const std::string& reason)
 {
-	health_ << num(t_s) << ',' << navStatusName(status) << ",\"" << reason << "\"\n";
+	health_.line(num(t_s) + ',' + navStatusName(status) + ",\"" + oneLine(reason) + "\"");
 	health_.flush();
 }
 
-void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
+void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, const std::string& rawlog,
 							  const std::string& error) const
 {
 	const double data_s = nav.startTime() > 0 ? nav.time() - nav.startTime() : 0.0;
 	io::Json j;
 	j["rawlog"] = rawlog;
-	j["completed"] = !interrupted && error.empty();
+	j["completed"] = phase == Phase::Ended && error.empty();
+	j["running"] = phase == Phase::Running;
+	if (phase == Phase::Interrupted) j["interrupted"] = true;
 	if (!error.empty()) j["error"] = error;
 	j["initialized"] = nav.initialized();
 	const auto& h = nav.health();
@@ -175,6 +183,7 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, bool interrup
 	j["real_time_factor"] = wall_s > 0 ? data_s / wall_s : 0;
 	j["predictions"] = nav.predictions();
 	j["imu_gaps"] = nav.imuGaps();
+	j["clock_jumps"] = nav.clockJumps();
 	j["replayed_predictions"] = nav.replayedPredictions();
 	j["cholesky_repairs"] = nav.filter().choleskyRepairs();
 	j["sensors"] = io::Json::array();

@@ -1,7 +1,9 @@
 #pragma once
 /** @file run_outputs.h
- *  auvnav-run's output files, written incrementally and flushed so that a run
- *  killed half way leaves valid files up to that point:
+ *  auvnav-run's output files, written incrementally so that a run killed
+ *  half way (kill -9 included) leaves valid files up to that point: the text
+ *  files hold whole lines only (io::LineFile; the caller flushes them at an
+ *  interval, flush()), summary.json is replaced atomically (writeSummary).
  *   - trajectory.tum: `t x y z qx qy qz qw`, body-origin position (NED tangent
  *     frame, metres) and body-to-NED attitude: the simulator's ground-truth
  *     convention;
@@ -19,11 +21,12 @@
  *     seconds from the first observation, status, reason;
  *   - summary.json: status (ok, degraded, diverged, not_initialized) with its
  *     reason and the worst status of the run, per-sensor counts, consistency (mean NIS per dimension),
- *     final standard deviations, run time and real-time factor.
+ *     final standard deviations, run time and real-time factor; `completed`
+ *     true only in the final rewrite of a run that read its whole rawlog.
  */
+#include <auvnav/io/line_file.h>
 #include <auvnav/navigator.h>
 
-#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -50,9 +53,20 @@ class RunOutputs
 	void onUpdate(const std::string& label, double t, const UpdateResult& r);
 	void onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
 	void onHealthChange(double t_s, NavStatus status, const std::string& reason);
+	/** Hands every file's buffered lines to the kernel (whole lines only). */
 	void flush();
-	/** Writes summary.json (complete rewrite, atomically via rename). */
-	void writeSummary(const Navigator& nav, double wall_s, bool interrupted, const std::string& rawlog,
+	/** Where the run is when summary.json is written. */
+	enum class Phase
+	{
+		Running,	  //!< at the start and at the interval: completed false, running true
+		Interrupted,  //!< stopped by a signal: completed false
+		Ended,		  //!< the end of the rawlog, or an error: completed = no error
+	};
+	/** Writes summary.json (complete rewrite: SUMMARY.tmp renamed over it, so
+	 *  a reader or a kill never sees half a file). `error` (one line) is
+	 *  written when not empty. `clock_jumps`: the jumps re-initialised
+	 *  through (Navigator::clockJumps(), clock.on_jump: reinitialize). */
+	void writeSummary(const Navigator& nav, double wall_s, Phase phase, const std::string& rawlog,
 					  const std::string& error) const;
 	std::size_t rows() const { return rows_; }
 
@@ -61,8 +75,7 @@ class RunOutputs
 	std::vector<std::string> names_, stored_names_;
 	double period_s_;
 	double last_t_ = -1e300;
-	std::ofstream tum_, csv_, fixes_, nis_, health_, updates_;
-	std::size_t update_rows_ = 0;
+	io::LineFile tum_, csv_, fixes_, nis_, health_, updates_;
 	struct NisAcc
 	{
 		std::size_t n = 0, dim = 0;

@@ -46,11 +46,12 @@ int main(int argc, char** argv)
 						s.stamp_out_of_order);
 		std::printf("  wrote %s (%.1f MB), ground_truth.tum, ground_truth.csv\n", s.rawlog_path.c_str(),
 					std::filesystem::file_size(s.rawlog_path) / 1e6);
-		return s.plan_completed ? 0 : 3;
+		if (s.plan_completed) return auvnav::cli::kExitOk;
+		std::cerr << "auvnav-sim: plan not completed: the mission's max_duration_s ended it (outputs written)\n";
+		return auvnav::cli::kExitNoResult;
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-sim: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-sim", e.what());
 	}
 }

@@ -256,13 +256,12 @@ int main(int argc, char** argv)
 		if (frames == 0)
 		{
 			std::cerr << "auvnav-sonar: no frames with label '" << cfg.label << "' in " << input.getValue() << "\n";
-			return 2;
+			return cli::kExitBadInput;
 		}
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-sonar: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-sonar", e.what());
 	}
 	return 0;
 }

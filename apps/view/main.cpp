@@ -84,8 +84,7 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "auvnav-view: error: " << e.what() << "\n";
-		return 2;
+		return auvnav::cli::fail("auvnav-view", e.what());
 	}
-	return 0;
+	return auvnav::cli::kExitOk;
 }

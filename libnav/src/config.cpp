@@ -1,11 +1,13 @@
 #include <algorithm>
 #include <auvnav/config.h>
+#include <auvnav/error_text.h>
 #include <yaml.h>
 
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace auvnav::config
@@ -28,16 +30,105 @@ Node Node::load(const std::string& file)
 
 namespace
 {
-/** MRPT's YAML reader reports some syntax errors on stderr and returns a
- *  partial document; run libyaml's parser first so a broken file is refused
- *  with its line and column. */
+/** What libyaml's event stream says MRPT's YAML reader would get wrong:
+ *  syntax errors (reported on stderr by MRPT, with a partial document),
+ *  duplicate keys (the last silently wins), a second document (silently
+ *  dropped), aliases and non-scalar keys (a multi-line assertion report).
+ *  Each is refused as one line: "ORIGIN:LINE:COLUMN: [KEY.PATH: ]what". */
+class StructureCheck
+{
+   public:
+	explicit StructureCheck(std::string origin) : origin_(std::move(origin)) {}
+
+	/** Empty, or the reason `event` makes the document unusable. */
+	std::string onEvent(const yaml_event_t& event)
+	{
+		const auto& mark = event.start_mark;
+		switch (event.type)
+		{
+			case YAML_DOCUMENT_START_EVENT:
+				if (++documents_ > 1) return at(mark, "", "a second YAML document ('---' or '...'): one document per file");
+				return "";
+			case YAML_ALIAS_EVENT:
+				return at(mark, path(), "aliases (*" + text(event.data.alias.anchor) + ") are not supported");
+			case YAML_SCALAR_EVENT:
+				return node(mark, text(event.data.scalar.value), true);
+			case YAML_SEQUENCE_START_EVENT:
+			case YAML_MAPPING_START_EVENT:
+			{
+				std::string why = node(mark, "", false);
+				Level level;
+				level.map = event.type == YAML_MAPPING_START_EVENT;
+				levels_.push_back(std::move(level));
+				return why;
+			}
+			case YAML_SEQUENCE_END_EVENT:
+			case YAML_MAPPING_END_EVENT: levels_.pop_back(); return "";
+			default: return "";
+		}
+	}
+
+   private:
+	struct Level
+	{
+		bool map = false;
+		bool at_key = true;			   // a map's next node is a key
+		std::string key;			   // a map's latest key
+		int items = 0;				   // a sequence's items so far
+		std::map<std::string, int> lines;  // a map's keys and their lines
+	};
+
+	static std::string text(const yaml_char_t* s) { return s ? reinterpret_cast<const char*>(s) : ""; }
+
+	std::string node(const yaml_mark_t& mark, const std::string& value, bool scalar)
+	{
+		if (levels_.empty()) return "";
+		Level& l = levels_.back();
+		if (!l.map)
+		{
+			++l.items;
+			return "";
+		}
+		l.at_key = !l.at_key;
+		if (l.at_key) return "";  // this was the value
+		if (!scalar) return at(mark, path(), "a key must be a plain name, not a list or a map");
+		l.key = value;
+		const auto [it, fresh] = l.lines.emplace(value, static_cast<int>(mark.line) + 1);
+		if (!fresh) return at(mark, path(), "duplicate key (first at line " + std::to_string(it->second) + ")");
+		return "";
+	}
+
+	/** The dotted path of the node being read (list items as [i]). */
+	std::string path() const
+	{
+		std::string p;
+		for (const Level& l : levels_)
+		{
+			if (l.map && !l.key.empty()) p += (p.empty() ? "" : ".") + l.key;
+			if (!l.map && l.items > 0) p += "[" + std::to_string(l.items - 1) + "]";
+		}
+		return p;
+	}
+
+	std::string at(const yaml_mark_t& mark, const std::string& key_path, const std::string& what) const
+	{
+		return origin_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1) + ": " +
+			   (key_path.empty() ? "" : key_path + ": ") + what;
+	}
+
+	std::string origin_;
+	int documents_ = 0;
+	std::vector<Level> levels_;
+};
+
 void checkSyntax(const std::string& text, const std::string& origin)
 {
 	yaml_parser_t parser;
 	if (!yaml_parser_initialize(&parser)) throw ConfigError(origin + ": cannot initialise the YAML parser");
 	yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(text.data()), text.size());
+	StructureCheck structure(origin);
 	std::string error;
-	for (bool done = false; !done;)
+	for (bool done = false; !done && error.empty();)
 	{
 		yaml_event_t event;
 		if (!yaml_parser_parse(&parser, &event))
@@ -49,6 +140,7 @@ void checkSyntax(const std::string& text, const std::string& origin)
 			error = m.str();
 			break;
 		}
+		error = structure.onEvent(event);
 		done = event.type == YAML_STREAM_END_EVENT;
 		yaml_event_delete(&event);
 	}
@@ -72,7 +164,7 @@ Node Node::fromText(const std::string& text, const std::string& origin)
 	}
 	catch (const std::exception& e)
 	{
-		throw ConfigError(origin + ": malformed YAML: " + e.what());
+		throw ConfigError(origin + ": malformed YAML: " + oneLineReason(e.what()));
 	}
 }
 

@@ -58,3 +58,40 @@ TEST(RawlogRun, ABadFileEndsTheRunWithTheErrorAndAFinishedNavigator)
 	EXPECT_EQ(nav.health().status(), NavStatus::NotInitialized);	// finish() ran
 	EXPECT_EQ(run.data_s, 0.0);
 }
+
+TEST(RawlogRun, AnEmptyLogIsAnErrorNotASilentRun)
+{
+	obs::registerAllClasses();
+	const auto cfg = defaultConfig();
+	PluginHost host;
+	Navigator nav(cfg, host);
+	const std::string path = ::testing::TempDir() + "/auvnav_empty.rawlog";
+	{
+		io::RawlogWriter w(path);  // a valid gzip stream without one object
+	}
+	const RunSummary run = runRawlog(nav, path);
+	EXPECT_FALSE(run.completed());
+	EXPECT_NE(run.error.find(path + ": no observations in its "), std::string::npos) << run.error;
+	EXPECT_THROW(run.rethrow(), io::RawlogError);
+	EXPECT_EQ(run.observations, 0u);
+}
+
+TEST(RawlogRun, ALogWithoutTheImuIsAnErrorListingItsLabels)
+{
+	obs::registerAllClasses();
+	auto cfg = defaultConfig();
+	cfg.set("imu.label", "IMU2");  // the sample's IMU is 'IMU'
+	PluginHost host;
+	Navigator nav(cfg, host);
+	std::size_t seen = 0;
+	RunCallbacks cb;
+	cb.on_observation = [&](const Navigator&) { ++seen; };
+	const RunSummary run = runRawlog(nav, kRepo + "/share/sample/sample.rawlog", cb);
+	EXPECT_FALSE(run.completed());
+	EXPECT_NE(run.error.find("no IMU observation with label 'IMU2' (imu.label) among " + std::to_string(seen) +
+							 " observations (ADCP "),
+			  std::string::npos)
+		<< run.error;
+	EXPECT_NE(run.error.find(", IMU 82672, "), std::string::npos) << run.error;
+	EXPECT_EQ(run.labels.at("IMU"), 82672u);
+}

@@ -58,6 +58,27 @@ TEST(Config, MissingOrMalformedFilesAreRefused)
 			  std::string::npos);
 }
 
+// What MRPT's YAML reader takes silently (the last duplicate wins, a second
+// document is dropped) or fails on with a multi-line assertion report (an
+// alias, a list as a key): refused in one line with file:line:column and key.
+TEST(Config, YamlMrptWouldMisreadIsRefusedInOneLine)
+{
+	const std::string dup = errorOf([] { Node::fromText("a: 1\nb:\n  c: 2\n  d: 3\n  c: 4\n", "dup.yaml"); });
+	EXPECT_EQ(dup, "dup.yaml:5:3: b.c: duplicate key (first at line 3)");
+	EXPECT_EQ(errorOf([] { Node::fromText("l: [{x: 1}, {x: 2, x: 3}]\n", "f.yaml"); }),
+			  "f.yaml:1:20: l[1].x: duplicate key (first at line 1)");
+	EXPECT_EQ(errorOf([] { Node::fromText("a: 1\n---\nb: 2\n", "docs.yaml"); }),
+			  "docs.yaml:2:1: a second YAML document ('---' or '...'): one document per file");
+	EXPECT_EQ(errorOf([] { Node::fromText("a: &x 1\nb: *x\n", "alias.yaml"); }),
+			  "alias.yaml:2:4: b: aliases (*x) are not supported");
+	EXPECT_EQ(errorOf([] { Node::fromText("? [a, b]\n: 1\n", "key.yaml"); }),
+			  "key.yaml:1:3: a key must be a plain name, not a list or a map");
+	// The same key in sibling maps is no duplicate.
+	EXPECT_EQ(errorOf([] { Node::fromText("a: {x: 1}\nb: {x: 2}\nl: [{x: 1}, {x: 2}]\n", "ok.yaml"); }), "");
+	for (const std::string& e : {dup, errorOf([] { Node::fromText("a: \"\\q\"\n", "esc.yaml"); })})
+		EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+}
+
 TEST(Config, OverridesEnterListsByLabelOrIndex)
 {
 	auto n = Node::fromText(

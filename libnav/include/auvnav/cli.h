@@ -3,10 +3,13 @@
  *  Command-line parsing with uniform exit codes for the auvnav programs
  *  (header-only; needs MRPT's TCLAP, CMake target auvnav_tclap).
  *
- *  Exit codes of every program (README, "Exit codes"): 0 ok, 1 bad command
- *  line (unknown option, missing or unreadable argument), 2 bad configuration
- *  or input (the message names it); auvnav-run adds 3 (never initialised) and
- *  4 (diverged), auvnav-calibrate-mag 3 (fit refused).
+ *  Exit codes of every program (README, "Exit codes"; ExitCode below): 0 ok,
+ *  1 bad command line (unknown option, missing or unreadable argument), 2 bad
+ *  input (configuration, unreadable / corrupt / empty rawlog, a log without
+ *  what the program needs, a clock jump; the message names it), 3 no result
+ *  from valid input (auvnav-run: never initialised; auvnav-calibrate-mag: fit
+ *  refused), 4 diverged (auvnav-run), 128 + N stopped by signal N (SIGINT
+ *  130, SIGTERM 143; auvnav-run, which ends its outputs first).
  *
  *  Why: MRPT's TCLAP returns false from CmdLine::parse() both after --help /
  *  --version and after a parse error (and prints the whole usage for the
@@ -16,6 +19,7 @@
  *  ObsLibOption: the `--obs-lib LIB` option (repeatable) of every program
  *  that reads rawlogs; see obs_libraries.h.
  */
+#include <auvnav/error_text.h>
 #include <auvnav/obs_libraries.h>
 #include <auvnav/plugin_host.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -28,9 +32,27 @@
 
 namespace auvnav::cli
 {
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 1;
-constexpr int kExitBadInput = 2;
+/** The one definition of the programs' exit codes (file comment). Plain
+ *  ints so that `return kExitBadInput;` works from main(). */
+enum ExitCode : int
+{
+	kExitOk = 0,
+	kExitUsage = 1,			  //!< bad command line
+	kExitBadInput = 2,		  //!< configuration or input unusable (named on stderr)
+	kExitNoResult = 3,		  //!< valid input, no result: never initialised, fit refused
+	kExitNotInitialized = 3,  //!< auvnav-run's name for kExitNoResult
+	kExitDiverged = 4,		  //!< auvnav-run: the divergence monitor says diverged
+	kExitSignalBase = 128,	  //!< + the signal number that stopped the run
+};
+
+/** Prints "PROGRAM: error: REASON" on stderr, REASON being the first
+ *  meaningful line of `what` (error_text.h: no MRPT exception report).
+ *  Returns `code` so that main() can `return cli::fail(...)`. */
+inline int fail(const std::string& program, const std::string& what, int code = kExitBadInput)
+{
+	std::cerr << program << ": error: " << oneLineReason(what) << "\n";
+	return code;
+}
 
 namespace detail
 {
@@ -115,8 +137,7 @@ class ObsLibOption
 		}
 		catch (const std::exception& e)
 		{
-			std::cerr << program << ": error: " << e.what() << "\n";
-			return kExitBadInput;
+			return fail(program, e.what());
 		}
 		return std::nullopt;
 	}

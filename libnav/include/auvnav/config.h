@@ -39,7 +39,11 @@ class Node
    public:
 	/** An empty map node (for default-constructed holders). */
 	Node() = default;
-	/** Parses a YAML file; throws ConfigError if missing or malformed. */
+	/** Parses a YAML file; throws ConfigError if missing or malformed, with
+	 *  one line naming file:line:column. Malformed includes what MRPT's YAML
+	 *  reader would take silently or fail on with a multi-line assertion: a
+	 *  duplicate key (the last would win), a second document ('---', '...'),
+	 *  an alias (*name), a key that is not a scalar. */
 	static Node load(const std::string& file);
 	/** Wraps an in-memory YAML text (for tests); `origin` names it in errors. */
 	static Node fromText(const std::string& text, const std::string& origin = "<text>");

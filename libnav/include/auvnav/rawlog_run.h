@@ -10,11 +10,18 @@
  *  (the navigator is finished and the figures cover what was processed) and
  *  is reported in RunSummary::error, so that a program can still write its
  *  outputs; RunSummary::rethrow() raises it for callers that just fail.
+ *
+ *  A log the navigator can do nothing with is an error too, not a silent
+ *  empty run (io::RawlogError, naming the file): one without any observation
+ *  (an empty file), and one without a single observation on the IMU's label
+ *  (imu.label), listing the labels it has. A run stopped by
+ *  RunCallbacks::stop is not judged.
  */
 #include <auvnav/navigator.h>
 
 #include <exception>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -40,6 +47,7 @@ struct RunSummary
 	std::string error;			   //!< what ended the run early (empty: the end of the file)
 	std::exception_ptr failure;	   //!< the same, as thrown
 	std::vector<SensorStats> stats;	//!< Navigator::stats() at the end
+	std::map<std::string, std::size_t> labels;	//!< observations fed, per sensor label
 
 	bool completed() const { return !interrupted && error.empty(); }
 	/** Rethrows the error that ended the run, if any. */

@@ -1,3 +1,4 @@
+#include <auvnav/error_text.h>
 #include <auvnav/io/rawlog.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -10,21 +11,6 @@ namespace auvnav::io
 {
 namespace
 {
-/** The "Message:" line of an MRPT exception report (which also holds a
- *  stack trace), or the first line of any other text. */
-std::string mrptMessage(const std::string& what)
-{
-	std::istringstream lines(what);
-	for (std::string line; std::getline(lines, line);)
-	{
-		const auto m = line.find("Message:");
-		if (m == std::string::npos) continue;
-		const auto start = line.find_first_not_of(' ', m + 8);
-		if (start != std::string::npos) return line.substr(start);
-	}
-	return what.substr(0, what.find('\n'));
-}
-
 [[noreturn]] void throwTruncated(const std::string& path, std::size_t index, uint64_t offset)
 {
 	std::ostringstream msg;
@@ -87,13 +73,14 @@ mrpt::obs::CObservation::Ptr RawlogReader::next()
 				// Garbage bytes or, far likelier in a well-formed file, a class
 				// from an observation library nobody loaded (obs_libraries.h).
 				msg << path_ << ": cannot read object #" << objects_read_ << " at byte " << offset
-					<< " (uncompressed): " << mrptMessage(what)
+					<< " (uncompressed): " << oneLineReason(what)
 					<< " (a corrupt rawlog, or a class whose observation library is not loaded: load it with "
 					   "--obs-lib LIB, or obs_libs in the sensor's config entry)";
 				throw RawlogError(msg.str());
 			}
+			// MRPT's report (call stack, nested reports) stays out: one line.
 			msg << path_ << ": corrupt rawlog: cannot read object #" << objects_read_
-				<< " at byte " << offset << " (uncompressed): " << e.what();
+				<< " at byte " << offset << " (uncompressed): " << oneLineReason(what);
 			throw RawlogError(msg.str());
 		}
 		if (!obj)

@@ -7,7 +7,8 @@
  *  sequence of CObservation objects, and CSensoryFrame/CActionCollection pairs
  *  (actions are skipped and counted). Any corrupt, truncated or foreign
  *  content raises RawlogError naming the file, the object index and the
- *  uncompressed byte offset; the reader never crashes on bad bytes.
+ *  uncompressed byte offset, in one line (MRPT's exception report reduced to
+ *  its cause, error_text.h); the reader never crashes on bad bytes.
  *
  *  RawlogWriter writes a gzip-compressed observation-only rawlog and refuses
  *  observations that go back in time.

@@ -1,0 +1,513 @@
+// auvnav-run as a script sees it (issue 15): the exit code and the one-line
+// reason of every run that cannot do its job (empty, truncated, corrupt or
+// IMU-less log, no valid GPS, YAML errors, clock jumps), and outputs that
+// survive a real SIGKILL of the real process (whole lines, a valid
+// summary.json). Each test builds its inputs from the sample dataset.
+#include <auvnav/cli.h>
+#include <auvnav/io/json.h>
+#include <auvnav/io/rawlog.h>
+#include <auvnav/obs/register.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <mrpt/io/CFileOutputStream.h>
+#include <mrpt/obs/CObservationGPS.h>
+#include <mrpt/serialization/CArchive.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace fs = std::filesystem;
+using auvnav::io::Json;
+
+namespace
+{
+const std::string kRepo = AUVNAV_SOURCE_DIR;
+const std::string kSample = kRepo + "/share/sample/sample.rawlog";
+const std::string kConfig = kRepo + "/config/flatfish.yaml";
+
+/** A fresh folder per test, under the build tree. */
+fs::path workDir()
+{
+	const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+	const fs::path dir = fs::path(AUVNAV_TEST_WORK_DIR) / "exit" / (std::string(info->test_suite_name()) + "." + info->name());
+	fs::remove_all(dir);
+	fs::create_directories(dir);
+	return dir;
+}
+
+struct Outcome
+{
+	int exit_code = -1;	 //!< when it exited
+	int signal = 0;		 //!< when a signal ended it
+	std::string output;	 //!< stdout and stderr
+	double wall_s = 0;
+};
+
+/** Runs auvnav-run with `args` (stdout+stderr to `dir`/output.txt); with
+ *  `kill_after_s` > 0, sends it SIGKILL after that long if still running. */
+Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, double kill_after_s = 0)
+{
+	const fs::path log = dir / "output.txt";
+	std::vector<std::string> argv_s = {AUVNAV_RUN_EXE};
+	argv_s.insert(argv_s.end(), args.begin(), args.end());
+	std::vector<char*> argv;
+	for (auto& a : argv_s) argv.push_back(a.data());
+	argv.push_back(nullptr);
+	const auto t0 = std::chrono::steady_clock::now();
+	const pid_t pid = fork();
+	if (pid == 0)
+	{
+		const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		dup2(fd, STDOUT_FILENO);
+		dup2(fd, STDERR_FILENO);
+		execv(argv[0], argv.data());
+		_exit(127);
+	}
+	Outcome o;
+	int status = 0;
+	if (kill_after_s > 0)
+	{
+		// Poll so that a run ending early is seen as such (and not killed late).
+		while (waitpid(pid, &status, WNOHANG) == 0)
+		{
+			if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= kill_after_s)
+			{
+				kill(pid, SIGKILL);
+				waitpid(pid, &status, 0);
+				break;
+			}
+			std::this_thread::sleep_for(std::chrono::milliseconds(5));
+		}
+	}
+	else
+		waitpid(pid, &status, 0);
+	o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+	if (WIFEXITED(status)) o.exit_code = WEXITSTATUS(status);
+	if (WIFSIGNALED(status)) o.signal = WTERMSIG(status);
+	std::ifstream in(log);
+	std::stringstream ss;
+	ss << in.rdbuf();
+	o.output = ss.str();
+	return o;
+}
+
+std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog, std::vector<std::string> extra = {},
+								 const std::string& config = kConfig)
+{
+	std::vector<std::string> a = {"--config", config, "--out", (dir / "out").string(), "--quiet"};
+	a.insert(a.end(), extra.begin(), extra.end());
+	a.push_back(rawlog);
+	return a;
+}
+
+/** What an edit does to one observation: false drops it. */
+using Edit = std::function<bool(mrpt::obs::CObservation&, double t_from_start_s)>;
+
+/** The sample's first `span_s` seconds, each observation passed through
+ *  `edit`, as a plain (uncompressed) rawlog. Written with MRPT's archive, not
+ *  RawlogWriter: an edit may send the clock backwards. Returns the number
+ *  written. */
+std::size_t writeEditedSample(const fs::path& out, double span_s, const Edit& edit)
+{
+	auvnav::obs::registerAllClasses();
+	auvnav::io::RawlogReader in(kSample);
+	mrpt::io::CFileOutputStream f(out.string());
+	auto archive = mrpt::serialization::archiveFrom(f);
+	double t0 = -1;
+	std::size_t n = 0;
+	while (const auto obs = in.next())
+	{
+		const double t = mrpt::Clock::toDouble(obs->timestamp);
+		if (t0 < 0) t0 = t;
+		if (t - t0 > span_s) break;
+		if (!edit(*obs, t - t0)) continue;
+		archive << *obs;
+		++n;
+	}
+	return n;
+}
+
+/** The sample played twice, the second time right after the first (its
+ *  stamps shifted by the sample's span plus one IMU period): ~28 minutes of
+ *  data, so that a run is still going when killed at 5 s on a fast machine
+ *  (the sample alone takes ~5 s). */
+void writeSampleTwice(const fs::path& out)
+{
+	auvnav::obs::registerAllClasses();
+	mrpt::io::CFileOutputStream f(out.string());
+	auto archive = mrpt::serialization::archiveFrom(f);
+	double first = -1, last = 0, shift = 0;
+	for (int pass = 0; pass < 2; ++pass)
+	{
+		auvnav::io::RawlogReader in(kSample);
+		while (const auto obs = in.next())
+		{
+			const double t = mrpt::Clock::toDouble(obs->timestamp);
+			if (first < 0) first = t;
+			if (pass == 0) last = std::max(last, t);
+			obs->timestamp = mrpt::Clock::fromDouble(t + shift);
+			archive << *obs;
+		}
+		shift = last - first + 0.01;
+	}
+}
+
+/** A clock jump of the whole logger: every observation from `at_s` on is stamped `jump_s` later. */
+Edit clockJump(double at_s, double jump_s)
+{
+	return [=](mrpt::obs::CObservation& o, double t) {
+		if (t >= at_s) o.timestamp = mrpt::Clock::fromDouble(mrpt::Clock::toDouble(o.timestamp) + jump_s);
+		return true;
+	};
+}
+
+std::string slurp(const fs::path& file)
+{
+	std::ifstream in(file, std::ios::binary);
+	std::stringstream ss;
+	ss << in.rdbuf();
+	return ss.str();
+}
+
+Json summaryOf(const fs::path& dir)
+{
+	const std::string text = slurp(dir / "out" / "summary.json");
+	return Json::parse(text);  // throws (fails the test) on a half-written file
+}
+
+/** The output's lines that carry an error or a MRPT report. */
+std::vector<std::string> errorLines(const std::string& output)
+{
+	std::vector<std::string> lines;
+	std::istringstream in(output);
+	for (std::string l; std::getline(in, l);)
+		if (l.find("error") != std::string::npos || l.find("MRPT") != std::string::npos ||
+			l.find("Location:") != std::string::npos || l.find("Call stack") != std::string::npos)
+			lines.push_back(l);
+	return lines;
+}
+
+/** The run's reason is exactly one line on stderr, with no MRPT exception report. */
+void expectOneLineError(const Outcome& o, const std::string& must_contain)
+{
+	const auto lines = errorLines(o.output);
+	ASSERT_EQ(lines.size(), 1u) << o.output;
+	EXPECT_EQ(lines[0].rfind("auvnav-run: error: ", 0), 0u) << lines[0];
+	EXPECT_NE(lines[0].find(must_contain), std::string::npos) << lines[0];
+}
+
+/** CSV fields, double quotes respected (updates.csv's "why" may hold commas). */
+std::vector<std::string> csvFields(const std::string& line)
+{
+	std::vector<std::string> f(1);
+	bool quoted = false;
+	for (char c : line)
+	{
+		if (c == '"')
+			quoted = !quoted;
+		else if (c == ',' && !quoted)
+			f.emplace_back();
+		else
+			f.back() += c;
+	}
+	return f;
+}
+
+bool isNumber(const std::string& s)
+{
+	if (s == "null" || s == "nan" || s == "-nan") return true;
+	char* end = nullptr;
+	std::strtod(s.c_str(), &end);
+	return !s.empty() && end == s.c_str() + s.size();
+}
+
+/** Every line of a killed run's CSV file is whole: the file ends in a newline,
+ *  every row has the header's field count and a number in its first column
+ *  (and in `numeric_columns`). Returns the number of rows. */
+std::size_t expectWholeCsv(const fs::path& file, const std::vector<std::size_t>& numeric_columns = {})
+{
+	const std::string text = slurp(file);
+	EXPECT_FALSE(text.empty()) << file;
+	if (text.empty()) return 0;
+	EXPECT_EQ(text.back(), '\n') << file << " ends in a partial line: '" << text.substr(text.rfind('\n') + 1) << "'";
+	std::istringstream in(text);
+	std::string header;
+	std::getline(in, header);
+	const std::size_t n = csvFields(header).size();
+	std::size_t rows = 0;
+	for (std::string l; std::getline(in, l); ++rows)
+	{
+		const auto f = csvFields(l);
+		EXPECT_EQ(f.size(), n) << file << " row " << rows + 1 << ": " << l.substr(0, 200);
+		if (f.size() != n) return rows;
+		EXPECT_TRUE(isNumber(f[0])) << file << " row " << rows + 1;
+		for (std::size_t c : numeric_columns) EXPECT_TRUE(isNumber(f[c])) << file << " row " << rows + 1 << " column " << c;
+	}
+	return rows;
+}
+
+/** The same for trajectory.tum: comment lines, then 8 numbers per line. */
+std::size_t expectWholeTum(const fs::path& file)
+{
+	const std::string text = slurp(file);
+	EXPECT_FALSE(text.empty());
+	if (text.empty()) return 0;
+	EXPECT_EQ(text.back(), '\n') << file << " ends in a partial line";
+	std::istringstream in(text);
+	std::size_t rows = 0;
+	for (std::string l; std::getline(in, l);)
+	{
+		if (l.rfind('#', 0) == 0) continue;
+		std::istringstream fields(l);
+		std::vector<std::string> f;
+		for (std::string x; fields >> x;) f.push_back(x);
+		EXPECT_EQ(f.size(), 8u) << file << ": " << l;
+		for (const auto& x : f) EXPECT_TRUE(isNumber(x)) << file << ": " << l;
+		++rows;
+	}
+	return rows;
+}
+
+/** Rows of a trajectory.tum from time `t_s` on, in file order after the
+ *  last row before it (a clock that went back starts a new run of rows). */
+std::size_t tumRowsFrom(const fs::path& file, double t_s)
+{
+	std::istringstream in(slurp(file));
+	std::size_t n = 0;
+	for (std::string l; std::getline(in, l);)
+		if (l.rfind('#', 0) != 0) n = std::stod(l.substr(0, l.find(' '))) >= t_s ? n + 1 : 0;
+	return n;
+}
+
+double lastTumTime(const fs::path& file)
+{
+	std::istringstream in(slurp(file));
+	double t = 0;
+	for (std::string l; std::getline(in, l);)
+		if (l.rfind('#', 0) != 0) t = std::stod(l.substr(0, l.find(' ')));
+	return t;
+}
+}  // namespace
+
+// ------------------------------------------------- runs that cannot do their job
+
+TEST(RunExit, AnEmptyRawlogIsBadInput)
+{
+	const auto dir = workDir();
+	std::ofstream(dir / "empty.rawlog").close();
+	const Outcome o = runNavigator(runArgs(dir, (dir / "empty.rawlog").string()), dir);
+	EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+	expectOneLineError(o, "empty.rawlog: no observations (an empty rawlog)");
+	const Json s = summaryOf(dir);
+	EXPECT_FALSE(s["completed"].get<bool>());
+	EXPECT_NE(s["error"].get<std::string>().find("no observations"), std::string::npos);
+}
+
+TEST(RunExit, ARawlogCutTo100BytesIsBadInputInOneLine)
+{
+	const auto dir = workDir();
+	const std::string bytes = slurp(kSample).substr(0, 100);
+	std::ofstream(dir / "cut.rawlog", std::ios::binary) << bytes;
+	const Outcome o = runNavigator(runArgs(dir, (dir / "cut.rawlog").string()), dir);
+	EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+	expectOneLineError(o, "cut.rawlog: no observations in its 100 bytes (an empty rawlog, or one cut short");
+}
+
+TEST(RunExit, ACorruptRawlogIsBadInputInOneLineWithoutMrptsReport)
+{
+	const auto dir = workDir();
+	const fs::path plain = dir / "plain.rawlog";
+	writeEditedSample(plain, 20, [](auto&, double) { return true; });
+	std::string bytes = slurp(plain);
+	ASSERT_GT(bytes.size(), 200000u);
+	for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 64; ++i) bytes[i] = static_cast<char>(0xA5 ^ i);
+	std::ofstream(dir / "corrupt.rawlog", std::ios::binary) << bytes;
+	const Outcome o = runNavigator(runArgs(dir, (dir / "corrupt.rawlog").string()), dir);
+	EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+	expectOneLineError(o, "corrupt.rawlog: ");
+	EXPECT_EQ(o.output.find("==== MRPT exception"), std::string::npos) << o.output;
+	EXPECT_FALSE(summaryOf(dir)["completed"].get<bool>());
+}
+
+TEST(RunExit, ALogWithoutImuIsBadInputNamingTheLabelAndWhatItHas)
+{
+	const auto dir = workDir();
+	const fs::path log = dir / "no_imu.rawlog";
+	ASSERT_GT(writeEditedSample(log, 60, [](auto& o, double) { return o.sensorLabel != "IMU"; }), 500u);
+	const Outcome o = runNavigator(runArgs(dir, log.string()), dir);
+	EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+	expectOneLineError(o, "no IMU observation with label 'IMU' (imu.label) among ");
+	EXPECT_NE(o.output.find("DVL "), std::string::npos) << o.output;  // the labels it has
+	const Json s = summaryOf(dir);
+	EXPECT_FALSE(s["completed"].get<bool>());
+	EXPECT_FALSE(s["initialized"].get<bool>());
+}
+
+TEST(RunExit, ALogWithoutAValidGpsFixNeverInitialises)
+{
+	const auto dir = workDir();
+	const fs::path log = dir / "no_fix.rawlog";
+	std::size_t gps = 0;
+	writeEditedSample(log, 60, [&](mrpt::obs::CObservation& o, double) {
+		if (auto* g = dynamic_cast<mrpt::obs::CObservationGPS*>(&o); g && g->has_GGA_datum())
+		{
+			g->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.fix_quality = 0;
+			++gps;
+		}
+		return true;
+	});
+	ASSERT_GT(gps, 30u);
+	const Outcome o = runNavigator(runArgs(dir, log.string()), dir);
+	EXPECT_EQ(o.exit_code, auvnav::cli::kExitNotInitialized) << o.output;
+	EXPECT_NE(o.output.find("auvnav-run: not initialised: a valid GPS fix on label 'GPS'"), std::string::npos)
+		<< o.output;
+	const Json s = summaryOf(dir);
+	EXPECT_TRUE(s["completed"].get<bool>());  // read to its end: complete, but no result
+	EXPECT_EQ(s["status"], "not_initialized");
+}
+
+// A YAML error MRPT's reader would take silently (a duplicate key, a second
+// document) or report as a multi-line assertion (an alias): exit 2, one line
+// naming file, line and key, and no run.
+TEST(RunExit, YamlErrorsStopTheRunInOneLine)
+{
+	const auto dir = workDir();
+	fs::copy(kRepo + "/config", dir / "config", fs::copy_options::recursive);
+	const std::string text = slurp(kConfig);
+	struct Case
+	{
+		std::string name, append, expected;
+	};
+	for (const Case& c : {Case{"duplicate", "outputs:\n  rate_hz: 5\n", ": outputs: duplicate key (first at line "},
+						  Case{"second_document", "---\noutputs: {rate_hz: 5}\n", ": a second YAML document"},
+						  Case{"alias", "extra: *rate\n", ": extra: aliases (*rate) are not supported"}})
+	{
+		SCOPED_TRACE(c.name);
+		const fs::path config = dir / "config" / (c.name + ".yaml");
+		std::ofstream(config) << text << c.append;
+		const Outcome o = runNavigator(runArgs(dir, kSample, {}, config.string()), dir);
+		EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+		expectOneLineError(o, c.name + ".yaml:");
+		EXPECT_NE(o.output.find(c.expected), std::string::npos) << o.output;
+		EXPECT_LT(o.wall_s, 10.0);	// refused before reading the log
+		EXPECT_FALSE(fs::exists(dir / "out" / "summary.json"));
+	}
+}
+
+// ------------------------------------------------------------ kill -9
+
+// A real SIGKILL of the real process at ~2 s and ~5 s of the sample (played
+// twice, to be still running at 5 s): every
+// text output ends in a whole line and parses to its last line, and
+// summary.json is valid JSON with completed false, rewritten during the run
+// (outputs.summary_every_s=1 here; 5 by default).
+TEST(RunKill, SigkillLeavesWholeLinesAndAValidSummary)
+{
+	const auto base = workDir();
+	const fs::path twice = base / "sample_twice.rawlog";
+	writeSampleTwice(twice);
+	for (double kill_s : {2.0, 5.0})
+	{
+		SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
+		const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
+		fs::create_directories(dir);
+		// 100 Hz rows: more bytes per second, more chances to be cut mid-line.
+		const Outcome o = runNavigator(
+			runArgs(dir, twice.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir,
+			kill_s);
+		ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
+		const fs::path out = dir / "out";
+		const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
+		EXPECT_GT(states, 500u);  // the kill came mid-run, after rows were written
+		EXPECT_GT(expectWholeTum(out / "trajectory.tum"), 500u);
+		EXPECT_GT(expectWholeCsv(out / "updates.csv", {1, 5}), 1000u);
+		EXPECT_GT(expectWholeCsv(out / "nis.csv", {2, 3, 4}), 10u);
+		expectWholeCsv(out / "position_fixes.csv", {2, 3});
+		expectWholeCsv(out / "health.csv");
+		const Json s = summaryOf(dir);
+		EXPECT_FALSE(s["completed"].get<bool>());
+		EXPECT_TRUE(s["running"].get<bool>());
+		EXPECT_GT(s["data_duration_s"].get<double>(), 10.0);  // rewritten since the start
+		EXPECT_GT(s["predictions"].get<double>(), 1000.0);
+	}
+}
+
+// ------------------------------------------------------------ clock jumps
+
+// The first 90 s of the sample, the logger's clock jumping at 60 s. Default
+// (clock.on_jump: stop): exit 2 naming the jump, at once.
+TEST(RunClockJump, AJumpStopsTheRunNamingIt)
+{
+	for (double jump : {3600.0, -3600.0, 1e9})
+	{
+		SCOPED_TRACE("jump " + std::to_string(jump));
+		const auto dir = workDir();
+		const fs::path log = dir / "jump.rawlog";
+		writeEditedSample(log, 90, clockJump(60, jump));
+		const Outcome o = runNavigator(runArgs(dir, log.string()), dir);
+		EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
+		expectOneLineError(o, "IMU 'IMU' clock jumped by ");
+		// The jump named with its size (plus the IMU period it replaced) and where.
+		const auto at = o.output.find("clock jumped by ");
+		ASSERT_NE(at, std::string::npos);
+		EXPECT_NEAR(std::stod(o.output.substr(at + 16)), jump, 0.02) << o.output;
+		EXPECT_NE(o.output.find(" s at 59.990 s from the start"), std::string::npos) << o.output;
+		EXPECT_LT(o.wall_s, 10.0);
+		const Json s = summaryOf(dir);
+		EXPECT_FALSE(s["completed"].get<bool>());
+		EXPECT_NEAR(s["data_duration_s"].get<double>(), 60.0, 0.1);  // not one step through the jump
+	}
+}
+
+// clock.on_jump: reinitialize: the run completes, re-initialises once, and the
+// 30 s after the jump are navigated, not silently dropped.
+TEST(RunClockJump, ReinitialiseCompletesWithTheDataAfterTheJump)
+{
+	for (double jump : {3600.0, -3600.0, 1e9})
+	{
+		SCOPED_TRACE("jump " + std::to_string(jump));
+		const auto dir = workDir();
+		const fs::path log = dir / "jump.rawlog";
+		std::size_t imu = 0, imu_after = 0;
+		double last_imu_s = 0;
+		writeEditedSample(log, 90, [&, jump_at = clockJump(60, jump)](mrpt::obs::CObservation& o, double t) {
+			jump_at(o, t);
+			if (o.sensorLabel != "IMU") return true;
+			++imu;
+			if (t >= 60) ++imu_after;
+			last_imu_s = mrpt::Clock::toDouble(o.timestamp);
+			return true;
+		});
+		ASSERT_GT(imu_after, 2900u);
+		const Outcome o = runNavigator(runArgs(dir, log.string(), {"--set", "clock.on_jump=reinitialize"}), dir);
+		EXPECT_EQ(o.exit_code, auvnav::cli::kExitOk) << o.output;
+		const Json s = summaryOf(dir);
+		EXPECT_TRUE(s["completed"].get<bool>());
+		EXPECT_EQ(s["clock_jumps"].get<int>(), 1);
+		EXPECT_TRUE(s["initialized"].get<bool>());
+		// Every IMU sample is accounted for: predicted, or used for levelling
+		// while waiting for a fix, at each of the two starts (1 s levelling and
+		// the first GPS fix after it: ~3 s each here, 603 samples in all).
+		const Json& imu_stats = s["sensors"][0];
+		ASSERT_EQ(imu_stats["plugin"], "(prediction)");
+		EXPECT_EQ(s["predictions"].get<std::size_t>(), imu_stats["accepted"].get<std::size_t>());
+		EXPECT_EQ(imu_stats["accepted"].get<std::size_t>() + imu_stats["before_init"].get<std::size_t>(), imu);
+		EXPECT_LT(imu_stats["before_init"].get<std::size_t>(), 2 * 400u);
+		EXPECT_GT(imu_stats["before_init"].get<std::size_t>(), 2 * 100u);  // levelled twice
+		// The 30 s after the jump are in the outputs at 10 Hz, on the new clock,
+		// to the last IMU sample (a backward jump included).
+		const double jump_at = last_imu_s - 30;
+		EXPECT_GT(tumRowsFrom(dir / "out" / "trajectory.tum", jump_at - 0.5), 270u);
+		EXPECT_NEAR(lastTumTime(dir / "out" / "trajectory.tum"), last_imu_s, 0.2);
+	}
+}
