@@ -8,6 +8,7 @@
 
 #include "eval.h"
 #include "plot.h"
+#include <unistd.h>
 
 using namespace auvnav::eval;
 namespace fs = std::filesystem;
@@ -25,7 +26,7 @@ TEST(Eval, ChiSquareBoundsMatchTables)
 
 TEST(Eval, ErrorsAndNeesOnAHandMadeRun)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_eval_test";
+	const fs::path dir = fs::temp_directory_path() / ("auvnav_eval_test_" + std::to_string(::getpid()));
 	fs::create_directories(dir);
 	// Truth: level, heading 0, at (10, 20, 5); current (0.1, 0.0); 100 m travelled.
 	{
@@ -79,7 +80,7 @@ TEST(Eval, TruthIsInterpolatedToTheStateTimes)
 {
 	// The truth turns at 0.2 rad/s and moves 1 m/s north, sampled at 10 Hz;
 	// the states sit between its rows, exactly on the true trajectory.
-	const fs::path dir = fs::temp_directory_path() / "auvnav_eval_interp_test";
+	const fs::path dir = fs::temp_directory_path() / ("auvnav_eval_interp_test_" + std::to_string(::getpid()));
 	fs::create_directories(dir);
 	auto yawAt = [](double t) { return 0.2 * (t - 1000); };
 	{

@@ -23,6 +23,7 @@
 #include <sstream>
 
 #include "bag_writers.h"
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using auvnav::import::testing::CdrWriter;
@@ -398,7 +399,7 @@ std::string slurp(const fs::path& p)
 fs::path simulated(const std::string& kind)
 {
 	{
-		const fs::path d = fs::temp_directory_path() / ("auvnav_bag_round_trip_" + kind);
+		const fs::path d = fs::temp_directory_path() / ("auvnav_bag_round_trip_" + std::to_string(::getpid()) + "_" + kind);
 		fs::remove_all(d);
 		fs::create_directories(d);
 		EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " +
@@ -493,7 +494,7 @@ fs::path smallBags(const fs::path& d)
 
 TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 {
-	const fs::path d = smallBags(fs::temp_directory_path() / "auvnav_bag_bad_topic");
+	const fs::path d = smallBags(fs::temp_directory_path() / ("auvnav_bag_bad_topic_" + std::to_string(::getpid())));
 	for (const std::string kind : {"ros1", "ros2"})
 	{
 		const std::string bag = kind == "ros1" ? "small.bag" : "small.db3";
@@ -514,7 +515,7 @@ TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 
 TEST(ImportBagBadInput, TruncatedBagIsAClearError)
 {
-	const fs::path d = smallBags(fs::temp_directory_path() / "auvnav_bag_truncated");
+	const fs::path d = smallBags(fs::temp_directory_path() / ("auvnav_bag_truncated_" + std::to_string(::getpid())));
 	for (const std::string bag : {"small.bag", "small.db3"})
 	{
 		const std::string cut = "cut_" + bag;

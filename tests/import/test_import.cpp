@@ -25,6 +25,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 using namespace auvnav::import;
 using ::testing::HasSubstr;
@@ -34,7 +35,7 @@ namespace
 {
 fs::path scratch(const std::string& name)
 {
-	const fs::path p = fs::temp_directory_path() / ("auvnav_import_test_" + name);
+	const fs::path p = fs::temp_directory_path() / ("auvnav_import_test_" + std::to_string(::getpid()) + "_" + name);
 	fs::remove_all(p);
 	fs::create_directories(p);
 	return p;

@@ -32,6 +32,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 using namespace auvnav::import;
 using ::testing::ContainsRegex;
@@ -42,7 +43,7 @@ namespace
 {
 fs::path scratch(const std::string& name)
 {
-	const fs::path p = fs::temp_directory_path() / ("auvnav_import_adversarial_" + name);
+	const fs::path p = fs::temp_directory_path() / ("auvnav_import_adversarial_" + std::to_string(::getpid()) + "_" + name);
 	fs::remove_all(p);
 	fs::create_directories(p);
 	return p;

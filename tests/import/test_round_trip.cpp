@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -21,7 +22,7 @@ const std::string kBin = AUVNAV_BIN_DIR;
 
 fs::path scratch(const std::string& name)
 {
-	const fs::path p = fs::temp_directory_path() / ("auvnav_round_trip_" + name);
+	const fs::path p = fs::temp_directory_path() / ("auvnav_round_trip_" + std::to_string(::getpid()) + "_" + name);
 	fs::remove_all(p);
 	fs::create_directories(p);
 	return p;

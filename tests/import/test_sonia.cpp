@@ -18,6 +18,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace auvnav::import;
@@ -36,7 +37,7 @@ const fs::path kData = AUVNAV_SONIA_DIR;
 
 fs::path scratch(const std::string& name)
 {
-	const fs::path p = fs::temp_directory_path() / ("auvnav_sonia_" + name);
+	const fs::path p = fs::temp_directory_path() / ("auvnav_sonia_" + std::to_string(::getpid()) + "_" + name);
 	fs::remove_all(p);
 	fs::create_directories(p);
 	return p;

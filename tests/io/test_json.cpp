@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using auvnav::io::Json;
@@ -34,7 +35,7 @@ TEST(Json, EscapesStringsAndReplacesInvalidUtf8)
 
 TEST(Json, AtomicWriteLeavesNoTemporaryFile)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_json_test";
+	const fs::path dir = fs::temp_directory_path() / ("auvnav_json_test_" + std::to_string(::getpid()));
 	fs::create_directories(dir);
 	const fs::path file = dir / "summary.json";
 	std::ofstream(file) << "old";

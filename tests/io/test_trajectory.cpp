@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace auvnav;
@@ -16,7 +17,7 @@ namespace
 {
 fs::path scratch(const std::string& name)
 {
-	const fs::path p = fs::temp_directory_path() / ("auvnav_trajectory_" + name);
+	const fs::path p = fs::temp_directory_path() / ("auvnav_trajectory_" + std::to_string(::getpid()) + "_" + name);
 	fs::remove(p);
 	return p;
 }

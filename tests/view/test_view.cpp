@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "scene.h"
+#include <unistd.h>
 
 using namespace auvnav::view;
 namespace fs = std::filesystem;
@@ -106,7 +107,7 @@ TEST(View, OffscreenScreenshotShowsTheTrajectory)
 
 TEST(View, BadRunFolderIsRefusedNamingTheFile)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_view_bad";
+	const fs::path dir = fs::temp_directory_path() / ("auvnav_view_bad_" + std::to_string(::getpid()));
 	fs::create_directories(dir);
 	EXPECT_THROW(loadRun((dir / "missing").string()), std::runtime_error);
 	std::ofstream(dir / "states.csv") << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d\n"
