@@ -143,6 +143,11 @@ int main(int argc, char** argv)
 			std::fprintf(stderr, "auvnav-run: %.1f s: %s%s%s\n", t, auvnav::navStatusName(st), why.empty() ? "" : ": ",
 						 why.c_str());
 	};
+	nav->on_event = [&](double t, const std::string& label, const std::string& what) {
+		outputs->onEvent(t, label, what);
+		if (progress) std::fprintf(stderr, "\r%60s\r", "");
+		if (!quiet.getValue()) std::fprintf(stderr, "auvnav-run: %.1f s: %s: %s\n", t, label.c_str(), what.c_str());
+	};
 	nav->on_update = [&](const std::string& label, double t, const auvnav::Measurement& m, const auvnav::UpdateResult& r) {
 		outputs->onUpdate(label, t, r);
 		// Filter time when made (a re-filtered delayed fix: its arrival) and measurement time.

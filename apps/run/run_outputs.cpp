@@ -57,6 +57,8 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 	nis_.line("time_s,label,updates,nis_sum,dim_sum");
 	health_ = io::LineFile(file("health.csv"));
 	health_.line("time_s,status,reason");
+	events_ = io::LineFile(file("events.csv"));
+	events_.line("time_s,sensor,event");
 	if (updates_csv)
 	{
 		updates_ = io::LineFile(file("updates.csv"));
@@ -153,12 +155,19 @@ void RunOutputs::flush()
 	csv_.flush();
 	fixes_.flush();
 	health_.flush();
+	events_.flush();
 }
 
 void RunOutputs::onHealthChange(double t_s, NavStatus status, const std::string& reason)
 {
 	health_.line(num(t_s) + ',' + navStatusName(status) + ",\"" + oneLine(reason) + "\"");
 	health_.flush();
+}
+
+void RunOutputs::onEvent(double t_s, const std::string& label, const std::string& what)
+{
+	events_.line(num(t_s) + ',' + label + ",\"" + oneLine(what) + "\"");
+	events_.flush();  // rare, and what a person watching a run reads
 }
 
 void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, const std::string& rawlog,
@@ -186,6 +195,7 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, 
 	j["clock_jumps"] = nav.clockJumps();
 	j["replayed_predictions"] = nav.replayedPredictions();
 	j["cholesky_repairs"] = nav.filter().choleskyRepairs();
+	j["position_reinitializations"] = nav.positionReinitializations();
 	j["sensors"] = io::Json::array();
 	for (const auto& s : nav.stats())
 		j["sensors"].push_back({{"label", s.label},
@@ -199,6 +209,7 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, 
 								{"late", s.late},
 								{"delayed", s.delayed},
 								{"before_init", s.before_init},
+								{"position_reinitializations", s.reinitialized},
 								{"mean_nis_per_dim", s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN},
 								{"last_problem", s.last_problem}});
 	io::Json sigma = io::Json::object();

@@ -19,6 +19,9 @@
  *     north/east [m] and whether the χ² gate accepted it (for auvnav-view);
  *   - health.csv: every change of the divergence monitor's status (health.h):
  *     seconds from the first observation, status, reason;
+ *   - events.csv: the navigator's events (Navigator::on_event: the start
+ *     from a fix consensus, position re-initialisations): seconds from the
+ *     first observation, sensor, what;
  *   - summary.json: status (ok, degraded, diverged, not_initialized) with its
  *     reason and the worst status of the run, per-sensor counts, consistency (mean NIS per dimension),
  *     final standard deviations, run time and real-time factor; `completed`
@@ -53,6 +56,7 @@ class RunOutputs
 	void onUpdate(const std::string& label, double t, const UpdateResult& r);
 	void onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r);
 	void onHealthChange(double t_s, NavStatus status, const std::string& reason);
+	void onEvent(double t_s, const std::string& label, const std::string& what);
 	/** Hands every file's buffered lines to the kernel (whole lines only). */
 	void flush();
 	/** Where the run is when summary.json is written. */
@@ -75,7 +79,7 @@ class RunOutputs
 	std::vector<std::string> names_, stored_names_;
 	double period_s_;
 	double last_t_ = -1e300;
-	io::LineFile tum_, csv_, fixes_, nis_, health_, updates_;
+	io::LineFile tum_, csv_, fixes_, nis_, health_, events_, updates_;
 	struct NisAcc
 	{
 		std::size_t n = 0, dim = 0;

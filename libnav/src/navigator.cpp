@@ -44,6 +44,11 @@ struct Navigator::Slot
 	double latency_s = 0;			// sensors[].latency_s: measurement time = stamp − latency
 	double rejecting_since_s = -1;	// start of the current run of rejections
 	RejectionStreak streak;			// its innovations (rejection_streak.h)
+	RejectedFixRun fix_run;			// a position sensor's gate-failing fixes (fix_consensus.h)
+	double last_reinit_t_obs = -1;	// counted once, though re-filtering may redo it
+	// Every fix of a position sensor since its run of rejections began (initialFix:
+	// also those the plugin skips): arrival time, fix − the state's sensor point [m].
+	std::deque<std::pair<double, Eigen::Vector2d>> fix_offsets;
 	std::vector<Measurement> buffer;
 };
 
@@ -66,6 +71,7 @@ struct Navigator::History
 	{
 		double rejecting_since_s = -1;
 		RejectionStreak streak;
+		RejectedFixRun fix_run;
 	};
 	struct Checkpoint
 	{
@@ -159,6 +165,15 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	}
 	else if (position_source != "config")
 		in.fail("position", "expected 'gps' or 'config', got '" + position_source + "'");
+	if (in.has("fix_consensus"))
+	{
+		const auto c = in.child("fix_consensus");
+		FixConsensusParams p;
+		p.min_fixes = static_cast<int>(c.inRange("min_fixes", 1, 100, p.min_fixes));
+		p.max_spread_m = c.positive("max_spread_m", p.max_spread_m);
+		p.window_s = c.positive("window_s", p.window_s);
+		fix_consensus_ = InitialFixConsensus(p);
+	}
 	// Used at initialisation (or with the other position source); checked now so
 	// that a bad or misspelled key fails at start.
 	(void)in.string("gps_label", "GPS");
@@ -182,12 +197,20 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	if (cfg.has("gates"))
 	{
 		const auto g = cfg.child("gates");
-		g.allowOnly({"recovery_after_s", "consistent_rejections", "consistency_probability"});
+		g.allowOnly({"recovery_after_s", "consistent_rejections", "consistency_probability", "position_reinit"});
 		recovery_after_s_ = g.positive("recovery_after_s", recovery_after_s_);
 		consistent_rejections_ = static_cast<int>(g.inRange("consistent_rejections", 0, 8, consistent_rejections_));
 		if (consistent_rejections_ > 0 && consistent_rejections_ < 3)
 			g.fail("consistent_rejections", "needs at least 3 rejections to fit a drift (0 switches it off)");
 		consistency_probability_ = g.inRange("consistency_probability", 0.5, 1.0 - 1e-9, consistency_probability_);
+		if (g.has("position_reinit"))
+		{
+			const auto r = g.child("position_reinit");
+			reinit_fixes_ = static_cast<int>(r.inRange("rejected_fixes", 0, 16, reinit_fixes_));
+			if (reinit_fixes_ == 1) r.fail("rejected_fixes", "needs at least 2 fixes to agree (0 switches it off)");
+			reinit_probability_ = r.inRange("probability", 0.5, 1.0 - 1e-9, reinit_probability_);
+			reinit_spread_m_ = r.positive("max_spread_m", reinit_spread_m_);
+		}
 	}
 	if (cfg.has("denial"))
 		for (const auto& d : cfg.sequence("denial"))
@@ -315,6 +338,13 @@ std::vector<SensorStats> Navigator::stats() const
 	return out;
 }
 
+std::size_t Navigator::positionReinitializations() const
+{
+	std::size_t n = 0;
+	for (const auto& s : slots_) n += s->stats.reinitialized;
+	return n;
+}
+
 std::vector<std::string> Navigator::positionFixLabels() const
 {
 	std::vector<std::string> out;
@@ -350,17 +380,52 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 		// whole: its accelerometer part must not update the state either.
 		if (!handleImu(obs)) return;
 	}
-	// The first fix for initialisation comes from the fix sensor's plugin
-	// (MeasurementModel::initialFix: the GPS decodes its GGA, a USBL its own).
+	// The fixes for initialisation come from the fix sensor's plugin
+	// (MeasurementModel::initialFix: the GPS decodes its GGA, a USBL its own);
+	// the start waits for enough of them to agree (fix_consensus.h).
 	if (!initialized_ && position_from_gps_ && obs.sensorLabel == gps_label_ && !denied(obs.sensorLabel, t))
 		for (auto& slot : slots_)
 			if (slot->stats.label == gps_label_)
 			{
 				InitialFix fix;
 				if (slot->model->initialFix(obs, context(t), fix) && fix.p_n.allFinite() && fix.r_b.allFinite())
-					gps_fix_ = fix;
+				{
+					fix_consensus_.add(t, fix);
+					gps_fix_ = fix_consensus_.agreed();
+				}
 			}
+	if (initialized_ && !denied(obs.sensorLabel, t)) recordFixOffset(obs, t);
 	dispatch(obs, t);
+}
+
+void Navigator::recordFixOffset(const mrpt::obs::CObservation& obs, double t)
+{
+	for (auto& slot : slots_)
+	{
+		if (slot->stats.label != obs.sensorLabel || !slot->model->reportsPositionFix()) continue;
+		InitialFix fix;
+		if (!slot->model->initialFix(obs, context(t), fix) || !fix.p_n.allFinite() || !fix.r_b.allFinite()) continue;
+		const NavState& x = ukf_->state();
+		const Eigen::Vector3d predicted_n = x.p_n + x.R_nb * (fix.r_b - imu_position_b_);
+		auto& offsets = slot->fix_offsets;
+		offsets.emplace_back(t, (fix.p_n - predicted_n).head<2>());
+		// Only those since the current run of rejections began are needed.
+		const double keep_from = slot->fix_run.size() > 0 ? slot->fix_run.firstTime_s() : t;
+		while (offsets.size() > 1 && offsets.front().first < keep_from) offsets.pop_front();
+	}
+}
+
+bool Navigator::mostFixesAgreeWith(const Slot& slot, const Eigen::Vector2d& offset_m) const
+{
+	const double from = slot.fix_run.firstTime_s(reinit_fixes_);
+	int all = 0, agreeing = 0;
+	for (const auto& [t, d] : slot.fix_offsets)
+		if (t >= from)
+		{
+			++all;
+			agreeing += (d - offset_m).norm() <= reinit_spread_m_;
+		}
+	return all == 0 || 2 * agreeing > all;	// no record (a plugin without initialFix): the run decides
 }
 
 bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
@@ -447,11 +512,13 @@ void Navigator::clockJump(double t, double dt)
 	f_sum_.setZero();
 	w_sum_.setZero();
 	gps_fix_.reset();
+	fix_consensus_.clear();
 	if (history_) history_ = std::make_unique<History>();
 	for (auto& slot : slots_)
 	{
 		slot->rejecting_since_s = -1;
 		slot->streak.clear();
+		slot->fix_run.clear();
 	}
 	t_s_ = t_latest_s_ = t;
 }
@@ -480,7 +547,7 @@ void Navigator::checkpointIfDue(std::size_t event)
 	c.omega_ib_b = omega_ib_b_;
 	c.alpha_b = alpha_b_;
 	c.gates.reserve(slots_.size());
-	for (const auto& slot : slots_) c.gates.push_back({slot->rejecting_since_s, slot->streak});
+	for (const auto& slot : slots_) c.gates.push_back({slot->rejecting_since_s, slot->streak, slot->fix_run});
 	cps.push_back(std::move(c));
 }
 
@@ -509,6 +576,7 @@ void Navigator::restoreLastCheckpoint()
 	{
 		slots_[i]->rejecting_since_s = c.gates[i].rejecting_since_s;
 		slots_[i]->streak = c.gates[i].streak;
+		slots_[i]->fix_run = c.gates[i].fix_run;
 	}
 }
 
@@ -589,6 +657,60 @@ void Navigator::initialize()
 	ukf_->initialize(x0, P0_);
 	initialized_ = true;
 	t_latest_s_ = t_s_;
+	if (position_from_gps_ && gps_fix_ && on_event)
+	{
+		const int n = fix_consensus_.fixes(), agree = fix_consensus_.agreeing();
+		char what[200];
+		std::snprintf(what, sizeof what,
+					  "initialised at N %.2f E %.2f m from the newest of %d agreeing fixes (%d in the last %.0f s, "
+					  "%d outliers)",
+					  p_body.x(), p_body.y(), agree, n, fix_consensus_.params().window_s, n - agree);
+		on_event(t_s_ - t0_s_, gps_label_, what);
+	}
+}
+
+bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, const UpdateResult& r, double t_obs)
+{
+	if (reinit_fixes_ < 2 || r.innovation.size() < 2 || m.R.rows() < 2) return false;
+	const Eigen::Vector2d nu = r.innovation.head<2>();
+	const Eigen::Matrix2d R = m.R.topLeftCorner<2, 2>();
+	slot.fix_run.add(t_obs, nu, R);
+	if (!slot.fix_run.agree(reinit_fixes_, reinit_probability_)) return false;
+	// Outliers the plugin happened to pick (one fix used per interval, the
+	// wild ones at the same phase) agree too, but the fixes in between do not.
+	if (!mostFixesAgreeWith(slot, nu)) return false;
+	// Every recent fix says the same: the state is off by ν, not the sensor.
+	// Move onto the newest (the older innovations were taken against a state
+	// recovery steps have moved since) and forget what the position was
+	// correlated with, as at the start.
+	NavState x = ukf_->state();
+	Covariance P = ukf_->covariance();
+	x.p_n.head<2>() += nu;
+	P.middleRows<2>(idx::pos).setZero();
+	P.middleCols<2>(idx::pos).setZero();
+	for (int i = 0; i < 2; ++i) P(idx::pos + i, idx::pos + i) = std::max(P0_(idx::pos + i, idx::pos + i), R(i, i));
+	ukf_->restore(x, P);
+	const Eigen::Vector2d mean = slot.fix_run.meanOffset_m(reinit_fixes_);
+	slot.fix_run.clear();
+	slot.fix_offsets.clear();
+	slot.streak.clear();
+	slot.rejecting_since_s = -1;
+	// A re-filtering pass (delayed measurements) redoes it: count it once.
+	if (t_obs > slot.last_reinit_t_obs)
+	{
+		slot.last_reinit_t_obs = t_obs;
+		++slot.stats.reinitialized;
+		if (on_event)
+		{
+			char what[220];
+			std::snprintf(what, sizeof what,
+						  "position re-initialised: moved N %+.2f E %+.2f m onto the newest of %d agreeing fixes "
+						  "rejected by the gate (their mean offset N %+.2f E %+.2f m)",
+						  nu.x(), nu.y(), reinit_fixes_, mean.x(), mean.y());
+			on_event(t_obs - t0_s_, slot.stats.label, what);
+		}
+	}
+	return true;
 }
 
 std::string Navigator::waitingFor() const
@@ -600,8 +722,10 @@ std::string Navigator::waitingFor() const
 		return "IMU data for levelling: " + std::to_string(t_s_ - leveling_start_s_) + " s of " +
 			   std::to_string(leveling_s_) + " s (imu.leveling_s)";
 	if (position_from_gps_ && !gps_fix_)
-		return "a valid GPS fix on label '" + gps_label_ +
-			   "' (filter.initial.position: gps); set filter.initial.position: config to start without one";
+		return std::to_string(fix_consensus_.params().min_fixes) + " agreeing GPS fixes on label '" + gps_label_ +
+			   "' (filter.initial.position: gps, filter.initial.fix_consensus): " +
+			   std::to_string(fix_consensus_.agreeing()) + " of " + std::to_string(fix_consensus_.fixes()) +
+			   " agree; set filter.initial.position: config to start without them";
 	return "initialisation";
 }
 
@@ -713,8 +837,23 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 			continue;
 		}
 		const bool recovery = slot.rejecting_since_s >= 0 && t_obs - slot.rejecting_since_s > recovery_after_s_;
-		UpdateResult r = ukf_->update(*slot.model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
-		if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
+		// Gated as usual first: a position fix that fails the gate may be one
+		// of a run that re-initialises the position (reinitializeFromRejectedFix).
+		UpdateResult r = ukf_->update(*slot.model, m, ctx, Recovery::None);
+		const bool position_fix = slot.model->reportsPositionFix();
+		bool reinitialized = false;
+		if (r.status == UpdateStatus::Rejected && position_fix)
+			reinitialized = reinitializeFromRejectedFix(slot, m, r, t_obs);
+		if (reinitialized)
+		{
+			// The position now sits on this fix with its start covariance; the
+			// fix itself has been used (applying it again would count it twice).
+			r.status = UpdateStatus::Recovered;
+			r.why = "position re-initialised onto agreeing rejected fixes";
+		}
+		else if (r.status == UpdateStatus::Rejected && recovery)
+			r = ukf_->update(*slot.model, m, ctx, Recovery::Noise);
+		else if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
 		{
 			// Rejected but agreeing with the aid's previous rejections: the
 			// state is off, not the aid. Re-acquire now (rejection_streak.h).
@@ -735,6 +874,9 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 			}
 		}
 		if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered) slot.streak.clear();
+		// A fix inside the gate ends a run of rejected ones (a recovery on
+		// the gate boundary does not: the fix still failed it).
+		if (r.status == UpdateStatus::Accepted) slot.fix_run.clear();
 		if (r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered)
 			slot.rejecting_since_s = -1;
 		else if (r.status == UpdateStatus::Rejected && slot.rejecting_since_s < 0)

@@ -3,6 +3,8 @@
 #include <auvnav/earth.h>
 #include <mrpt/obs/CObservationGPS.h>
 
+#include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "plugin_common.h"
@@ -108,16 +110,33 @@ PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const Filt
 		return PrepareStatus::Skip;
 	}
 	const double since_last_s = t_obs - last_used_s_;
-	last_used_s_ = t_obs;
 	double sigma = sigma_m_;
 	if (scale_by_hdop_ && std::isfinite(hdop) && hdop > 0) sigma *= hdop;
 
 	Measurement m;
 	m.z = p_n.head<2>();
 	m.R = Eigen::Matrix2d::Identity() * (sigma * sigma + correlatedVariance(since_last_s));
+	// A fix far outside the gate is offered (the filter's gate rejects it and
+	// its re-initialisation rule counts it) but does not spend the interval:
+	// the next fix is tried, not one min_interval_s later. Else wild fixes at
+	// the interval's phase (every 5th of 1 Hz fixes, 30 s apart) would be the
+	// only ones ever used.
+	if (!likelyOutlier(m, ctx)) last_used_s_ = t_obs;
 	m.label = "position";
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;
+}
+
+bool GpsModel::likelyOutlier(const Measurement& m, const FilterContext& ctx) const
+{
+	if (!ctx.mean || !ctx.covariance || ctx.covariance->rows() < idx::pos + 2) return false;
+	const NavState& x = *ctx.mean;
+	const Eigen::Vector2d nu = m.z - (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
+	// Linearised in position alone (the lever arm's attitude share is mm):
+	// S ≈ P_pos + R; the 2-dof χ² quantile is −2 ln(1 − p).
+	const Eigen::Matrix2d S = ctx.covariance->block<2, 2>(idx::pos, idx::pos) + m.R;
+	const double nis = nu.dot(S.ldlt().solve(nu));
+	return std::isfinite(nis) && nis > -2 * std::log(1 - std::min(gate_probability_, 1 - 1e-12));
 }
 
 double GpsModel::correlatedVariance(double since_last_s) const

@@ -18,7 +18,10 @@
  *  share that error, and the filter, which takes them as independent, must
  *  not average it down faster than it really averages out. Observations
  *  without a GGA message or without a fix (fix_quality 0) are skipped; gross
- *  outliers fail the χ² gate (gate_probability).
+ *  outliers fail the χ² gate (gate_probability). A fix that fails it against
+ *  the filter's mean and position covariance (linearised) is still offered
+ *  but does not start a new min_interval_s: the next fix is tried at once
+ *  (wild fixes at the interval's phase must not be the only ones used).
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -54,6 +57,9 @@ class GpsModel final : public SafeMeasurementModel
 	/** Variance [m²] of the correlated error for a fix `since_last_s` after
 	 *  the last one used (0 when correlated_sigma_m is 0). */
 	double correlatedVariance(double since_last_s) const;
+	/** The fix fails the gate against the filter's mean and position
+	 *  covariance (linearised; false without them). */
+	bool likelyOutlier(const Measurement& m, const FilterContext& ctx) const;
 
 	std::string label_;
 	Eigen::Vector3d position_b_;

@@ -11,6 +11,8 @@
 #include <mrpt/obs/gnss_messages_ascii_nmea.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <limits>
 
 using namespace auvnav;
@@ -169,7 +171,8 @@ TEST(NavigatorInput, UnknownSensorsAndWrongClassesAreHarmless)
 TEST(NavigatorInput, FirstFixComesFromTheFixSensorsPluginAtItsAntenna)
 {
 	// position: gps starts from the GPS plugin's initialFix: the antenna's
-	// point, moved to the body origin with the initial attitude.
+	// point, moved to the body origin with the initial attitude, once
+	// fix_consensus.min_fixes (5) fixes agree; a wild first one is outvoted.
 	config::Node cfg = config::Node::load(kConfig);
 	cfg.set("filter.initial.heading_deg", "90");
 	cfg.set("sensors.GPS.config.position_m.0", "-0.3");
@@ -180,24 +183,53 @@ TEST(NavigatorInput, FirstFixComesFromTheFixSensorsPluginAtItsAntenna)
 	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));  // past the levelling
 	EXPECT_FALSE(nav.initialized());
 	EXPECT_NE(nav.waitingFor().find("GPS fix"), std::string::npos) << nav.waitingFor();
-	auto gps = mrpt::obs::CObservationGPS::Create();
-	gps->sensorLabel = "GPS";
-	gps->timestamp = mrpt::Clock::fromDouble(t + 0.005);
-	mrpt::obs::gnss::Message_NMEA_GGA gga;
-	const earth::Geodetic geo = nav.frame().toGeodetic(Eigen::Vector3d(50, -20, 0));
-	gga.fields.latitude_degrees = geo.lat_rad * 180 / M_PI;
-	gga.fields.longitude_degrees = geo.lon_rad * 180 / M_PI;
-	gga.fields.fix_quality = 1;
-	gps->setMsg(gga);
-	nav.process(*gps);
-	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));
+	auto gpsAt = [&](const Eigen::Vector3d& p_n) {
+		auto gps = mrpt::obs::CObservationGPS::Create();
+		gps->sensorLabel = "GPS";
+		gps->timestamp = mrpt::Clock::fromDouble(t + 0.005);
+		mrpt::obs::gnss::Message_NMEA_GGA gga;
+		const earth::Geodetic geo = nav.frame().toGeodetic(p_n);
+		gga.fields.latitude_degrees = geo.lat_rad * 180 / M_PI;
+		gga.fields.longitude_degrees = geo.lon_rad * 180 / M_PI;
+		gga.fields.fix_quality = 1;
+		gps->setMsg(gga);
+		nav.process(*gps);
+		for (int k = 0; k < 100; ++k) nav.process(*imuAt(t += 0.01));
+	};
+	gpsAt(Eigen::Vector3d(1050, -20, 0));  // wild: 1 km north
+	for (int i = 0; i < 4; ++i)
+	{
+		gpsAt(Eigen::Vector3d(50, -20, 0));
+		EXPECT_FALSE(nav.initialized()) << "after " << i + 2 << " fixes, " << i + 1 << " agreeing";
+	}
+	EXPECT_NE(nav.waitingFor().find("4 of 5 agree;"), std::string::npos) << nav.waitingFor();
+	gpsAt(Eigen::Vector3d(50.5, -20, 0));
 	ASSERT_TRUE(nav.initialized());
 	// Heading 90°: body x points east, y south. The antenna at (−0.3, 0.1) in
 	// the body is 0.3 m west and 0.1 m south of the origin, so the origin is
-	// 0.3 m east and 0.1 m north of the fix.
+	// 0.3 m east and 0.1 m north of the fix (the newest agreeing one).
 	const Eigen::Vector3d p = nav.bodyPosition_n();
-	EXPECT_NEAR(p.x(), 50 + 0.1, 0.02);
+	EXPECT_NEAR(p.x(), 50.5 + 0.1, 0.02);
 	EXPECT_NEAR(p.y(), -20 + 0.3, 0.02);
+}
+
+TEST(NavigatorInput, WithoutAFixConsensusSectionTheDefaultsStartFromFiveFixes)
+{
+	// Profiles that predate filter.initial.fix_consensus (compass_hello.yaml)
+	// keep working with position: gps and get the defaults.
+	std::ifstream file(kConfig);
+	std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+	const auto from = text.find("    fix_consensus:"), to = text.find("    north_m:");
+	ASSERT_NE(from, std::string::npos);
+	ASSERT_LT(from, to);
+	text.erase(from, to - from);
+	const config::Node cfg = config::Node::fromText(text, kConfig);
+	ASSERT_FALSE(cfg.child("filter").child("initial").has("fix_consensus"));
+	PluginHost host;
+	Navigator nav(cfg, host);
+	double t = kT0;
+	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));  // past the levelling
+	EXPECT_NE(nav.waitingFor().find("5 agreeing GPS fixes"), std::string::npos) << nav.waitingFor();
 }
 
 TEST(NavigatorInput, FixLabelNamingNoSensorIsAConfigError)

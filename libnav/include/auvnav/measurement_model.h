@@ -188,9 +188,13 @@ class MeasurementModel
 	/** Gate probability; the filter gates at the χ² quantile of the
 	 *  measurement's own dimension. 1.0 disables the gate. */
 	virtual double gateProbability() const noexcept { return 0.999; }
-	/** A fix the filter may start from (called only before initialisation,
-	 *  for the sensor named by filter.initial.gps_label); false: this
-	 *  observation gives none. */
+	/** The fix in `obs` as measured, with no rate limit and no state (false:
+	 *  this observation gives none). Called before initialisation for the
+	 *  sensor named by filter.initial.gps_label (the start waits for a
+	 *  consensus of these, fix_consensus.h), and afterwards for every
+	 *  observation of a sensor whose reportsPositionFix() is true (the
+	 *  re-initialisation rule checks its rejected fixes against all of them,
+	 *  navigator.h). */
 	virtual bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
 	{
 		(void)obs, (void)ctx, (void)out;

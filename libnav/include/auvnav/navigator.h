@@ -24,9 +24,24 @@
  *    record each update once, when it was first applied. Older ones are
  *    counted as late.
  *  - Start-up: the first `imu.leveling_s` of accelerometer data give roll and
- *    pitch; heading comes from `filter.initial.heading_deg`; position from the
- *    first GPS fix (`filter.initial.position: gps`) or from `north_m`,
- *    `east_m` (`position: config`); depth from `depth_m`.
+ *    pitch; heading comes from `filter.initial.heading_deg`; position from
+ *    the fix sensor `filter.initial.gps_label` (`filter.initial.position:
+ *    gps`): the newest of `fix_consensus.min_fixes` fixes that agree with the
+ *    median of the recent ones and are a majority of them (fix_consensus.h),
+ *    so one wild fix cannot be the start; or from `north_m`, `east_m`
+ *    (`position: config`); depth from `depth_m`.
+ *  - Position re-initialisation (`gates.position_reinit`): when the last
+ *    `rejected_fixes` fixes of any position sensor (its plugin's
+ *    reportsPositionFix(): GPS, USBL, …) all failed the χ² gate and agree
+ *    with each other (RejectedFixRun, fix_consensus.h), the horizontal
+ *    position is moved onto the newest of them, its covariance reset to the
+ *    start's (`filter.initial.position_sigma_m`, or the fix's σ if larger)
+ *    and decorrelated from the rest of the state — provided most of the
+ *    sensor's fixes over that run, also those its plugin skipped (read with
+ *    initialFix, where the plugin gives it), lie within `max_spread_m` of
+ *    that offset: outliers the plugin happened to pick at the same phase
+ *    agree with each other, the good fixes between them do not. Counted per
+ *    sensor (SensorStats::reinitialized) and reported through on_event.
  *  - Every update is counted per sensor: accepted, recovered, rejected by the
  *    gate, invalid, skipped, denied (data denial windows), late. A sensor
  *    whose last `gates.consistent_rejections` rejections agree with each other
@@ -49,6 +64,7 @@
  */
 #include <auvnav/config.h>
 #include <auvnav/earth.h>
+#include <auvnav/fix_consensus.h>
 #include <auvnav/health.h>
 #include <auvnav/plugin_host.h>
 #include <auvnav/ukf.h>
@@ -70,6 +86,8 @@ struct SensorStats
 	//! Observations applied at their measurement time by re-filtering (also
 	//! counted by their update status).
 	std::size_t delayed = 0;
+	//! Position re-initialisations from this sensor's fixes (gates.position_reinit).
+	std::size_t reinitialized = 0;
 	double nis_sum = 0;		 //!< over accepted updates
 	double nis_dim_sum = 0;	 //!< Σ dimensions of those updates (E[NIS] = dim)
 	std::string last_problem;
@@ -130,6 +148,8 @@ class Navigator
 	/** IMU steps re-predicted while re-filtering for delayed measurements
 	 *  (the cost of delays: compare with predictions()). */
 	std::size_t replayedPredictions() const { return replayed_predictions_; }
+	/** Position re-initialisations of the run, all sensors (gates.position_reinit). */
+	std::size_t positionReinitializations() const;
 
 	/** Names of the state's tangent coordinates: the paper's 43
 	 *  (tangentNames) and "<label>.<block>_<component>" per plugin state. */
@@ -152,6 +172,10 @@ class Navigator
 	/** Called after every measurement update with the sensor label, the
 	 *  observation time, the measurement and its result (any status). */
 	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)> on_update;
+	/** Called on an event worth a line in a log: the start from a fix
+	 *  consensus, a position re-initialisation (time from startTime() [s],
+	 *  sensor label, what happened). */
+	std::function<void(double t_s, const std::string& label, const std::string& what)> on_event;
 
    private:
 	struct Slot;
@@ -183,6 +207,15 @@ class Navigator
 	/** The measurement time of `obs` for a slot (NaN: the plugin says invalid). */
 	double measurementTime(const Slot& slot, const mrpt::obs::CObservation& obs, double stamp_s) const;
 	void initialize();
+	/** A fix of a position sensor failed the gate (r rejected): adds it to
+	 *  the slot's run and, if the run agrees, re-initialises the horizontal
+	 *  position onto it. True: re-initialised. */
+	bool reinitializeFromRejectedFix(Slot& slot, const Measurement& m, const UpdateResult& r, double t_obs);
+	/** Records a position sensor's fix (every one, initialFix) against the state. */
+	void recordFixOffset(const mrpt::obs::CObservation& obs, double t);
+	/** More than half of the fixes recorded over the slot's run of rejections
+	 *  lie within reinit_spread_m_ of `offset_m` (fix − state) [m]. */
+	bool mostFixesAgreeWith(const Slot& slot, const Eigen::Vector2d& offset_m) const;
 	void dispatch(const mrpt::obs::CObservation& obs, double stamp_s);
 	/** What a plugin sees besides the state, for an observation at t_obs. */
 	FilterContext context(double t_obs) const;
@@ -211,6 +244,10 @@ class Navigator
 	void clockJump(double t, double dt);
 	int consistent_rejections_ = 5;			// gates.consistent_rejections (0: off)
 	double consistency_probability_ = 0.99;	// gates.consistency_probability
+	// gates.position_reinit: this many agreeing gate-rejected fixes reset the position (0: off).
+	int reinit_fixes_ = 3;
+	double reinit_probability_ = 0.99;
+	double reinit_spread_m_ = 10;	// [m] a recorded fix agrees with the run's offset within this
 	bool position_from_gps_ = false;
 	bool earth_rate_ = true;  // filter.earth_rate: false only for studies (no gyrocompassing)
 	std::string gps_label_;
@@ -227,7 +264,8 @@ class Navigator
 	Eigen::Vector3d f_sum_ = Eigen::Vector3d::Zero(), w_sum_ = Eigen::Vector3d::Zero();
 	std::size_t leveling_samples_ = 0;
 	double leveling_start_s_ = -1;
-	std::optional<InitialFix> gps_fix_;	// from the fix sensor's plugin (initialFix)
+	InitialFixConsensus fix_consensus_;	 // the fix sensor's fixes before the start (initialFix)
+	std::optional<InitialFix> gps_fix_;	 // the agreed one, once there is a consensus
 	SensorStats imu_stats_;
 	std::size_t predictions_ = 0, imu_gaps_ = 0;
 	HealthMonitor health_;
