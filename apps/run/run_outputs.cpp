@@ -195,6 +195,7 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, 
 	j["clock_jumps"] = nav.clockJumps();
 	j["replayed_predictions"] = nav.replayedPredictions();
 	j["cholesky_repairs"] = nav.filter().choleskyRepairs();
+	j["sigma_limit_hits"] = nav.filter().sigmaLimitHits();  // filter.sigma_limits (0 without)
 	j["position_reinitializations"] = nav.positionReinitializations();
 	j["sensors"] = io::Json::array();
 	for (const auto& s : nav.stats())

@@ -255,9 +255,57 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	}
 	// Every key must have been read: a misspelled one is an error, not a default.
 	// plugin_paths and outputs belong to the program (auvnav-run checks them).
-	cfg.checkAllKeysUsed({"plugin_paths", "outputs"});
 	appendPluginStates(pm);
 	ukf_ = std::make_unique<ManifoldUkf>(pm, ut);
+	if (f.has("sigma_limits")) readSigmaLimits(f.child("sigma_limits"));
+	cfg.checkAllKeysUsed({"plugin_paths", "outputs"});
+}
+
+void Navigator::readSigmaLimits(const config::Node& limits)
+{
+	// What a key may name: a block of the paper's state, a plugin's block
+	// ("<label>.<block>") or one state (stateNames()), each [first, count).
+	std::map<std::string, std::pair<int, int>> targets = {
+		{"att", {idx::att, 3}},
+		{"gyro_bias", {idx::gyro_bias, 3}},
+		{"acc", {idx::acc, 3}},
+		{"gravity", {idx::gravity, 1}},
+		{"acc_bias", {idx::acc_bias, 3}},
+		{"vel", {idx::vel, 3}},
+		{"pos", {idx::pos, 3}},
+		{"current", {idx::current_vehicle, 2}},
+		{"current_far", {idx::current_far, 2}},
+		{"adcp_bias", {idx::adcp_bias, 2}},
+		{"M", {idx::inertia, 6}},
+		{"Dl", {idx::damping_lin, 6}},
+		{"Dq", {idx::damping_quad, 6}}};
+	for (const auto& b : plugin_blocks_) targets[b.sensor + "." + b.name] = {b.offset, b.dim};
+	for (int i = 0; i < static_cast<int>(state_names_.size()); ++i) targets.emplace(state_names_[i], std::make_pair(i, 1));
+	std::vector<std::string> names;
+	for (const auto& [name, range] : targets) names.push_back(name);
+	limits.allowOnly(names);
+	const int n = static_cast<int>(state_names_.size());
+	TangentVector lo = TangentVector::Zero(n), hi = TangentVector::Constant(n, INFINITY);
+	// Blocks first, then single states, so that a state's own entry wins.
+	for (const bool single : {false, true})
+		for (const auto& key : limits.keys())
+		{
+			const auto [first, count] = targets.at(key);
+			if ((count == 1 && first < n && state_names_[first] == key) != single) continue;
+			const auto l = limits.child(key);
+			l.allowOnly({"min", "max"});
+			const double min_sigma = l.nonNegative("min", 0.0);
+			const double max_sigma = l.has("max") ? l.positive("max") : INFINITY;
+			if (max_sigma < min_sigma) l.fail("max", "is below min");
+			lo.segment(first, count).setConstant(min_sigma);
+			hi.segment(first, count).setConstant(max_sigma);
+		}
+	for (int i = 0; i < n; ++i)
+		if (std::sqrt(P0_(i, i)) < lo[i] || std::sqrt(P0_(i, i)) > hi[i])
+			limits.fail(state_names_[i], "its initial sigma " + std::to_string(std::sqrt(P0_(i, i))) +
+											 " (filter.initial) is outside its limits [" + std::to_string(lo[i]) +
+											 ", " + std::to_string(hi[i]) + "]");
+	ukf_->setSigmaLimits(lo, hi);
 }
 
 void Navigator::appendPluginStates(ProcessModel& pm)

@@ -110,6 +110,52 @@ void repairCovariance(Covariance& P, const TangentVector& variance_floor)
 	symmetrize(P);
 }
 
+int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVector& max_sigma)
+{
+	int moved = 0;
+	for (int i = 0; i < P.rows(); ++i)
+	{
+		const double var = P(i, i);
+		if (!(var > 0) || !std::isfinite(var)) continue;  // repairCovariance's case
+		const double lo = min_sigma[i], hi = max_sigma[i];
+		double target = var;
+		if (var < lo * lo) target = lo * lo;
+		else if (var > hi * hi) target = hi * hi;
+		if (target == var) continue;
+		const double s = std::sqrt(target / var);
+		P.row(i) *= s;
+		P.col(i) *= s;	// P(i, i) scaled by s² in all: exactly the target (to rounding)
+		P(i, i) = target;
+		++moved;
+	}
+	return moved;
+}
+
+void ManifoldUkf::setSigmaLimits(const TangentVector& min_sigma, const TangentVector& max_sigma)
+{
+	if (min_sigma.size() == 0 && max_sigma.size() == 0)
+	{
+		min_sigma_.resize(0);
+		max_sigma_.resize(0);
+		return;
+	}
+	if (min_sigma.size() != n_ || max_sigma.size() != n_)
+		throw std::invalid_argument("ManifoldUkf::setSigmaLimits: bounds of " + std::to_string(min_sigma.size()) +
+									" and " + std::to_string(max_sigma.size()) + " states for a filter of " +
+									std::to_string(n_));
+	for (int i = 0; i < n_; ++i)
+		if (!(min_sigma[i] >= 0) || !(max_sigma[i] >= min_sigma[i]))
+			throw std::invalid_argument("ManifoldUkf::setSigmaLimits: state " + std::to_string(i) +
+										": need 0 <= min_sigma <= max_sigma");
+	min_sigma_ = min_sigma;
+	max_sigma_ = max_sigma;
+}
+
+void ManifoldUkf::applySigmaLimits()
+{
+	if (min_sigma_.size() == n_) sigma_limit_hits_ += static_cast<std::size_t>(limitSigmas(P_, min_sigma_, max_sigma_));
+}
+
 void ManifoldUkf::repairCovariance()
 {
 	auvnav::repairCovariance(P_, variance_floor_);
@@ -218,6 +264,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
 	P_ += model_.noiseCovariance(dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
+	applySigmaLimits();
 	mean.R_nb = so3::normalized(mean.R_nb);
 	x_ = mean;
 }
@@ -400,6 +447,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	x_.R_nb = so3::normalized(x_.R_nb);
 	P_.noalias() -= Pxz * KT;
 	symmetrize(P_);
+	applySigmaLimits();
 	return res;
 }
 

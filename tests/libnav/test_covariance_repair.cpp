@@ -88,3 +88,46 @@ TEST(CovarianceRepair, ANonPositiveVarianceGetsItsFloorAndNoCorrelation)
 	EXPECT_EQ(P(2, 3), 0.0);
 	EXPECT_NEAR(P(0, 1), 0.5, 1e-12);
 }
+
+// Sigma limits (issue 15 item 7, filter.sigma_limits): a state's σ is moved
+// onto its bound by scaling its row and column; correlations are kept and P
+// stays positive definite.
+TEST(SigmaLimits, MoveOnlyTheStatesOutsideTheirBoundsAndKeepCorrelations)
+{
+	const int n = idx::core_dim;
+	std::mt19937 rng(7);
+	std::normal_distribution<double> N;
+	Eigen::MatrixXd A(n, n);
+	for (int i = 0; i < n; ++i)
+		for (int j = 0; j < n; ++j) A(i, j) = N(rng);
+	TangentVector sigma(n);
+	for (int i = 0; i < n; ++i) sigma[i] = std::pow(10.0, 1.0 - 6.0 * i / (n - 1));	// 10 … 1e-5
+	Covariance P = A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+	const TangentVector d = P.diagonal().cwiseSqrt().cwiseInverse();
+	P = (sigma.cwiseProduct(d)).asDiagonal() * P * (sigma.cwiseProduct(d)).asDiagonal();
+	const Covariance before = P;
+	TangentVector lo = TangentVector::Zero(n), hi = TangentVector::Constant(n, INFINITY);
+	lo[idx::gyro_bias + 2] = 10 * sigma[idx::gyro_bias + 2];  // a floor above: raised
+	hi[idx::pos] = 0.5 * sigma[idx::pos];					  // a ceiling below: lowered
+	lo[idx::vel] = 0.5 * sigma[idx::vel];					  // bounds it already meets: untouched
+	hi[idx::vel] = 2 * sigma[idx::vel];
+	EXPECT_EQ(limitSigmas(P, lo, hi), 2);
+	EXPECT_DOUBLE_EQ(std::sqrt(P(idx::gyro_bias + 2, idx::gyro_bias + 2)), lo[idx::gyro_bias + 2]);
+	EXPECT_NEAR(std::sqrt(P(idx::pos, idx::pos)), hi[idx::pos], 4e-16 * hi[idx::pos]);
+	EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(P).info(), Eigen::Success);
+	for (int i = 0; i < n; ++i)
+	{
+		if (i != idx::gyro_bias + 2 && i != idx::pos)
+		{
+			EXPECT_EQ(P(i, i), before(i, i)) << i;
+		}
+		for (int j = 0; j < n; ++j)
+		{
+			const double r0 = before(i, j) / std::sqrt(before(i, i) * before(j, j));
+			const double r1 = P(i, j) / std::sqrt(P(i, i) * P(j, j));
+			EXPECT_NEAR(r1, r0, 1e-12) << i << "," << j;
+		}
+	}
+	// Again: nothing left to move.
+	EXPECT_EQ(limitSigmas(P, lo, hi), 0);
+}

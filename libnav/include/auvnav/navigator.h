@@ -222,6 +222,10 @@ class Navigator
 	bool denied(const std::string& label, double t_obs) const;
 	/** Appends the plugins' state blocks to `pm` and P0 (plugin SDK v2). */
 	void appendPluginStates(ProcessModel& pm);
+	/** filter.sigma_limits: {<block or state>: {min, max}} [the state's units]
+	 *  → ManifoldUkf::setSigmaLimits (after appendPluginStates: plugin
+	 *  blocks may be named). */
+	void readSigmaLimits(const config::Node& limits);
 
 	std::unique_ptr<earth::TangentFrame> frame_;
 	std::unique_ptr<ManifoldUkf> ukf_;

@@ -115,6 +115,14 @@ struct UpdateResult
  *  finite is first set to variance_floor(i) (> 0). */
 void repairCovariance(Covariance& P, const TangentVector& variance_floor);
 
+/** Keeps every state's σ within [min_sigma(i), max_sigma(i)] (0 and +∞: no
+ *  bound) by scaling its row and column of P: P ← D P D with D diagonal and
+ *  positive, so correlations are kept and P stays positive definite. A floor
+ *  keeps a state from becoming over-confident (a bias the data can never pin
+ *  to nanoradians); a ceiling keeps an unobservable one from growing without
+ *  meaning. Returns how many states were moved. */
+int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVector& max_sigma);
+
 class ManifoldUkf
 {
    public:
@@ -143,6 +151,12 @@ class ManifoldUkf
 		return update(model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
 	}
 
+	/** Bounds applied after every prediction and update (limitSigmas);
+	 *  dim() long each. Empty vectors: none (the default). */
+	void setSigmaLimits(const TangentVector& min_sigma, const TangentVector& max_sigma);
+	/** How many times a state's σ was moved onto one of its bounds. */
+	std::size_t sigmaLimitHits() const { return sigma_limit_hits_; }
+
 	std::size_t choleskyRepairs() const { return repairs_; }
 	const UtWeights& weights() const { return w_; }
 	const ProcessModel& processModel() const { return model_; }
@@ -167,6 +181,9 @@ class ManifoldUkf
 	Eigen::MatrixXd z_sigma_;
 	std::array<NavState, 2 * idx::adcp_bias + 1> sigma_scratch_;	 // prediction sigma points
 	std::size_t repairs_ = 0;
+	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
+	std::size_t sigma_limit_hits_ = 0;
+	void applySigmaLimits();
 	TangentVector variance_floor_;	// 1e-12 × the initial variances (repairCovariance)
 };
 
