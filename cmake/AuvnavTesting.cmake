@@ -24,8 +24,17 @@ function(auvnav_add_gtest target)
   target_link_libraries(${target} PRIVATE GTest::gtest_main auvnav_warnings ${ARG_LIBS})
   target_compile_definitions(${target} PRIVATE
     AUVNAV_TEST_DATA_DIR="${AUVNAV_TEST_DATA_DIR}")
+  # Test suites named *Slow (e.g. RunLongSlow) carry the ctest label `slow`:
+  # left out of the default run (ctest -LE slow), run with ctest -L slow.
   gtest_discover_tests(${target}
     TEST_PREFIX "${ARG_PREFIX}"
+    TEST_FILTER "-*Slow.*"
     DISCOVERY_MODE PRE_TEST
     WORKING_DIRECTORY "${CMAKE_CURRENT_BINARY_DIR}")
+  gtest_discover_tests(${target}
+    TEST_PREFIX "${ARG_PREFIX}"
+    TEST_FILTER "*Slow.*"
+    DISCOVERY_MODE PRE_TEST
+    WORKING_DIRECTORY "${CMAKE_CURRENT_BINARY_DIR}"
+    PROPERTIES LABELS slow TIMEOUT 5400)
 endfunction()

@@ -13,10 +13,12 @@
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/serialization/CArchive.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -51,14 +53,16 @@ struct Outcome
 	int signal = 0;		 //!< when a signal ended it
 	std::string output;	 //!< stdout and stderr
 	double wall_s = 0;
+	long max_rss_kb = 0;  //!< the child's peak resident set (getrusage)
 };
 
-/** Runs auvnav-run with `args` (stdout+stderr to `dir`/output.txt); with
+/** Runs `exe` with `args` (stdout+stderr to `dir`/output.txt); with
  *  `kill_after_s` > 0, sends it SIGKILL after that long if still running. */
-Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, double kill_after_s = 0)
+Outcome runProgram(const std::string& exe, const std::vector<std::string>& args, const fs::path& dir,
+				   double kill_after_s = 0)
 {
 	const fs::path log = dir / "output.txt";
-	std::vector<std::string> argv_s = {AUVNAV_RUN_EXE};
+	std::vector<std::string> argv_s = {exe};
 	argv_s.insert(argv_s.end(), args.begin(), args.end());
 	std::vector<char*> argv;
 	for (auto& a : argv_s) argv.push_back(a.data());
@@ -75,22 +79,24 @@ Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, 
 	}
 	Outcome o;
 	int status = 0;
+	struct rusage usage = {};
 	if (kill_after_s > 0)
 	{
 		// Poll so that a run ending early is seen as such (and not killed late).
-		while (waitpid(pid, &status, WNOHANG) == 0)
+		while (wait4(pid, &status, WNOHANG, &usage) == 0)
 		{
 			if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >= kill_after_s)
 			{
 				kill(pid, SIGKILL);
-				waitpid(pid, &status, 0);
+				wait4(pid, &status, 0, &usage);
 				break;
 			}
 			std::this_thread::sleep_for(std::chrono::milliseconds(5));
 		}
 	}
 	else
-		waitpid(pid, &status, 0);
+		wait4(pid, &status, 0, &usage);
+	o.max_rss_kb = usage.ru_maxrss;
 	o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	if (WIFEXITED(status)) o.exit_code = WEXITSTATUS(status);
 	if (WIFSIGNALED(status)) o.signal = WTERMSIG(status);
@@ -99,6 +105,11 @@ Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, 
 	ss << in.rdbuf();
 	o.output = ss.str();
 	return o;
+}
+
+Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, double kill_after_s = 0)
+{
+	return runProgram(AUVNAV_RUN_EXE, args, dir, kill_after_s);
 }
 
 std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog, std::vector<std::string> extra = {},
@@ -512,4 +523,104 @@ TEST(RunClockJump, ReinitialiseCompletesWithTheDataAfterTheJump)
 		EXPECT_GT(tumRowsFrom(dir / "out" / "trajectory.tum", jump_at - 0.5), 225u);
 		EXPECT_NEAR(lastTumTime(dir / "out" / "trajectory.tum"), last_imu_s, 0.2);
 	}
+}
+
+// ------------------------------------------------------------ a day at sea
+
+namespace
+{
+/** A mission of the sample's kind (surface with GPS, then dives of a 40 m
+ *  square at 8 m, each followed by 90 s at the surface), `cycles` dives long:
+ *  each cycle ~9 minutes. */
+fs::path writeLongMission(const fs::path& dir, int cycles)
+{
+	std::string text = slurp(kRepo + "/config/missions/sample.yaml");
+	text = text.substr(0, text.find("plan:"));
+	text.replace(text.find("name: sample"), 12, "name: long");
+	// Relative paths in it (vehicle, sensors) stay those of config/missions.
+	for (const char* key : {"vehicle: ", "sensors: "})
+	{
+		const auto at = text.find(key) + std::string(key).size();
+		text.insert(at, kRepo + "/config/missions/");
+	}
+	const auto dur = text.find("max_duration_s:");
+	text.replace(dur, text.find('\n', dur) - dur, "max_duration_s: " + std::to_string(600 * cycles + 900));
+	text += "plan:\n"
+			"  - {goto: [140, 40], surface: true, speed_mps: 0.5}\n"
+			"  - repeat: " +
+			std::to_string(cycles) +
+			"\n"
+			"    steps:\n"
+			"      - {wait_s: 50, depth_m: 8}\n"
+			"      - {goto: [180, 40], depth_m: 8, speed_mps: 0.4}\n"
+			"      - {goto: [180, 80], depth_m: 8, speed_mps: 0.4}\n"
+			"      - {goto: [140, 80], depth_m: 8, speed_mps: 0.4}\n"
+			"      - {goto: [140, 40], depth_m: 8, speed_mps: 0.4}\n"
+			"      - {wait_s: 90, surface: true}\n";
+	const fs::path file = dir / "long.yaml";
+	std::ofstream(file) << text;
+	return file;
+}
+
+struct LongRun
+{
+	Outcome run;
+	Json summary;
+	std::size_t rows = 0;
+};
+
+LongRun simulateAndRun(const fs::path& base, const std::string& name, int cycles)
+{
+	const fs::path dir = base / name;
+	fs::create_directories(dir);
+	const fs::path mission = writeLongMission(dir, cycles);
+	const Outcome sim = runProgram(AUVNAV_SIM_EXE, {mission.string(), "--seed", "1", "--out", (dir / "sim").string()}, dir);
+	EXPECT_EQ(sim.exit_code, 0) << sim.output;
+	LongRun r;
+	// 1 Hz rows: a day of states.csv at 10 Hz would be ~1 GB.
+	r.run = runNavigator(runArgs(dir, (dir / "sim" / "long.rawlog").string(), {"--set", "outputs.rate_hz=1"}), dir);
+	fs::remove(dir / "sim" / "long.rawlog");
+	fs::remove(dir / "sim" / "ground_truth.csv");
+	r.summary = summaryOf(dir);
+	r.rows = expectWholeCsv(dir / "out" / "states.csv");
+	// Every field a finite number: no NaN or Inf in any state or σ.
+	std::ifstream states(dir / "out" / "states.csv");
+	std::string line;
+	std::getline(states, line);	 // header
+	std::size_t non_finite = 0;
+	for (std::size_t row = 1; std::getline(states, line); ++row)
+		for (const auto& f : csvFields(line))
+		{
+			char* end = nullptr;
+			const double v = std::strtod(f.c_str(), &end);
+			if (end != f.c_str() + f.size() || !std::isfinite(v))
+				if (++non_finite <= 5) ADD_FAILURE() << name << ": states.csv row " << row << ": '" << f << "'";
+		}
+	EXPECT_EQ(non_finite, 0u) << name;
+	return r;
+}
+}  // namespace
+
+// Issue 15: a 24 h mission (slow label): no NaN anywhere in the states, the
+// covariance positive definite throughout (no Cholesky repair was needed),
+// a healthy end, and a peak RSS within 5 % of a 1 h run's (nothing grows
+// with the length of the run).
+TEST(RunLongSlow, ADayAtSeaStaysFiniteHealthyAndBoundedInMemory)
+{
+	const fs::path base = workDir();
+	const LongRun hour = simulateAndRun(base, "hour", 6), day = simulateAndRun(base, "day", 162);
+	for (const LongRun* r : {&hour, &day})
+	{
+		EXPECT_EQ(r->run.exit_code, 0) << r->run.output;
+		EXPECT_TRUE(r->summary["completed"].get<bool>());
+		EXPECT_EQ(r->summary["status"], "ok");
+		EXPECT_EQ(r->summary["cholesky_repairs"].get<std::size_t>(), 0u);
+	}
+	const double day_s = day.summary["data_duration_s"].get<double>();
+	EXPECT_GT(day_s, 24 * 3600.0);
+	EXPECT_GT(day.rows, 86000u);
+	std::printf("1 h run: %.0f s of data, max RSS %ld kB, %.0f s; 24 h run: %.0f s of data, max RSS %ld kB, %.0f s\n",
+				hour.summary["data_duration_s"].get<double>(), hour.run.max_rss_kb, hour.run.wall_s, day_s,
+				day.run.max_rss_kb, day.run.wall_s);
+	EXPECT_LE(day.run.max_rss_kb, 1.05 * hour.run.max_rss_kb);
 }
