@@ -350,13 +350,17 @@ sensors:
 	ASSERT_NE(g, nullptr);
 	ASSERT_TRUE(g->has_GGA_datum());
 	const auto& f = g->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields;
-	EXPECT_EQ(f.latitude_degrees, -12.975);	 // bit-exact: degrees kept as read
-	EXPECT_EQ(f.longitude_degrees, -38.43);
-	EXPECT_EQ(f.fix_quality, 1);
-	EXPECT_EQ(dynamic_cast<mrpt::obs::CObservationGPS*>(obs[1].get())
-				  ->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>()
-				  .fields.fix_quality,
-			  0);
+	// MRPT's GGA fields are packed: copied out, since EXPECT_EQ binds
+	// references (a misaligned double reference is undefined behaviour).
+	const double lat_deg = f.latitude_degrees, lon_deg = f.longitude_degrees;
+	const int quality = f.fix_quality;
+	EXPECT_EQ(lat_deg, -12.975);  // bit-exact: degrees kept as read
+	EXPECT_EQ(lon_deg, -38.43);
+	EXPECT_EQ(quality, 1);
+	const int quality_1 = dynamic_cast<mrpt::obs::CObservationGPS*>(obs[1].get())
+							  ->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>()
+							  .fields.fix_quality;
+	EXPECT_EQ(quality_1, 0);
 }
 
 TEST(Import, AdcpAndThrusterArrays)

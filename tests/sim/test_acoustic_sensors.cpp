@@ -115,12 +115,17 @@ TEST(AdcpSim, ValidCellsMeasureCurrentRelativeToTheSensor)
 	Eigen::Vector3d mean = Eigen::Vector3d::Zero();
 	int n = 0;
 	for (int k = 0; k < 100; ++k)
-		for (const auto& c : adcp.sample(s.t, env)->cells)
+	{
+		// Held: a range-for over a temporary's member would read freed memory
+		// (the temporary dies before the loop body; found by ASan).
+		const auto profile = adcp.sample(s.t, env);
+		for (const auto& c : profile->cells)
 			if (c.valid)
 			{
 				mean += Eigen::Vector3d(c.velocity_s_mps[0], c.velocity_s_mps[1], c.velocity_s_mps[2]);
 				++n;
 			}
+	}
 	ASSERT_GT(n, 1000);
 	mean /= n;
 	const Eigen::Matrix3d R_sn = Eigen::AngleAxisd(-22.5 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
