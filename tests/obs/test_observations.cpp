@@ -4,6 +4,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/obs/CObservationUSBL.h>
 #include <gtest/gtest.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/rtti/CObject.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -132,7 +134,7 @@ Bytes dvlVersion0Bytes(const CObservationDVL& d, uint8_t bottom_lock_byte = 1)
 	const std::string name = "auvnav::obs::CObservationDVL";
 	out << static_cast<uint8_t>(0x80 | name.size());
 	out.WriteBuffer(name.data(), name.size());
-	out << static_cast<uint8_t>(0);	 // version
+	out << static_cast<uint8_t>(0);  // version
 	out << d.timestamp << d.sensorLabel << d.sensorPose;
 	for (double v : d.velocity_s_mps) out << v;
 	for (double c : d.velocity_cov) out << c;
@@ -168,7 +170,8 @@ struct DvlV1Layout
 void patchU8(Bytes& bytes, std::size_t offset, uint8_t expected, uint8_t value)
 {
 	ASSERT_LT(offset, bytes.size());
-	ASSERT_EQ(unsigned(expected), unsigned(bytes[offset])) << "unexpected serialized layout at byte " << offset;
+	ASSERT_EQ(unsigned(expected), unsigned(bytes[offset]))
+	    << "unexpected serialized layout at byte " << offset;
 	bytes[offset] = value;
 }
 
@@ -514,7 +517,7 @@ TEST(ObservationCorruption, DvlFrameOrSignCodeOutOfRangeIsCorruptData)
 	Bytes huge = good;
 	patchU8(huge, at.frame_at, uint8_t(DvlFrame::EarthEnu), 0xFF);
 	EXPECT_NE(std::string::npos, deserializeError(huge).find("corrupt data"));
-	EXPECT_EQ("", deserializeError(good));	// the offsets above are the right ones
+	EXPECT_EQ("", deserializeError(good));  // the offsets above are the right ones
 }
 
 TEST(ObservationCorruption, DvlFlagsOtherThanZeroOrOneAreCorruptData)
@@ -616,4 +619,192 @@ TEST(ObservationCorruption, TruncatedObjectThrowsAtEveryCut)
 		const Bytes cut_bytes(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(cut));
 		EXPECT_THROW(deserialize(cut_bytes), std::exception) << "cut at byte " << cut;
 	}
+}
+
+// ------------------------------------------------- byte-edited records (issue 15)
+// Every class refuses a damaged label length, a damaged mounting pose and a
+// flag or enum byte no writer produces, naming the class and the field, and a
+// refused record leaves the object it was read into untouched.
+
+namespace
+{
+CObservationUSBL makeUsbl()
+{
+	CObservationUSBL u;
+	u.sensorLabel = "USBL";
+	u.timestamp = fixedTime(4);
+	u.measurement_time = fixedTime(-5);
+	u.sensorPose = mrpt::poses::CPose3D(0.4, 0.0, -0.3, 0.0, 0.0, 0.0);
+	u.frame = UsblFrame::LocalNed;
+	u.position = {120.5, -33.25, 41.0};
+	u.covariance_ned_m2 = {4, 0, 0, 0, 4, 0, 0, 0, 9};
+	u.slant_range_m = 130.0;
+	u.transponder_id = 7;
+	return u;
+}
+
+// The label's uint32 length follows the object header and the 8-byte timestamp.
+std::size_t labelLengthOffset(const mrpt::serialization::CSerializable& obj)
+{
+	return versionByteOffset(obj) + 1 + sizeof(int64_t);
+}
+
+// The offset of the only occurrence of the double `v` in `bytes` (npos if
+// absent or not unique): a field found by value, independent of the layout.
+std::size_t uniqueDoubleOffset(const Bytes& bytes, double v)
+{
+	uint8_t pattern[sizeof(double)];
+	std::memcpy(pattern, &v, sizeof(double));
+	std::size_t found = std::string::npos;
+	for (std::size_t i = 0; i + sizeof(double) <= bytes.size(); ++i)
+		if (std::memcmp(&bytes[i], pattern, sizeof(double)) == 0)
+		{
+			if (found != std::string::npos) return std::string::npos;
+			found = i;
+		}
+	return found;
+}
+
+void patchDouble(Bytes& bytes, double expected, double value)
+{
+	const std::size_t at = uniqueDoubleOffset(bytes, expected);
+	ASSERT_NE(std::string::npos, at) << expected << " is not found once in the record";
+	std::memcpy(&bytes[at], &value, sizeof(double));
+}
+
+void expectRefusal(const Bytes& bytes, const std::string& cls, const std::string& field)
+{
+	const std::string msg = deserializeError(bytes);
+	EXPECT_NE(std::string::npos, msg.find("corrupt data")) << msg;
+	EXPECT_NE(std::string::npos, msg.find(cls)) << msg;
+	EXPECT_NE(std::string::npos, msg.find(field)) << msg;
+}
+
+struct NamedRecord
+{
+	std::string cls;
+	std::function<Bytes()> bytes;
+	std::size_t label_at;
+};
+
+std::vector<NamedRecord> everyClass()
+{
+	return {
+	    {"CObservationDVL", [] { return serialize(makeDvlV1()); }, labelLengthOffset(makeDvl())},
+	    {"CObservationADCP", [] { return serialize(makeAdcp()); }, labelLengthOffset(makeAdcp())},
+	    {"CObservationPressure", [] { return serialize(makePressure()); }, labelLengthOffset(makePressure())},
+	    {"CObservationThrusters", [] { return serialize(makeThrusters()); },
+	     labelLengthOffset(makeThrusters())},
+	    {"CObservationUSBL", [] { return serialize(makeUsbl()); }, labelLengthOffset(makeUsbl())}};
+}
+}  // namespace
+
+TEST(ObservationCorruption, HugeLabelLengthIsRefusedBeforeAllocatingInEveryClass)
+{
+	for (const auto& rec : everyClass())
+	{
+		SCOPED_TRACE(rec.cls);
+		Bytes bytes = rec.bytes();
+		ASSERT_EQ("", deserializeError(bytes));
+		uint32_t len = 0;
+		std::memcpy(&len, &bytes[rec.label_at], 4);
+		ASSERT_GT(len, 0u);
+		ASSERT_LT(len, 20u) << "the offset does not point at the label length";
+		// 4 GiB would be one allocation (and 4 GiB of RSS) with MRPT's reader.
+		patchU32(bytes, rec.label_at, len, 0xFFFFFFF0u);
+		expectRefusal(bytes, rec.cls, "sensorLabel length");
+	}
+}
+
+TEST(ObservationCorruption, DamagedSensorPoseIsRefusedInEveryClassThatHasOne)
+{
+	struct Case
+	{
+		std::string cls;
+		Bytes bytes;
+		double x;
+	};
+	const std::vector<Case> cases = {{"CObservationDVL", serialize(makeDvlV1()), 0.75},
+	                                 {"CObservationADCP", serialize(makeAdcp()), -0.5},
+	                                 {"CObservationPressure", serialize(makePressure()), 1.2},
+	                                 {"CObservationUSBL", serialize(makeUsbl()), 0.4}};
+	for (const auto& c : cases)
+	{
+		SCOPED_TRACE(c.cls);
+		Bytes nan_x = c.bytes;
+		patchDouble(nan_x, c.x, std::numeric_limits<double>::quiet_NaN());
+		expectRefusal(nan_x, c.cls, "sensorPose");
+		// The rotation matrix follows x, y, z: its first element scaled by 3
+		// is no rotation any more.
+		Bytes skewed = c.bytes;
+		const std::size_t r00 = uniqueDoubleOffset(c.bytes, c.x) + 3 * sizeof(double);
+		double v = 0;
+		std::memcpy(&v, &skewed[r00], sizeof v);
+		ASSERT_TRUE(std::abs(v) <= 1.0) << "not a rotation element at byte " << r00;
+		v = 3 * v + 0.5;
+		std::memcpy(&skewed[r00], &v, sizeof v);
+		expectRefusal(skewed, c.cls, "sensorPose");
+	}
+}
+
+TEST(ObservationCorruption, AdcpValidFlagOtherThanZeroOrOneIsCorruptData)
+{
+	const auto a = makeAdcp();
+	Bytes bytes = serialize(a);
+	// The last cell's valid byte is the last byte before the end flag.
+	patchU8(bytes, bytes.size() - kEndFlagSize - 1, 0, 2);
+	expectRefusal(bytes, "CObservationADCP", "cell valid");
+	patchU8(bytes, bytes.size() - kEndFlagSize - 1, 2, 0xFF);
+	expectRefusal(bytes, "CObservationADCP", "cell valid");
+}
+
+TEST(ObservationCorruption, ThrusterUnitAndUsblFrameCodesNameClassAndField)
+{
+	const auto t = makeThrusters();
+	Bytes thr = serialize(t);
+	patchU8(thr, thr.size() - kEndFlagSize - t.effort.size() * sizeof(double) - 4 - 1,
+	        uint8_t(EffortUnit::Speed_rpm), 2);
+	expectRefusal(thr, "CObservationThrusters", "unit");
+
+	const auto u = makeUsbl();
+	Bytes usbl = serialize(u);
+	// frame byte: just before the first position value.
+	const std::size_t frame_at = uniqueDoubleOffset(usbl, 120.5) - 1;
+	patchU8(usbl, frame_at, uint8_t(UsblFrame::LocalNed), 2);
+	expectRefusal(usbl, "CObservationUSBL", "frame");
+}
+
+TEST(ObservationCorruption, RefusedRecordLeavesTheObjectItIsReadIntoUntouched)
+{
+	// A damaged beam flag comes after every head field: reading it into an
+	// existing object must not leave that object half overwritten.
+	const CObservationDVL other = makeDvl();
+	CObservationDVL target = makeDvlV1();
+	target.sensorLabel = "KEEP";
+	Bytes bytes = serialize(other);
+	const DvlV1Layout at(bytes, other.beams.size());
+	patchU8(bytes, at.validAt(3), 0, 9);
+	mrpt::io::CMemoryStream buf;
+	buf.Write(bytes.data(), bytes.size());
+	buf.Seek(0);
+	EXPECT_THROW(mrpt::serialization::archiveFrom(buf).ReadObject(&target), std::exception);
+	EXPECT_EQ("KEEP", target.sensorLabel);
+	EXPECT_EQ(DvlFrame::EarthEnu, target.frame);
+	EXPECT_EQ(0.0125, target.beam_velocity_sigma_mps);
+	EXPECT_EQ(-0.625, target.beams[0].velocity_mps);
+}
+
+TEST(ObservationSerialization, UsblRoundTripKeepsEveryField)
+{
+	const auto u = makeUsbl();
+	const auto back = roundTrip(u);
+	ASSERT_TRUE(back);
+	expectSameBase(u, *back);
+	EXPECT_EQ(u.measurement_time, back->measurement_time);
+	EXPECT_EQ(u.frame, back->frame);
+	EXPECT_EQ(u.position, back->position);
+	EXPECT_EQ(u.covariance_ned_m2, back->covariance_ned_m2);
+	EXPECT_EQ(u.slant_range_m, back->slant_range_m);
+	EXPECT_EQ(u.transponder_id, back->transponder_id);
+	expectSamePose(u.sensorPose, back->sensorPose);
 }

@@ -13,9 +13,13 @@ IMPLEMENTS_SERIALIZABLE(CObservationADCP, CObservation, auvnav::obs)
 namespace
 {
 constexpr uint32_t kMaxCells = 4096;
-}
+constexpr const char* kClass = "CObservationADCP";
+}  // namespace
 
-uint8_t CObservationADCP::serializeGetVersion() const { return 0; }
+uint8_t CObservationADCP::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationADCP::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -25,28 +29,37 @@ void CObservationADCP::serializeTo(mrpt::serialization::CArchive& out) const
 	for (const auto& c : cells)
 	{
 		for (double v : c.velocity_s_mps) out << v;
-		out << c.correlation << c.valid;
+		out << c.correlation;
+		detail::writeFlag(out, c.valid);
 	}
 }
 
 void CObservationADCP::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
+	// Read into a fresh object and adopt it only once the whole record is
+	// valid: a record refused half-way leaves this one untouched.
+	CObservationADCP r;
 	switch (version)
 	{
 		case 0:
 		{
-			in >> timestamp >> sensorLabel >> sensorPose;
-			in >> blank_distance_m >> cell_size_m >> velocity_sigma_mps;
-			cells.resize(detail::readCount(in, kMaxCells, "ADCP cell"));
-			for (auto& c : cells)
+			in >> r.timestamp;
+			r.sensorLabel = detail::readLabel(in, kClass);
+			detail::readPose(in, r.sensorPose, kClass);
+			in >> r.blank_distance_m >> r.cell_size_m >> r.velocity_sigma_mps;
+			r.cells.resize(detail::readCount(in, kMaxCells, "ADCP cell"));
+			for (auto& c : r.cells)
 			{
 				for (double& v : c.velocity_s_mps) in >> v;
-				in >> c.correlation >> c.valid;
+				in >> c.correlation;
+				c.valid = detail::readFlag(in, kClass, "cell valid");
 			}
 		}
 		break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
+	*this = std::move(r);
 }
 
 void CObservationADCP::getDescriptionAsText(std::ostream& o) const
@@ -59,9 +72,8 @@ void CObservationADCP::getDescriptionAsText(std::ostream& o) const
 	for (std::size_t i = 0; i < cells.size(); ++i)
 	{
 		const auto& c = cells[i];
-		o << "  " << cellDistance(i) << " | " << c.velocity_s_mps[0] << " " << c.velocity_s_mps[1]
-		  << " " << c.velocity_s_mps[2] << " | " << c.correlation << " | " << (c.valid ? 1 : 0)
-		  << "\n";
+		o << "  " << cellDistance(i) << " | " << c.velocity_s_mps[0] << " " << c.velocity_s_mps[1] << " "
+		  << c.velocity_s_mps[2] << " | " << c.correlation << " | " << (c.valid ? 1 : 0) << "\n";
 	}
 }
 
@@ -75,7 +87,7 @@ std::string CObservationADCP::exportTxtDataRow() const
 	std::ostringstream s;
 	s << std::setprecision(9) << cells.size();
 	for (const auto& c : cells)
-		s << " " << c.velocity_s_mps[0] << " " << c.velocity_s_mps[1] << " " << c.velocity_s_mps[2]
-		  << " " << c.correlation << " " << (c.valid ? 1 : 0);
+		s << " " << c.velocity_s_mps[0] << " " << c.velocity_s_mps[1] << " " << c.velocity_s_mps[2] << " "
+		  << c.correlation << " " << (c.valid ? 1 : 0);
 	return s.str();
 }

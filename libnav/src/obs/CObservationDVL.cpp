@@ -19,28 +19,20 @@ constexpr const char* kSignNames[] = {"vehicle_over_bottom", "bottom_over_instru
 constexpr uint8_t kFrameCount = sizeof(kFrameNames) / sizeof(kFrameNames[0]);
 constexpr uint8_t kSignCount = sizeof(kSignNames) / sizeof(kSignNames[0]);
 
-/** A uint8 that must be below `count`. MRPT reads a bool by copying the byte
- *  into it, so any other byte value would be undefined behaviour: we read the
- *  byte and refuse what no writer produces. */
-uint8_t readCode(mrpt::serialization::CArchive& in, uint8_t count, const char* what)
+constexpr const char* kClass = "CObservationDVL";
+
+bool readFlag(mrpt::serialization::CArchive& in, const char* field)
 {
-	uint8_t v = 0;
-	in >> v;
-	if (v >= count)
-		THROW_EXCEPTION_FMT("corrupt data: DVL %s code %u out of range 0..%u", what, unsigned(v),
-							unsigned(count - 1));
-	return v;
+	return detail::readFlag(in, kClass, field);
 }
-
-bool readFlag(mrpt::serialization::CArchive& in, const char* what) { return readCode(in, 2, what) != 0; }
-
-void writeFlag(mrpt::serialization::CArchive& out, bool b) { out << static_cast<uint8_t>(b ? 1 : 0); }
 
 /** The fields versions 0 and 1 share, in their order, up to the beam
  *  inclination. */
 void readCommonHead(mrpt::serialization::CArchive& in, CObservationDVL& d)
 {
-	in >> d.timestamp >> d.sensorLabel >> d.sensorPose;
+	in >> d.timestamp;
+	d.sensorLabel = detail::readLabel(in, kClass);
+	detail::readPose(in, d.sensorPose, kClass);
 	for (double& v : d.velocity_s_mps) in >> v;
 	for (double& c : d.velocity_cov) in >> c;
 	d.bottom_lock = readFlag(in, "bottom_lock");
@@ -85,7 +77,10 @@ bool parseDvlSign(const std::string& name, DvlSign& out)
 }
 }  // namespace auvnav::obs
 
-uint8_t CObservationDVL::serializeGetVersion() const { return 1; }
+uint8_t CObservationDVL::serializeGetVersion() const
+{
+	return 1;
+}
 
 // Version 1 layout: timestamp, label, sensorPose, velocity (3 doubles),
 // covariance (9), bottom_lock (u8), altitude, inclination, frame (u8),
@@ -95,52 +90,53 @@ void CObservationDVL::serializeTo(mrpt::serialization::CArchive& out) const
 {
 	// Never write what the reader would refuse.
 	if (static_cast<uint8_t>(frame) >= kFrameCount || static_cast<uint8_t>(sign) >= kSignCount)
-		THROW_EXCEPTION_FMT("CObservationDVL: invalid frame %u or sign %u", unsigned(static_cast<uint8_t>(frame)),
-							unsigned(static_cast<uint8_t>(sign)));
+		THROW_EXCEPTION_FMT("CObservationDVL: invalid frame %u or sign %u",
+		                    unsigned(static_cast<uint8_t>(frame)), unsigned(static_cast<uint8_t>(sign)));
 	out << timestamp << sensorLabel << sensorPose;
 	for (double v : velocity_s_mps) out << v;
 	for (double c : velocity_cov) out << c;
-	writeFlag(out, bottom_lock);
+	detail::writeFlag(out, bottom_lock);
 	out << altitude_m << beam_inclination_rad;
 	out << static_cast<uint8_t>(frame) << static_cast<uint8_t>(sign) << beam_velocity_sigma_mps;
 	out << static_cast<uint32_t>(beams.size());
 	for (const auto& b : beams)
 	{
 		out << b.range_m;
-		writeFlag(out, b.valid);
+		detail::writeFlag(out, b.valid);
 		out << b.velocity_mps << b.azimuth_rad;
 	}
 }
 
 void CObservationDVL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
+	// Read into a fresh object and adopt it only once the whole record is
+	// valid: a record refused half-way leaves this one untouched.
+	CObservationDVL r;
 	switch (version)
 	{
 		case 0:
 		{
-			readCommonHead(in, *this);
-			// Version 0 knew the instrument frame and the sensor's own sign only.
-			frame = DvlFrame::Instrument;
-			sign = DvlSign::VehicleOverBottom;
-			beam_velocity_sigma_mps = 0;
-			beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
-			for (auto& b : beams)
+			readCommonHead(in, r);
+			// Version 0 knew the instrument frame and the sensor's own sign only
+			// (and the fresh object's beam velocity, azimuth and sigma are 0).
+			r.frame = DvlFrame::Instrument;
+			r.sign = DvlSign::VehicleOverBottom;
+			r.beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
+			for (auto& b : r.beams)
 			{
 				in >> b.range_m;
 				b.valid = readFlag(in, "beam valid");
-				b.velocity_mps = 0;
-				b.azimuth_rad = 0;
 			}
 		}
 		break;
 		case 1:
 		{
-			readCommonHead(in, *this);
-			frame = static_cast<DvlFrame>(readCode(in, kFrameCount, "frame"));
-			sign = static_cast<DvlSign>(readCode(in, kSignCount, "sign"));
-			in >> beam_velocity_sigma_mps;
-			beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
-			for (auto& b : beams)
+			readCommonHead(in, r);
+			r.frame = static_cast<DvlFrame>(detail::readCode(in, kFrameCount, kClass, "frame"));
+			r.sign = static_cast<DvlSign>(detail::readCode(in, kSignCount, kClass, "sign"));
+			in >> r.beam_velocity_sigma_mps;
+			r.beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
+			for (auto& b : r.beams)
 			{
 				in >> b.range_m;
 				b.valid = readFlag(in, "beam valid");
@@ -148,8 +144,10 @@ void CObservationDVL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
 			}
 		}
 		break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
+	*this = std::move(r);
 }
 
 void CObservationDVL::getDescriptionAsText(std::ostream& o) const
@@ -157,11 +155,12 @@ void CObservationDVL::getDescriptionAsText(std::ostream& o) const
 	CObservation::getDescriptionAsText(o);
 	o << "Sensor pose on vehicle (FRD): " << sensorPose << "\n";
 	o << "Frame: " << dvlFrameName(frame) << ", sign: " << dvlSignName(sign)
-	  << (sign == DvlSign::BottomOverInstrument ? " (seabed relative to the instrument, RDI PD0)" : "") << "\n";
+	  << (sign == DvlSign::BottomOverInstrument ? " (seabed relative to the instrument, RDI PD0)" : "")
+	  << "\n";
 	o << "Bottom lock: " << (bottom_lock ? "yes" : "no") << "\n";
 	if (frame != DvlFrame::Beam)
-		o << "Velocity (" << dvlFrameName(frame) << ") [m/s]: " << velocity_s_mps[0] << " " << velocity_s_mps[1]
-		  << " " << velocity_s_mps[2] << "\n";
+		o << "Velocity (" << dvlFrameName(frame) << ") [m/s]: " << velocity_s_mps[0] << " "
+		  << velocity_s_mps[1] << " " << velocity_s_mps[2] << "\n";
 	o << "Altitude [m]: " << altitude_m << "\n";
 	o << "Beam velocity sigma [m/s]: " << beam_velocity_sigma_mps
 	  << (beam_velocity_sigma_mps > 0 ? "" : " (unknown)") << "\n";
@@ -178,17 +177,17 @@ void CObservationDVL::getDescriptionAsText(std::ostream& o) const
 std::string CObservationDVL::exportTxtHeader() const
 {
 	return "[VX_MPS]  [VY_MPS]  [VZ_MPS]  [BOTTOM_LOCK]  [ALTITUDE_M]  "
-		   "[FRAME 0=instrument 1=vehicle 2=earth_ned 3=earth_enu 4=beam]  "
-		   "[SIGN 0=vehicle_over_bottom 1=bottom_over_instrument]  [BEAM_COUNT]  "
-		   "then per beam: [BEAM_VELOCITY_MPS] [VALID]";
+	       "[FRAME 0=instrument 1=vehicle 2=earth_ned 3=earth_enu 4=beam]  "
+	       "[SIGN 0=vehicle_over_bottom 1=bottom_over_instrument]  [BEAM_COUNT]  "
+	       "then per beam: [BEAM_VELOCITY_MPS] [VALID]";
 }
 
 std::string CObservationDVL::exportTxtDataRow() const
 {
 	std::ostringstream s;
-	s << std::setprecision(9) << velocity_s_mps[0] << " " << velocity_s_mps[1] << " " << velocity_s_mps[2] << " "
-	  << (bottom_lock ? 1 : 0) << " " << altitude_m << " " << unsigned(static_cast<uint8_t>(frame)) << " "
-	  << unsigned(static_cast<uint8_t>(sign)) << " " << beams.size();
+	s << std::setprecision(9) << velocity_s_mps[0] << " " << velocity_s_mps[1] << " " << velocity_s_mps[2]
+	  << " " << (bottom_lock ? 1 : 0) << " " << altitude_m << " " << unsigned(static_cast<uint8_t>(frame))
+	  << " " << unsigned(static_cast<uint8_t>(sign)) << " " << beams.size();
 	for (const auto& b : beams) s << " " << b.velocity_mps << " " << (b.valid ? 1 : 0);
 	return s.str();
 }

@@ -4,11 +4,16 @@
 #include <iomanip>
 #include <sstream>
 
+#include "serialization_utils.h"
+
 using namespace auvnav::obs;
 
 IMPLEMENTS_SERIALIZABLE(CObservationPressure, CObservation, auvnav::obs)
 
-uint8_t CObservationPressure::serializeGetVersion() const { return 0; }
+uint8_t CObservationPressure::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationPressure::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -17,11 +22,22 @@ void CObservationPressure::serializeTo(mrpt::serialization::CArchive& out) const
 
 void CObservationPressure::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
+	// Read into a fresh object and adopt it only once the whole record is
+	// valid: a record refused half-way leaves this one untouched.
+	constexpr const char* kClass = "CObservationPressure";
+	CObservationPressure r;
 	switch (version)
 	{
-		case 0: in >> timestamp >> sensorLabel >> sensorPose >> pressure_pa >> temperature_c; break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		case 0:
+			in >> r.timestamp;
+			r.sensorLabel = detail::readLabel(in, kClass);
+			detail::readPose(in, r.sensorPose, kClass);
+			in >> r.pressure_pa >> r.temperature_c;
+			break;
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
+	*this = std::move(r);
 }
 
 void CObservationPressure::getDescriptionAsText(std::ostream& o) const
@@ -32,7 +48,10 @@ void CObservationPressure::getDescriptionAsText(std::ostream& o) const
 	o << "Temperature [degC]: " << temperature_c << "\n";
 }
 
-std::string CObservationPressure::exportTxtHeader() const { return "[PRESSURE_PA]  [TEMPERATURE_C]"; }
+std::string CObservationPressure::exportTxtHeader() const
+{
+	return "[PRESSURE_PA]  [TEMPERATURE_C]";
+}
 
 std::string CObservationPressure::exportTxtDataRow() const
 {

@@ -15,7 +15,10 @@ namespace
 constexpr uint32_t kMaxThrusters = 64;
 }
 
-uint8_t CObservationThrusters::serializeGetVersion() const { return 0; }
+uint8_t CObservationThrusters::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationThrusters::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -26,28 +29,33 @@ void CObservationThrusters::serializeTo(mrpt::serialization::CArchive& out) cons
 
 void CObservationThrusters::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
+	// Read into a fresh object and adopt it only once the whole record is
+	// valid: a record refused half-way leaves this one untouched.
+	constexpr const char* kClass = "CObservationThrusters";
+	CObservationThrusters r;
 	switch (version)
 	{
 		case 0:
 		{
-			uint8_t u = 0;
-			in >> timestamp >> sensorLabel >> u;
-			if (u > static_cast<uint8_t>(EffortUnit::Speed_rpm))
-				THROW_EXCEPTION_FMT("corrupt data: unknown thruster effort unit %u", unsigned(u));
-			unit = static_cast<EffortUnit>(u);
-			effort.resize(detail::readCount(in, kMaxThrusters, "thruster"));
-			for (double& e : effort) in >> e;
+			in >> r.timestamp;
+			r.sensorLabel = detail::readLabel(in, kClass);
+			constexpr uint8_t kUnitCount = static_cast<uint8_t>(EffortUnit::Speed_rpm) + 1;
+			r.unit = static_cast<EffortUnit>(detail::readCode(in, kUnitCount, kClass, "unit"));
+			r.effort.resize(detail::readCount(in, kMaxThrusters, "thruster"));
+			for (double& e : r.effort) in >> e;
 		}
 		break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
+	*this = std::move(r);
 }
 
 void CObservationThrusters::getDescriptionAsText(std::ostream& o) const
 {
 	CObservation::getDescriptionAsText(o);
-	o << "Thrusters: " << effort.size() << ", unit: "
-	  << (unit == EffortUnit::Force_N ? "N (commanded force)" : "rpm") << "\nEfforts:";
+	o << "Thrusters: " << effort.size()
+	  << ", unit: " << (unit == EffortUnit::Force_N ? "N (commanded force)" : "rpm") << "\nEfforts:";
 	for (double e : effort) o << " " << e;
 	o << "\n";
 }

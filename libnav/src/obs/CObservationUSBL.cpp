@@ -5,11 +5,16 @@
 #include <iomanip>
 #include <sstream>
 
+#include "serialization_utils.h"
+
 using namespace auvnav::obs;
 
 IMPLEMENTS_SERIALIZABLE(CObservationUSBL, CObservation, auvnav::obs)
 
-uint8_t CObservationUSBL::serializeGetVersion() const { return 0; }
+uint8_t CObservationUSBL::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationUSBL::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -21,23 +26,30 @@ void CObservationUSBL::serializeTo(mrpt::serialization::CArchive& out) const
 
 void CObservationUSBL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
+	// Read into a fresh object and adopt it only once the whole record is
+	// valid: a record refused half-way leaves this one untouched.
+	constexpr const char* kClass = "CObservationUSBL";
+	CObservationUSBL r;
 	switch (version)
 	{
 		case 0:
 		{
-			uint8_t f = 0;
-			in >> timestamp >> sensorLabel >> sensorPose >> measurement_time >> f;
+			in >> r.timestamp;
+			r.sensorLabel = detail::readLabel(in, kClass);
+			detail::readPose(in, r.sensorPose, kClass);
+			in >> r.measurement_time;
 			// A corrupt byte must not become an enum value no code handles.
-			if (f > static_cast<uint8_t>(UsblFrame::LocalNed))
-				THROW_EXCEPTION_FMT("CObservationUSBL: invalid frame code %u", static_cast<unsigned>(f));
-			frame = static_cast<UsblFrame>(f);
-			for (double& v : position) in >> v;
-			for (double& v : covariance_ned_m2) in >> v;
-			in >> slant_range_m >> transponder_id;
+			constexpr uint8_t kFrameCount = static_cast<uint8_t>(UsblFrame::LocalNed) + 1;
+			r.frame = static_cast<UsblFrame>(detail::readCode(in, kFrameCount, kClass, "frame"));
+			for (double& v : r.position) in >> v;
+			for (double& v : r.covariance_ned_m2) in >> v;
+			in >> r.slant_range_m >> r.transponder_id;
 			break;
 		}
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
+	*this = std::move(r);
 }
 
 bool CObservationUSBL::hasCovariance() const
@@ -53,15 +65,15 @@ void CObservationUSBL::getDescriptionAsText(std::ostream& o) const
 	o << "Transponder pose on vehicle (FRD): " << sensorPose << "\n";
 	o << "Measurement time: "
 	  << (measurement_time == INVALID_TIMESTAMP ? std::string("(not given)")
-												 : mrpt::system::dateTimeLocalToString(measurement_time))
+	                                            : mrpt::system::dateTimeLocalToString(measurement_time))
 	  << "\n";
 	o << std::setprecision(10);
 	if (frame == UsblFrame::Geodetic)
-		o << "Latitude [deg]: " << position[0] << "  longitude [deg]: " << position[1] << "  depth [m]: " << position[2]
-		  << "\n";
+		o << "Latitude [deg]: " << position[0] << "  longitude [deg]: " << position[1]
+		  << "  depth [m]: " << position[2] << "\n";
 	else
-		o << "North, east, down from the origin [m]: " << position[0] << " " << position[1] << " " << position[2]
-		  << "\n";
+		o << "North, east, down from the origin [m]: " << position[0] << " " << position[1] << " "
+		  << position[2] << "\n";
 	o << "Covariance NED [m^2]:";
 	for (double v : covariance_ned_m2) o << " " << v;
 	o << "\nSlant range [m]: " << slant_range_m << "  transponder: " << transponder_id << "\n";
@@ -69,16 +81,17 @@ void CObservationUSBL::getDescriptionAsText(std::ostream& o) const
 
 std::string CObservationUSBL::exportTxtHeader() const
 {
-	return "[MEASUREMENT_TIME_S]  [FRAME]  [POS0]  [POS1]  [POS2]  [C_NN]  [C_EE]  [C_DD]  [SLANT_RANGE_M]  [ID]";
+	return "[MEASUREMENT_TIME_S]  [FRAME]  [POS0]  [POS1]  [POS2]  [C_NN]  [C_EE]  [C_DD]  [SLANT_RANGE_M]  "
+	       "[ID]";
 }
 
 std::string CObservationUSBL::exportTxtDataRow() const
 {
 	std::ostringstream s;
 	s << std::setprecision(12)
-	  << (measurement_time == INVALID_TIMESTAMP ? std::nan("") : mrpt::Clock::toDouble(measurement_time)) << " "
-	  << static_cast<int>(frame) << " " << position[0] << " " << position[1] << " " << position[2] << " "
-	  << covariance_ned_m2[0] << " " << covariance_ned_m2[4] << " " << covariance_ned_m2[8] << " " << slant_range_m
-	  << " " << transponder_id;
+	  << (measurement_time == INVALID_TIMESTAMP ? std::nan("") : mrpt::Clock::toDouble(measurement_time))
+	  << " " << static_cast<int>(frame) << " " << position[0] << " " << position[1] << " " << position[2]
+	  << " " << covariance_ned_m2[0] << " " << covariance_ned_m2[4] << " " << covariance_ned_m2[8] << " "
+	  << slant_range_m << " " << transponder_id;
 	return s.str();
 }

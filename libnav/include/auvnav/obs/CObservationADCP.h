@@ -11,6 +11,9 @@
  *  - `correlation` in [0, 1] is the beam correlation of the cell; consumers may
  *    apply their own threshold on top of `valid`.
  *  - Serialization is versioned; every version ever written stays readable.
+ *    Reading refuses a damaged record whole (the object read into is left as
+ *    it was): a `valid` byte other than 0/1, more than 4096 cells, a label
+ *    longer than 4 KiB or a sensor pose that is no rigid transform.
  */
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
