@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -30,6 +31,15 @@ fs::path scratch()
 	const fs::path base = fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
 	const fs::path dir = base / ("auvnav_fuzz_csv_" + std::to_string(::getpid()));
 	fs::create_directories(dir);
+	// Removed at exit (libFuzzer exits through exit() after a run and after
+	// a finding), so that repeated runs leave nothing behind in /dev/shm.
+	static const fs::path to_remove = dir;
+	std::atexit(
+	    []
+	    {
+		    std::error_code ec;
+		    fs::remove_all(to_remove, ec);
+	    });
 	for (const char* f : kFormats)
 	{
 		std::ofstream spec(dir / (std::string("spec_") + f + ".yaml"));

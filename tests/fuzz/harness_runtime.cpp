@@ -15,10 +15,12 @@ extern "C" int backtrace(void** buffer, int size)
 	return 0;
 }
 
-// LeakSanitizer: leaks inside libfyaml (MRPT's YAML reader, allocated by
-// fy_input_alloc through mrpt::containers::yaml::loadFromText) are MRPT's
-// and libfyaml's, not ours, and cannot be fixed here.
+// LeakSanitizer: leaks of MRPT and libfyaml, not ours, that cannot be fixed
+// here: libfyaml's input (fy_input_alloc, through MRPT's YAML reader), and
+// the message CObservationGPS's reader creates (gnss_message::Factory) and
+// drops when the message's data is damaged (regressions/*/leak-mrpt-gnss-*).
 extern "C" const char* __lsan_default_suppressions()
 {
-	return "leak:libfyaml.so\n";
+	return "leak:libfyaml.so\n"
+		   "leak:gnss_message::Factory\n";
 }

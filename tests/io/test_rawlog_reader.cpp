@@ -7,6 +7,8 @@
 #include <auvnav/obs/CObservationThrusters.h>
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileOutputStream.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/math/CMatrixD.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservationGPS.h>
@@ -15,7 +17,10 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -554,4 +559,136 @@ TEST(RawlogSensoryFrameLayout, ObservationsAreYieldedAndActionsSkipped)
 	for (int i = 0; i < 6; ++i) EXPECT_EQ(timeAtMs(10 * i), times[i]) << "observation " << i;
 	EXPECT_EQ(3u, reader.actionsSkipped());
 	EXPECT_EQ(6u, reader.objectsRead());  // 3 action collections + 3 sensory frames
+}
+
+// ------------------------------------------------------------ (g) hardening
+// Issue 15: counts read from the file are checked before they drive a loop
+// or an allocation, a class with no place in a rawlog is refused from its
+// header before it is built, and a damaged sensory frame yields nothing.
+
+namespace
+{
+std::vector<uint8_t> objectBytes(const mrpt::serialization::CSerializable& o)
+{
+	mrpt::io::CMemoryStream buf;
+	mrpt::serialization::archiveFrom(buf) << o;
+	const auto* p = static_cast<const uint8_t*>(buf.getRawBufferData());
+	return std::vector<uint8_t>(p, p + buf.getTotalBytesCount());
+}
+
+// A sensory frame of an IMU and a DVL, and the offset of its member count
+// (after [0x80|len][name][version]).
+std::vector<uint8_t> sensoryFrameBytes(std::size_t& count_at)
+{
+	mrpt::obs::CSensoryFrame sf;
+	sf.insert(makeImu(0));
+	sf.insert(makeDvl(1));
+	const auto bytes = objectBytes(sf);
+	count_at = 1 + (bytes[0] & 0x7F) + 1;
+	return bytes;
+}
+}  // namespace
+
+TEST(RawlogHardening, AbsurdSensoryFrameCountIsRefusedAtOnce)
+{
+	// MRPT's own reader resized its list to the claimed count (3.5 billion
+	// here): the fuzzer's timeout (tests/fuzz/regressions/rawlog).
+	TempDir tmp;
+	std::size_t count_at = 0;
+	auto bytes = sensoryFrameBytes(count_at);
+	uint32_t n = 0;
+	std::memcpy(&n, &bytes[count_at], 4);
+	ASSERT_EQ(2u, n) << "not the member count";
+	n = 0xD4000002u;
+	std::memcpy(&bytes[count_at], &n, 4);
+	const auto path = tmp.file("sf_count.rawlog");
+	writeBytes(path, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+	const auto t0 = std::chrono::steady_clock::now();
+	EXPECT_EQ(0u, expectRawlogError(path, {"corrupt rawlog", "object #0", "3556769794 objects"}));
+	EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
+}
+
+TEST(RawlogHardening, DamagedSensoryFrameYieldsNoneOfItsObservations)
+{
+	// The frame's second member is damaged (its class name): the first,
+	// intact, must not come out either.
+	TempDir tmp;
+	std::size_t count_at = 0;
+	auto bytes = sensoryFrameBytes(count_at);
+	const std::string dvl = "auvnav::obs::CObservationDVL";
+	const auto it = std::search(bytes.begin(), bytes.end(), dvl.begin(), dvl.end());
+	ASSERT_NE(bytes.end(), it);
+	// "...::CObservationXVL" is not registered (MRPT also finds a class by
+	// its name without namespace, so the damage is in the class's own name).
+	*(it + std::ptrdiff_t(dvl.size()) - 3) = 'X';
+	const auto before = objectBytes(*makeImu(5));
+	bytes.insert(bytes.begin(), before.begin(), before.end());
+	const auto path = tmp.file("sf_damaged.rawlog");
+	writeBytes(path, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+	EXPECT_EQ(1u, expectRawlogError(path, {"corrupt rawlog", "object #1", "sensory frame"}))
+	    << "only the IMU before the frame comes out";
+}
+
+TEST(RawlogHardening, ForeignClassIsRefusedBeforeItIsBuilt)
+{
+	// A matrix (any registered class that is no observation): refused from
+	// its header, its reader never runs; inside a sensory frame too.
+	TempDir tmp;
+	mrpt::math::CMatrixD m(1, 1);
+	auto matrix = objectBytes(m);
+	const auto path = tmp.file("matrix.rawlog");
+	writeBytes(path, reinterpret_cast<const char*>(matrix.data()), matrix.size());
+	expectRawlogError(path, {"unexpected object of class 'mrpt::math::CMatrixD'", "#0"});
+
+	std::size_t count_at = 0;
+	auto sf = sensoryFrameBytes(count_at);
+	const uint32_t one = 1;
+	std::memcpy(&sf[count_at], &one, 4);
+	std::vector<uint8_t> framed(sf.begin(), sf.begin() + std::ptrdiff_t(count_at + 4));
+	framed.insert(framed.end(), matrix.begin(), matrix.end());
+	framed.push_back(0x88);
+	const auto in_frame = tmp.file("matrix_in_frame.rawlog");
+	writeBytes(in_frame, reinterpret_cast<const char*>(framed.data()), framed.size());
+	expectRawlogError(in_frame,
+	                  {"corrupt rawlog", "mrpt::obs::CObservation objects only", "mrpt::math::CMatrixD"});
+}
+
+TEST(RawlogHardening, HugeLabelLengthOfAnAuvnavClassIsRefusedInPlainAndGzipFiles)
+{
+	// 4 GiB label length: one allocation of that size before (auvnav-info
+	// took 4.26 GB and 27 s on a 10 KB file); now a refusal naming the class.
+	TempDir tmp;
+	auto bytes = objectBytes(*makeDvl(1));
+	const std::size_t label_at = 1 + (bytes[0] & 0x7F) + 1 + 8;  // header, timestamp
+	uint32_t len = 0;
+	std::memcpy(&len, &bytes[label_at], 4);
+	ASSERT_EQ(3u, len) << "not the label length";
+	len = 0xFFFFFFF0u;
+	std::memcpy(&bytes[label_at], &len, 4);
+	const auto plain = tmp.file("label_plain.rawlog");
+	writeBytes(plain, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+	expectRawlogError(plain, {"corrupt rawlog", "CObservationDVL sensorLabel length"});
+	const auto gz = tmp.file("label_gz.rawlog");
+	{
+		mrpt::io::CFileGZOutputStream f(gz);
+		f.Write(bytes.data(), bytes.size());
+	}
+	expectRawlogError(gz, {"corrupt rawlog", "CObservationDVL sensorLabel length"});
+}
+
+TEST(RawlogHardening, ImuFlagByteOtherThanZeroOrOneIsRefused)
+{
+	// MRPT copies these bytes into bools (CObservationIMU::dataIsPresent): a
+	// damaged one would be undefined behaviour in the first plugin to ask has().
+	TempDir tmp;
+	auto bytes = objectBytes(*makeImu(3));
+	// Version-4 layout: header, sensorPose (an object), one byte per field.
+	const std::size_t flags_at = 1 + (bytes[0] & 0x7F) + 1 + objectBytes(mrpt::poses::CPose3D()).size();
+	const std::size_t wz_at = flags_at + mrpt::obs::IMU_WZ;
+	ASSERT_EQ(1, bytes[wz_at]) << "not the IMU_WZ flag";
+	ASSERT_EQ(0, bytes[flags_at + mrpt::obs::IMU_YAW]);
+	bytes[wz_at] = 7;
+	const auto path = tmp.file("imu_flag.rawlog");
+	writeBytes(path, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+	EXPECT_EQ(0u, expectRawlogError(path, {"corrupt rawlog", "object #0", "CObservationIMU dataIsPresent"}));
 }
