@@ -34,6 +34,8 @@
 # names the plugin `<name>`. It links auvnav::nav, is compiled with hidden
 # visibility, linked with --no-undefined and with a version script that exports
 # the entry point auvnav_plugin_entry_v1 only (define it with AUVNAV_PLUGIN).
+# Against an auvnav built with AUVNAV_SANITIZE, both are built with its
+# sanitizers (the plugin fingerprint compares them).
 include_guard(GLOBAL)
 
 # The version script sits next to this file both in the source tree (cmake/)
@@ -59,6 +61,18 @@ function(_auvnav_install_rpath out destination)
   set(${out} "${rpath}" PARENT_SCOPE)
 endfunction()
 
+# Out-of-tree builds against a sanitized auvnav (auvnavConfig.cmake sets
+# AUVNAV_BUILT_SANITIZED): the same sanitizers as auvnav, and the definition
+# that names UBSan in the fingerprint (gcc has no macro for it; plugin_api.h).
+# In-tree, the top-level AUVNAV_SANITIZE option sets both for every target.
+function(_auvnav_match_sanitizers target)
+  if(AUVNAV_BUILT_SANITIZED)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+    target_compile_definitions(${target} PRIVATE AUVNAV_BUILT_WITH_UBSAN=1)
+  endif()
+endfunction()
+
 function(auvnav_add_observation_library target)
   cmake_parse_arguments(ARG "" "INSTALL_DESTINATION" "SOURCES" ${ARGN})
   if(ARG_UNPARSED_ARGUMENTS)
@@ -72,6 +86,7 @@ function(auvnav_add_observation_library target)
   endif()
   add_library(${target} SHARED ${ARG_SOURCES})
   target_link_libraries(${target} PUBLIC auvnav::obs)
+  _auvnav_match_sanitizers(${target})
   # --no-undefined: a missing serialization method is a link error here,
   # not a dlopen failure in the field.
   target_link_options(${target} PRIVATE "LINKER:--no-undefined")
@@ -111,6 +126,7 @@ function(auvnav_add_plugin_module target)
 
   add_library(${target} MODULE ${ARG_SOURCES})
   target_link_libraries(${target} PRIVATE auvnav::nav)
+  _auvnav_match_sanitizers(${target})
   # Hidden visibility for the plugin's code; the version script also hides the
   # template instantiations that libstdc++ headers mark visible: the entry is all.
   target_link_options(${target} PRIVATE

@@ -1,6 +1,5 @@
 #include <algorithm>
 #include <auvnav/config.h>
-#include <auvnav/error_text.h>
 #include <yaml.h>
 
 #include <cctype>
@@ -8,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace auvnav::config
@@ -121,12 +121,130 @@ class StructureCheck
 	std::vector<Level> levels_;
 };
 
-void checkSyntax(const std::string& text, const std::string& origin)
+/** A plain untagged scalar with this text is null (YAML 1.2 core schema). */
+bool readsAsNull(const std::string& text)
+{
+	return text.empty() || text == "~" || text == "null" || text == "Null" || text == "NULL";
+}
+
+/** Builds the document tree from the very events StructureCheck accepted, so
+ *  that the check that accepts a document is the parser that reads it. (MRPT's
+ *  own reader, libfyaml, silently cut an under-indented flow map that libyaml
+ *  accepts, refused empty values, and kept comments that its printer then
+ *  turned into invalid YAML.) MRPT's yaml is the container only. Scalars are
+ *  strings, as MRPT stores them; an untagged plain empty, ~, null, Null or NULL
+ *  is a null scalar (an empty std::any), as MRPT's reader made it; quoted,
+ *  they are the strings. Comments are not kept. */
+class TreeBuilder
+{
+ public:
+	void onEvent(const yaml_event_t& event)
+	{
+		switch (event.type)
+		{
+			case YAML_SCALAR_EVENT:
+				add(scalar(event));
+				return;
+			case YAML_SEQUENCE_START_EVENT:
+				open(event, yaml::sequence_t());
+				return;
+			case YAML_MAPPING_START_EVENT:
+				open(event, yaml::map_t());
+				return;
+			case YAML_SEQUENCE_END_EVENT:
+			case YAML_MAPPING_END_EVENT:
+			{
+				yaml::node_t done = std::move(open_.back().node);
+				open_.pop_back();
+				add(std::move(done));
+				return;
+			}
+			default:
+				return;
+		}
+	}
+	/** The document's root; false if the text holds no document (empty or comments only). */
+	bool root(yaml::node_t& out) const
+	{
+		if (!has_root_) return false;
+		out = root_;
+		return true;
+	}
+
+ private:
+	struct Open
+	{
+		yaml::node_t node;
+		std::optional<yaml::node_t> key;  // a map's key waiting for its value
+	};
+
+	static void mark(yaml::node_t& n, const yaml_event_t& event)
+	{
+		n.marks.input_pos = event.start_mark.index;
+		n.marks.line = static_cast<int>(event.start_mark.line);
+		n.marks.column = static_cast<int>(event.start_mark.column);
+	}
+
+	static yaml::node_t scalar(const yaml_event_t& event)
+	{
+		const auto& s = event.data.scalar;
+		const std::string text(reinterpret_cast<const char*>(s.value), s.length);
+		yaml::node_t n;
+		const bool plain = s.plain_implicit && s.style == YAML_PLAIN_SCALAR_STYLE;
+		if (plain && readsAsNull(text))
+			n.d.emplace<yaml::scalar_t>();
+		else
+			n.d.emplace<yaml::scalar_t>().emplace<std::string>(text);
+		mark(n, event);
+		return n;
+	}
+
+	template <class Collection>
+	void open(const yaml_event_t& event, Collection empty)
+	{
+		Open o;
+		o.node.d = std::move(empty);
+		mark(o.node, event);
+		open_.push_back(std::move(o));
+	}
+
+	void add(yaml::node_t n)
+	{
+		if (open_.empty())
+		{
+			root_ = std::move(n);
+			has_root_ = true;
+			return;
+		}
+		Open& top = open_.back();
+		if (top.node.isSequence())
+			top.node.asSequence().push_back(std::move(n));
+		else if (!top.key)
+			top.key = std::move(n);
+		else
+		{
+			// StructureCheck refused non-scalar and duplicate keys; a null key is its text.
+			if (top.key->isNullNode()) top.key->d.emplace<yaml::scalar_t>().emplace<std::string>("");
+			top.node.asMap()[std::move(*top.key)] = std::move(n);
+			top.key.reset();
+		}
+	}
+
+	std::vector<Open> open_;
+	yaml::node_t root_;
+	bool has_root_ = false;
+};
+
+/** Parses `text` with libyaml into a tree, refusing in one line
+ *  "ORIGIN:LINE:COLUMN: [KEY.PATH: ]what" what StructureCheck refuses and
+ *  libyaml's syntax errors. False if the text holds no document. */
+bool parseDocument(const std::string& text, const std::string& origin, yaml::node_t& root)
 {
 	yaml_parser_t parser;
 	if (!yaml_parser_initialize(&parser)) throw ConfigError(origin + ": cannot initialise the YAML parser");
 	yaml_parser_set_input_string(&parser, reinterpret_cast<const unsigned char*>(text.data()), text.size());
 	StructureCheck structure(origin);
+	TreeBuilder tree;
 	std::string error;
 	for (bool done = false; !done && error.empty();)
 	{
@@ -141,31 +259,138 @@ void checkSyntax(const std::string& text, const std::string& origin)
 			break;
 		}
 		error = structure.onEvent(event);
+		if (error.empty()) tree.onEvent(event);
 		done = event.type == YAML_STREAM_END_EVENT;
 		yaml_event_delete(&event);
 	}
 	yaml_parser_delete(&parser);
 	if (!error.empty()) throw ConfigError(error);
+	return tree.root(root);
 }
+
+/** Writes a tree as block YAML with libyaml's emitter (the library that
+ *  reads it back): it quotes what needs quoting ('#', ": ", a leading '-' or
+ *  '*', ...). Strings that would read back as null if plain are double-quoted;
+ *  null scalars are written as ~. */
+class TextEmitter
+{
+ public:
+	explicit TextEmitter(std::string where) : where_(std::move(where))
+	{
+		if (!yaml_emitter_initialize(&emitter_))
+			throw ConfigError(where_ + ": cannot initialise the YAML emitter");
+		yaml_emitter_set_output(&emitter_, &TextEmitter::append, &out_);
+		yaml_emitter_set_unicode(&emitter_, 1);
+		yaml_emitter_set_width(&emitter_, -1);  // no folding of long scalars
+		yaml_emitter_set_indent(&emitter_, 2);
+	}
+	~TextEmitter() { yaml_emitter_delete(&emitter_); }
+	TextEmitter(const TextEmitter&) = delete;
+	TextEmitter& operator=(const TextEmitter&) = delete;
+
+	std::string document(const yaml::node_t& root)
+	{
+		yaml_event_t e;
+		yaml_stream_start_event_initialize(&e, YAML_UTF8_ENCODING);
+		emit(e);
+		yaml_document_start_event_initialize(&e, nullptr, nullptr, nullptr, 1);
+		emit(e);
+		node(root);
+		yaml_document_end_event_initialize(&e, 1);
+		emit(e);
+		yaml_stream_end_event_initialize(&e);
+		emit(e);
+		return out_;
+	}
+
+ private:
+	static int append(void* data, unsigned char* buffer, size_t size)
+	{
+		static_cast<std::string*>(data)->append(reinterpret_cast<const char*>(buffer), size);
+		return 1;
+	}
+
+	void emit(yaml_event_t& event)
+	{
+		// yaml_emitter_emit takes the event over, also when it fails.
+		if (!yaml_emitter_emit(&emitter_, &event))
+			throw ConfigError(
+			    where_ + ": cannot write YAML: " + (emitter_.problem ? emitter_.problem : "emitter error"));
+	}
+
+	void node(const yaml::node_t& n)
+	{
+		yaml_event_t e;
+		if (n.isMap())
+		{
+			yaml_mapping_start_event_initialize(&e, nullptr, nullptr, 1, YAML_BLOCK_MAPPING_STYLE);
+			emit(e);
+			for (const auto& kv : n.asMap())
+			{
+				node(kv.first);
+				node(kv.second);
+			}
+			yaml_mapping_end_event_initialize(&e);
+			emit(e);
+		}
+		else if (n.isSequence())
+		{
+			yaml_sequence_start_event_initialize(&e, nullptr, nullptr, 1, YAML_BLOCK_SEQUENCE_STYLE);
+			emit(e);
+			for (const auto& item : n.asSequence()) node(item);
+			yaml_sequence_end_event_initialize(&e);
+			emit(e);
+		}
+		else if (n.isNullNode())
+			scalar("~", YAML_PLAIN_SCALAR_STYLE);
+		else
+		{
+			std::string text;
+			try
+			{
+				text = n.as<std::string>();
+			}
+			catch (const std::exception&)
+			{
+				throw ConfigError(where_ + ": cannot write a value of type " + n.typeName() + " as YAML");
+			}
+			scalar(text, styleFor(text));
+		}
+	}
+
+	/** Plain where libyaml finds it safe; double-quoted if plain would read
+	 *  back as null; multi-line text as a literal block where libyaml allows
+	 *  one (else it quotes). */
+	static yaml_scalar_style_t styleFor(const std::string& text)
+	{
+		if (readsAsNull(text)) return YAML_DOUBLE_QUOTED_SCALAR_STYLE;
+		return text.find('\n') != std::string::npos ? YAML_LITERAL_SCALAR_STYLE : YAML_ANY_SCALAR_STYLE;
+	}
+
+	void scalar(const std::string& text, yaml_scalar_style_t style)
+	{
+		yaml_event_t e;
+		auto* value = reinterpret_cast<yaml_char_t*>(const_cast<char*>(text.data()));
+		if (!yaml_scalar_event_initialize(&e, nullptr, nullptr, value, static_cast<int>(text.size()), 1, 1,
+		                                  style))
+			throw ConfigError(where_ + ": cannot write YAML: out of memory");
+		emit(e);
+	}
+
+	std::string where_;
+	std::string out_;
+	yaml_emitter_t emitter_;
+};
 }  // namespace
 
 Node Node::fromText(const std::string& text, const std::string& origin)
 {
-	checkSyntax(text, origin);
-	try
-	{
-		yaml y = yaml::FromText(text);
-		if (!y.isMap()) throw ConfigError(origin + ": top level must be a YAML map");
-		return Node(std::move(y), origin, "", std::make_shared<Access>());
-	}
-	catch (const ConfigError&)
-	{
-		throw;
-	}
-	catch (const std::exception& e)
-	{
-		throw ConfigError(origin + ": malformed YAML: " + oneLineReason(e.what()));
-	}
+	yaml::node_t root;
+	if (!parseDocument(text, origin, root) || !root.isMap())
+		throw ConfigError(origin + ": top level must be a YAML map");
+	yaml y;
+	y.node() = std::move(root);
+	return Node(std::move(y), origin, "", std::make_shared<Access>());
 }
 
 std::string Node::filePath(const std::string& key) const
@@ -180,9 +405,7 @@ std::string Node::filePath(const std::string& key) const
 std::string Node::toYaml() const
 {
 	if (y_.isNullNode() || (y_.isMap() && y_.empty())) return "{}\n";
-	std::ostringstream o;
-	y_.printAsYAML(o);
-	return o.str();
+	return TextEmitter(file_ + (path_.empty() ? "" : ": " + path_)).document(y_.node());
 }
 
 void Node::set(const std::string& dotted_path, const std::string& value)

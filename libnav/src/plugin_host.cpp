@@ -32,6 +32,63 @@ std::string executableDir()
 	return ec ? std::string() : exe.parent_path().string();
 }
 
+/** A sanitizer's shared runtime, as a plugin's DT_NEEDED names it. */
+struct SanitizerRuntime
+{
+	const char* prefix;  // of the library's file name
+	const char* sanitizer;
+	bool in_host;  // this navigator is built with it
+};
+
+// gcc's runtimes (libasan.so.8, ...) and clang's with -shared-libsan
+// (libclang_rt.asan-x86_64.so, ...). Standalone LeakSanitizer is never the
+// host's (ASan's leak checker is part of libasan).
+const SanitizerRuntime kSanitizerRuntimes[] = {
+    {"libasan.so", "AddressSanitizer", AUVNAV_SANITIZER_ASAN},
+    {"libclang_rt.asan", "AddressSanitizer", AUVNAV_SANITIZER_ASAN},
+    {"libhwasan.so", "HWAddressSanitizer", AUVNAV_SANITIZER_HWASAN},
+    {"libclang_rt.hwasan", "HWAddressSanitizer", AUVNAV_SANITIZER_HWASAN},
+    {"libtsan.so", "ThreadSanitizer", AUVNAV_SANITIZER_TSAN},
+    {"libclang_rt.tsan", "ThreadSanitizer", AUVNAV_SANITIZER_TSAN},
+    {"libubsan.so", "UndefinedBehaviorSanitizer", AUVNAV_SANITIZER_UBSAN},
+    {"libclang_rt.ubsan", "UndefinedBehaviorSanitizer", AUVNAV_SANITIZER_UBSAN},
+    {"liblsan.so", "LeakSanitizer", false},
+    {"libclang_rt.lsan", "LeakSanitizer", false},
+};
+
+/** "plugin 'dvl' (PATH)", or "plugin PATH" when it was named by its path. */
+std::string pluginNamed(const std::string& plugin, const std::string& path)
+{
+	return plugin.find('/') != std::string::npos ? "plugin " + path
+	                                             : "plugin '" + plugin + "' (" + path + ")";
+}
+
+/** Refuses, before dlopen runs any of its code, a file that is not an ELF
+ *  shared library or that links a sanitizer runtime this navigator lacks
+ *  (dlopen would abort the program from inside the runtime's initialiser). */
+void checkBeforeLoading(const std::string& plugin, const std::string& path)
+{
+	std::vector<std::string> needed;
+	try
+	{
+		needed = elfNeededLibraries(path);
+	}
+	catch (const PluginError& e)
+	{
+		// e: "PATH: why"; as dlopen's failures: "cannot load plugin 'NAME' from PATH: why".
+		const bool by_path = plugin.find('/') != std::string::npos;
+		throw PluginError("cannot load plugin " + (by_path ? "" : "'" + plugin + "' from ") + e.what());
+	}
+	for (const std::string& lib : needed)
+		for (const SanitizerRuntime& r : kSanitizerRuntimes)
+			if (lib.rfind(r.prefix, 0) == 0 && !r.in_host)
+				throw PluginError(pluginNamed(plugin, path) + " needs " + lib + ", the " + r.sanitizer +
+				                  " runtime, but this navigator is built without " + r.sanitizer +
+				                  " (its runtime cannot be loaded into a program built without it): rebuild "
+				                  "the plugin without -fsanitize, or "
+				                  "use a navigator built with the same sanitizers");
+}
+
 std::vector<std::string> splitPath(const char* s)
 {
 	std::vector<std::string> out;
@@ -91,6 +148,7 @@ std::shared_ptr<PluginHost::Library> PluginHost::open(const std::string& plugin)
 
 	auto lib = std::make_shared<Library>();
 	lib->path = path;
+	checkBeforeLoading(plugin, path);
 	lib->handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
 	if (!lib->handle)
 	{

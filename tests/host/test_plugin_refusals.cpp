@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -244,6 +245,134 @@ TEST(PluginRefusal, GoodTestPluginLoads)
 	auto m = host.create(AUVNAV_TEST_PLUGIN_PROBE, "mode: passthrough\n", "P");
 	ASSERT_TRUE(m);
 	EXPECT_EQ(m->uses(), uint32_t(kPosition));
+}
+
+// ------------------------------------------------------------ sanitizers and ELF
+
+TEST(PluginRefusal, FingerprintNamesTheSanitizers)
+{
+	const std::string fp = AUVNAV_BUILD_FINGERPRINT;
+#if AUVNAV_SANITIZER_ASAN && AUVNAV_SANITIZER_UBSAN
+	EXPECT_CONTAINS(fp, " sanitize-asan-ubsan");
+#elif !AUVNAV_SANITIZER_ASAN && !AUVNAV_SANITIZER_UBSAN && !AUVNAV_SANITIZER_TSAN
+	EXPECT_EQ(fp.find("sanitize"), std::string::npos) << fp;
+#endif
+#if defined(__clang__)
+	EXPECT_EQ(fp.rfind("clang-", 0), 0u) << fp;
+#else
+	EXPECT_EQ(fp.rfind("gcc-", 0), 0u) << fp;
+#endif
+}
+
+#ifdef AUVNAV_TEST_PLUGIN_ASAN_BUILT
+// A plugin built with -fsanitize=address passed the fingerprint check (it had
+// no sanitizer in it) and dlopen killed the program with "ASan runtime does not
+// come first", naming no plugin. Now: refused before dlopen, in one line.
+TEST(PluginRefusal, SanitizedPluginIsRefusedBeforeLoading)
+{
+	const struct
+	{
+		const char* path;
+		const char* runtime;
+		const char* sanitizer;
+	} cases[] = {{AUVNAV_TEST_PLUGIN_ASAN_BUILT, "libasan.so", "AddressSanitizer"},
+	             {AUVNAV_TEST_PLUGIN_UBSAN_BUILT, "libubsan.so", "UndefinedBehaviorSanitizer"}};
+	for (const auto& c : cases)
+	{
+		SCOPED_TRACE(c.path);
+		PluginHost host;
+		const std::string msg = pluginError([&] { host.create(c.path, "{}", "X"); });
+		EXPECT_CONTAINS(msg, std::string("plugin ") + c.path + " needs " + c.runtime);
+		EXPECT_CONTAINS(msg, std::string("the ") + c.sanitizer + " runtime");
+		EXPECT_CONTAINS(msg, std::string("this navigator is built without ") + c.sanitizer);
+		EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+	}
+	// By name through the search path: the name as configured, and the file.
+	PluginHost host({std::filesystem::path(AUVNAV_TEST_PLUGIN_ASAN_BUILT).parent_path().string()});
+	const std::string msg = pluginError([&] { host.load("asan_built"); });
+	EXPECT_CONTAINS(
+	    msg, std::string("plugin 'asan_built' (") + AUVNAV_TEST_PLUGIN_ASAN_BUILT + ") needs libasan.so");
+}
+#endif
+
+namespace
+{
+/** A scratch copy of the first `bytes` bytes of `from`. */
+std::string truncatedCopy(const std::string& from, std::size_t bytes, const std::string& name)
+{
+	const std::string data = readFile(from);
+	const std::string path = ::testing::TempDir() + name;
+	std::ofstream(path, std::ios::binary) << data.substr(0, std::min(bytes, data.size()));
+	return path;
+}
+}  // namespace
+
+TEST(ElfScan, ListsTheNeededLibrariesOfAPlugin)
+{
+	const auto needed = elfNeededLibraries(AUVNAV_TEST_PLUGIN_PROBE);
+	EXPECT_NE(std::find(needed.begin(), needed.end(), "libauvnav_nav.so"), needed.end());
+	EXPECT_NE(std::find_if(needed.begin(), needed.end(),
+	                       [](const std::string& n) { return n.rfind("libc.so", 0) == 0; }),
+	          needed.end());
+#ifdef AUVNAV_TEST_PLUGIN_ASAN_BUILT
+	const auto asan = elfNeededLibraries(AUVNAV_TEST_PLUGIN_ASAN_BUILT);
+	EXPECT_NE(std::find_if(asan.begin(), asan.end(),
+	                       [](const std::string& n) { return n.rfind("libasan.so", 0) == 0; }),
+	          asan.end());
+#endif
+}
+
+TEST(ElfScan, NonElfAndEmptyFilesAreRefusedNamingThem)
+{
+	const std::string text = ::testing::TempDir() + "elf_scan_text.so";
+	std::ofstream(text) << "not an ELF file, but longer than an ELF header would be: 0123456789abcdef\n";
+	const std::string empty = ::testing::TempDir() + "elf_scan_empty.so";
+	std::ofstream{empty};
+	for (const std::string& path : {text, empty})
+	{
+		const std::string msg = pluginError([&] { elfNeededLibraries(path); });
+		EXPECT_EQ(msg, path + ": not an ELF shared library (no ELF header)");
+	}
+	EXPECT_CONTAINS(pluginError([] { elfNeededLibraries("/nonexistent/x.so"); }),
+	                "/nonexistent/x.so: cannot open");
+	std::filesystem::remove(text);
+	std::filesystem::remove(empty);
+}
+
+TEST(ElfScan, TruncatedPluginsAreRefusedNeverCrash)
+{
+	// Every cut of a real plugin, down to its 16-byte ident: either the needed
+	// list (the dynamic section lies before the cut) or a one-line refusal naming
+	// the file, and never a read beyond it (the test runs under ASan in .ci/sanitize).
+	const std::string from = AUVNAV_TEST_PLUGIN_PROBE;
+	const std::size_t size = readFile(from).size();
+	std::vector<std::size_t> cuts = {16, 52, 63, 64, 65, 100, 200, 512, 4096};
+	for (std::size_t i = 1; i < 64; ++i) cuts.push_back(size * i / 64);
+	int refused = 0;
+	for (const std::size_t cut : cuts)
+	{
+		SCOPED_TRACE("cut at " + std::to_string(cut) + " of " + std::to_string(size));
+		const std::string path = truncatedCopy(from, cut, "elf_scan_cut.so");
+		try
+		{
+			const auto needed = elfNeededLibraries(path);
+			EXPECT_FALSE(needed.empty());
+		}
+		catch (const PluginError& e)
+		{
+			++refused;
+			EXPECT_EQ(std::string(e.what()).rfind(path + ": ", 0), 0u) << e.what();
+			EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+		}
+		std::filesystem::remove(path);
+	}
+	EXPECT_GE(refused, 6);  // at least the cuts inside the headers
+	// Through the host: a truncated plugin is "cannot load plugin", naming it.
+	const std::string path = truncatedCopy(from, 100, "libauvnav_plugin_cut.so");
+	PluginHost host;
+	const std::string msg = pluginError([&] { host.load(path); });
+	EXPECT_CONTAINS(msg, "cannot load plugin " + path + ": truncated ELF file");
+	std::filesystem::remove(path);
 }
 
 // ------------------------------------------------------------ bad numbers

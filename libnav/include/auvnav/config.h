@@ -1,6 +1,12 @@
 #pragma once
 /** @file config.h
- *  Typed, checked access to YAML configuration (MRPT's YAML parser).
+ *  Typed, checked access to YAML configuration.
+ *
+ *  One YAML library end to end: libyaml parses (the parser whose checks
+ *  accept a document is the one that builds the tree) and libyaml's emitter
+ *  writes toYaml(); MRPT's yaml is only the in-memory tree. Scalars are
+ *  strings; a plain empty value, ~ or null is a null scalar. Comments are
+ *  read and dropped.
  *
  *  Every accessor validates what it returns (present, right type, finite,
  *  in range) and throws ConfigError whose message names the file and the full
@@ -40,10 +46,10 @@ class Node
 	/** An empty map node (for default-constructed holders). */
 	Node() = default;
 	/** Parses a YAML file; throws ConfigError if missing or malformed, with
-	 *  one line naming file:line:column. Malformed includes what MRPT's YAML
-	 *  reader would take silently or fail on with a multi-line assertion: a
-	 *  duplicate key (the last would win), a second document ('---', '...'),
-	 *  an alias (*name), a key that is not a scalar. */
+	 *  one line naming file:line:column. Malformed includes what a YAML
+	 *  reader might take silently: a duplicate key (the last would win), a
+	 *  second document ('---', '...'), an alias (*name), a key that is not a
+	 *  scalar; and a top level that is not a map. */
 	static Node load(const std::string& file);
 	/** Wraps an in-memory YAML text (for tests); `origin` names it in errors. */
 	static Node fromText(const std::string& text, const std::string& origin = "<text>");
@@ -98,7 +104,9 @@ class Node
 	/** The path given under `key`, resolved relative to the folder of this
 	 *  node's file unless it is absolute (file references inside configs). */
 	std::string filePath(const std::string& key) const;
-	/** This subtree as YAML text (to hand a plugin its configuration). */
+	/** This subtree as YAML text (to hand a plugin its configuration),
+	 *  written by libyaml's emitter: strings are quoted where needed, comments
+	 *  are gone, and fromText() of it gives the same tree. */
 	std::string toYaml() const;
 	/** Sets `dotted.key.path` to the scalar `value` (creating maps on the way),
 	 *  for command-line overrides such as `--set filter.initial.heading_deg=25`.

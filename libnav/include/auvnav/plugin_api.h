@@ -14,8 +14,8 @@
  *  ABI version: changes when this entry layout or the MeasurementModel vtable
  *  changes (the host refuses other values). API version: grows when the
  *  interface gains backward-compatible features. Build fingerprint: compiler,
- *  Eigen version and alignment, MRPT version, state dimension; must match the
- *  host's exactly (C++ objects cross the boundary).
+ *  Eigen version and alignment, MRPT version, state dimension, sanitizers;
+ *  must match the host's exactly (C++ objects cross the boundary).
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -49,14 +49,73 @@
 #else
 #define AUVNAV_STDLIB_ID " other-stdlib"
 #endif
+// Sanitizers of this translation unit, each 0 or 1. A sanitized plugin in an
+// unsanitized navigator aborts inside dlopen (ASan's runtime must come first)
+// and ASan changes object layouts (container annotations), so the set must
+// match. gcc defines __SANITIZE_ADDRESS__/__SANITIZE_THREAD__ but nothing for
+// UBSan: AUVNAV_BUILT_WITH_UBSAN is defined by the build rules that add
+// -fsanitize=undefined (CMakeLists.txt AUVNAV_SANITIZE; for out-of-tree
+// plugins auvnav_add_plugin_module, from the installed package's
+// AUVNAV_BUILT_SANITIZED). The host also refuses, before dlopen, a plugin that
+// links a sanitizer runtime it lacks (plugin_host.h), which catches gcc UBSan
+// plugins built by other rules.
+#if defined(__has_feature)
+#define AUVNAV_HAS_FEATURE(x) __has_feature(x)
+#else
+#define AUVNAV_HAS_FEATURE(x) 0
+#endif
+#if defined(__SANITIZE_ADDRESS__) || AUVNAV_HAS_FEATURE(address_sanitizer)
+#define AUVNAV_SANITIZER_ASAN 1
+#define AUVNAV_ASAN_ID "-asan"
+#else
+#define AUVNAV_SANITIZER_ASAN 0
+#define AUVNAV_ASAN_ID ""
+#endif
+#if defined(__SANITIZE_HWADDRESS__) || AUVNAV_HAS_FEATURE(hwaddress_sanitizer)
+#define AUVNAV_SANITIZER_HWASAN 1
+#define AUVNAV_HWASAN_ID "-hwasan"
+#else
+#define AUVNAV_SANITIZER_HWASAN 0
+#define AUVNAV_HWASAN_ID ""
+#endif
+#if defined(__SANITIZE_THREAD__) || AUVNAV_HAS_FEATURE(thread_sanitizer)
+#define AUVNAV_SANITIZER_TSAN 1
+#define AUVNAV_TSAN_ID "-tsan"
+#else
+#define AUVNAV_SANITIZER_TSAN 0
+#define AUVNAV_TSAN_ID ""
+#endif
+#if AUVNAV_HAS_FEATURE(memory_sanitizer)
+#define AUVNAV_SANITIZER_MSAN 1
+#define AUVNAV_MSAN_ID "-msan"
+#else
+#define AUVNAV_SANITIZER_MSAN 0
+#define AUVNAV_MSAN_ID ""
+#endif
+#if defined(AUVNAV_BUILT_WITH_UBSAN) || AUVNAV_HAS_FEATURE(undefined_behavior_sanitizer)
+#define AUVNAV_SANITIZER_UBSAN 1
+#define AUVNAV_UBSAN_ID "-ubsan"
+#else
+#define AUVNAV_SANITIZER_UBSAN 0
+#define AUVNAV_UBSAN_ID ""
+#endif
+#if AUVNAV_SANITIZER_ASAN || AUVNAV_SANITIZER_HWASAN || AUVNAV_SANITIZER_TSAN || AUVNAV_SANITIZER_MSAN || \
+    AUVNAV_SANITIZER_UBSAN
+/** e.g. " sanitize-asan-ubsan"; empty for an unsanitized build (its fingerprint as before). */
+#define AUVNAV_SANITIZER_ID \
+	" sanitize" AUVNAV_ASAN_ID AUVNAV_HWASAN_ID AUVNAV_TSAN_ID AUVNAV_MSAN_ID AUVNAV_UBSAN_ID
+#else
+#define AUVNAV_SANITIZER_ID ""
+#endif
+
 /** Everything that must agree between host and plugin for C++ objects to
  *  cross: compiler (clang and gcc mangle and lay out alike only in part),
- *  the std::string ABI, Eigen's version and alignment, MRPT, and the state's
- *  storage (43 + room for plugin states). */
+ *  the std::string ABI, Eigen's version and alignment, MRPT, the state's
+ *  storage (43 + room for plugin states), and the sanitizers. */
 #define AUVNAV_BUILD_FINGERPRINT                                                                       \
 	AUVNAV_COMPILER_ID AUVNAV_STDLIB_ID " eigen-" AUVNAV_STR(EIGEN_WORLD_VERSION) "." AUVNAV_STR(          \
 		EIGEN_MAJOR_VERSION) "." AUVNAV_STR(EIGEN_MINOR_VERSION) " align-" AUVNAV_STR(EIGEN_MAX_ALIGN_BYTES) \
-		" mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43+" AUVNAV_STR(AUVNAV_MAX_EXTRA_STATES)
+		" mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43+" AUVNAV_STR(AUVNAV_MAX_EXTRA_STATES) AUVNAV_SANITIZER_ID
 
 extern "C"
 {

@@ -12,9 +12,13 @@
  *  `<dir of the running program>/../lib/auvnav/plugins` (the build tree).
  *  A name containing '/' or ending in ".so" is a path.
  *
- *  Refusals (PluginError, message naming plugin and path): file not found or
- *  not loadable, no entry point, wrong ABI version, newer API than the host,
- *  build fingerprint mismatch, factory failure (with the plugin's message).
+ *  Refusals (PluginError, one line naming plugin and path): file not found,
+ *  not an ELF shared library or truncated (checked before dlopen), a sanitizer
+ *  runtime the navigator was not built with among its DT_NEEDED libraries
+ *  (checked before dlopen, which would abort the program: ASan's runtime
+ *  must come first), not loadable, no entry point, wrong ABI version, newer
+ *  API than the host, build fingerprint mismatch (which includes the
+ *  sanitizers), factory failure (with the plugin's message).
  */
 #include <auvnav/measurement_model.h>
 #include <auvnav/plugin_api.h>
@@ -38,6 +42,14 @@ struct PluginInfo
 	std::string name, version, description, fingerprint, path;
 	uint32_t abi_version = 0, api_version = 0;
 };
+
+/** The shared libraries the ELF file at `path` asks the dynamic loader for
+ *  (its DT_NEEDED entries, in order, e.g. "libasan.so.8"), read from its
+ *  program headers without loading it: 32- or 64-bit, this machine's byte
+ *  order; none for a file without a dynamic section. Every read is bounded by
+ *  the file's size. Throws PluginError "PATH: what" for a file that cannot be
+ *  read, is not ELF, or is truncated or inconsistent. */
+std::vector<std::string> elfNeededLibraries(const std::string& path);
 
 /** A model created by a plugin; destroying it calls the plugin's destroy and
  *  keeps the library loaded until the last of its models is gone. */
