@@ -18,8 +18,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -148,17 +149,17 @@ std::size_t writeEditedSample(const fs::path& out, double span_s, const Edit& ed
 	return n;
 }
 
-/** The sample played twice, the second time right after the first (its
- *  stamps shifted by the sample's span plus one IMU period): ~28 minutes of
- *  data, so that a run is still going when killed at 5 s on a fast machine
- *  (the sample alone takes ~5 s). */
-void writeSampleTwice(const fs::path& out)
+/** The sample played `copies` times, each copy right after the one before
+ *  (its stamps shifted by the sample's span plus one IMU period): ~14 minutes
+ *  of data per copy, so that a run is still going when killed (the sample
+ *  alone takes ~5 s on a fast machine). */
+void writeSampleRepeated(const fs::path& out, int copies)
 {
 	auvnav::obs::registerAllClasses();
 	mrpt::io::CFileOutputStream f(out.string());
 	auto archive = mrpt::serialization::archiveFrom(f);
 	double first = -1, last = 0, shift = 0;
-	for (int pass = 0; pass < 2; ++pass)
+	for (int pass = 0; pass < copies; ++pass)
 	{
 		auvnav::io::RawlogReader in(kSample);
 		while (const auto obs = in.next())
@@ -169,7 +170,7 @@ void writeSampleTwice(const fs::path& out)
 			obs->timestamp = mrpt::Clock::fromDouble(t + shift);
 			archive << *obs;
 		}
-		shift = last - first + 0.01;
+		shift += last - first + 0.01;
 	}
 }
 
@@ -417,40 +418,57 @@ TEST(RunExit, YamlErrorsStopTheRunInOneLine)
 
 // ------------------------------------------------------------ kill -9
 
-// A real SIGKILL of the real process at ~2 s and ~5 s of the sample (played
-// twice, to be still running at 5 s): every
-// text output ends in a whole line and parses to its last line, and
-// summary.json is valid JSON with completed false, rewritten during the run
-// (outputs.summary_every_s=1 here; 5 by default).
+/** Runs the navigator on `rawlog` (100 Hz rows: more bytes per second, more
+ *  chances to be cut mid-line; summary every second), SIGKILLs it after
+ *  `kill_s` and checks what it left: every text output ends in a whole line
+ *  and parses to its last line, summary.json is valid JSON with completed
+ *  false, rewritten during the run. */
+void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlog, double kill_s)
+{
+	SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
+	const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
+	fs::create_directories(dir);
+	const Outcome o = runNavigator(
+		runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir,
+		kill_s);
+	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
+	const fs::path out = dir / "out";
+	const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
+	EXPECT_GT(states, 500u);  // the kill came mid-run, after rows were written
+	EXPECT_GT(expectWholeTum(out / "trajectory.tum"), 500u);
+	EXPECT_GT(expectWholeCsv(out / "updates.csv", {1, 5}), 1000u);
+	EXPECT_GT(expectWholeCsv(out / "nis.csv", {2, 3, 4}), 10u);
+	expectWholeCsv(out / "position_fixes.csv", {2, 3});
+	expectWholeCsv(out / "health.csv");
+	const Json s = summaryOf(dir);
+	EXPECT_FALSE(s["completed"].get<bool>());
+	EXPECT_TRUE(s["running"].get<bool>());
+	EXPECT_GT(s["data_duration_s"].get<double>(), 10.0);  // rewritten since the start
+	EXPECT_GT(s["predictions"].get<double>(), 1000.0);
+	std::printf("killed at %.0f s: %zu state rows, summary at %.0f s of data\n", kill_s, states,
+				s["data_duration_s"].get<double>());
+}
+
+// A real SIGKILL of the real process at ~2 s and ~5 s of the sample played
+// twice (to be still running at 5 s).
 TEST(RunKill, SigkillLeavesWholeLinesAndAValidSummary)
 {
 	const auto base = workDir();
 	const fs::path twice = base / "sample_twice.rawlog";
-	writeSampleTwice(twice);
-	for (double kill_s : {2.0, 5.0})
-	{
-		SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
-		const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
-		fs::create_directories(dir);
-		// 100 Hz rows: more bytes per second, more chances to be cut mid-line.
-		const Outcome o = runNavigator(
-			runArgs(dir, twice.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir,
-			kill_s);
-		ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
-		const fs::path out = dir / "out";
-		const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
-		EXPECT_GT(states, 500u);  // the kill came mid-run, after rows were written
-		EXPECT_GT(expectWholeTum(out / "trajectory.tum"), 500u);
-		EXPECT_GT(expectWholeCsv(out / "updates.csv", {1, 5}), 1000u);
-		EXPECT_GT(expectWholeCsv(out / "nis.csv", {2, 3, 4}), 10u);
-		expectWholeCsv(out / "position_fixes.csv", {2, 3});
-		expectWholeCsv(out / "health.csv");
-		const Json s = summaryOf(dir);
-		EXPECT_FALSE(s["completed"].get<bool>());
-		EXPECT_TRUE(s["running"].get<bool>());
-		EXPECT_GT(s["data_duration_s"].get<double>(), 10.0);  // rewritten since the start
-		EXPECT_GT(s["predictions"].get<double>(), 1000.0);
-	}
+	writeSampleRepeated(twice, 2);
+	for (double kill_s : {2.0, 5.0}) expectKilledRunLeftWholeOutputs(base, twice, kill_s);
+}
+
+// The same at ~30 s, on the sample played 12 times (~2.8 h of data, ~60 s of
+// run on a fast machine): buffers that fill and files that grow past their
+// first megabytes are cut whole too.
+TEST(RunKill, SigkillAfterHalfAMinuteLeavesWholeLinesAndAValidSummary)
+{
+	const auto base = workDir();
+	const fs::path log = base / "sample_12x.rawlog";
+	writeSampleRepeated(log, 12);
+	expectKilledRunLeftWholeOutputs(base, log, 30.0);
+	fs::remove(log);
 }
 
 // ------------------------------------------------------------ clock jumps
