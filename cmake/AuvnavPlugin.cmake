@@ -65,6 +65,16 @@ endfunction()
 # AUVNAV_BUILT_SANITIZED): the same sanitizers as auvnav, and the definition
 # that names UBSan in the fingerprint (gcc has no macro for it; plugin_api.h).
 # In-tree, the top-level AUVNAV_SANITIZE option sets both for every target.
+# --no-undefined, except against clang's sanitizers: clang links their
+# runtime into executables only, so every shared library leaves its hooks
+# (__asan_report_load8, ...) undefined until the program loads it.
+function(_auvnav_no_undefined target)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "Clang" AND (AUVNAV_BUILT_SANITIZED OR AUVNAV_SANITIZE OR AUVNAV_FUZZ))
+    return()
+  endif()
+  target_link_options(${target} PRIVATE "LINKER:--no-undefined")
+endfunction()
+
 function(_auvnav_match_sanitizers target)
   if(AUVNAV_BUILT_SANITIZED)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer)
@@ -89,7 +99,7 @@ function(auvnav_add_observation_library target)
   _auvnav_match_sanitizers(${target})
   # --no-undefined: a missing serialization method is a link error here,
   # not a dlopen failure in the field.
-  target_link_options(${target} PRIVATE "LINKER:--no-undefined")
+  _auvnav_no_undefined(${target})
   _auvnav_install_rpath(rpath "${ARG_INSTALL_DESTINATION}")
   set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON INSTALL_RPATH "${rpath}")
   if(ARG_INSTALL_DESTINATION)
@@ -129,8 +139,8 @@ function(auvnav_add_plugin_module target)
   _auvnav_match_sanitizers(${target})
   # Hidden visibility for the plugin's code; the version script also hides the
   # template instantiations that libstdc++ headers mark visible: the entry is all.
-  target_link_options(${target} PRIVATE
-    "LINKER:--version-script=${exports_map}" "LINKER:--no-undefined")
+  target_link_options(${target} PRIVATE "LINKER:--version-script=${exports_map}")
+  _auvnav_no_undefined(${target})
   set_target_properties(${target} PROPERTIES
     PREFIX "lib"
     OUTPUT_NAME auvnav_plugin_${name}

@@ -4,6 +4,7 @@
 #   CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DAUVNAV_FUZZ=ON
 #   cmake --build build-fuzz -j2 --target auvnav_fuzz
 #   tests/fuzz/run_all.sh [SECONDS] [BUILD_DIR]      (BUILD_DIR default: build-fuzz)
+# .ci/sanitize runs it for 30 s per harness in its sanitized build (FUZZ_SEED=1).
 # Each harness starts from a fresh temporary corpus, a copy of its committed
 # seeds and regressions, so the repository is never written to. Stops at the
 # first harness that finds something (crash, sanitizer report, leak,
@@ -25,6 +26,9 @@ declare -A max_len=([rawlog]=16384 [config]=8192 [csv_import]=4096 [plugin_prepa
 # still check every committed input for leaks, with the suppressions of
 # harness_runtime.cpp.
 declare -A extra=([config]=-detect_leaks=0 [csv_import]=-detect_leaks=0)
+# FUZZ_SEED: libFuzzer's random seed (CI fixes it; default: a new one per run).
+seed_arg=""
+[ -n "${FUZZ_SEED:-}" ] && seed_arg="-seed=$FUZZ_SEED"
 status=0
 for bin in "$build"/bin/fuzz_*; do
 	[ -x "$bin" ] || continue
@@ -34,7 +38,7 @@ for bin in "$build"/bin/fuzz_*; do
 	cp -r "$here/regressions/$name/." "$corpus/" 2>/dev/null || true
 	echo "== fuzz_$name: ${seconds}s, corpus $corpus"
 	if ! "$bin" -max_total_time="$seconds" -max_len="${max_len[$name]:-1024}" -rss_limit_mb=2048 -timeout=10 \
-		-print_final_stats=1 -artifact_prefix="$artifacts/fuzz_$name-" ${extra[$name]:-} "$corpus" > "$artifacts/fuzz_$name.log" 2>&1; then
+		-print_final_stats=1 $seed_arg -artifact_prefix="$artifacts/fuzz_$name-" ${extra[$name]:-} "$corpus" > "$artifacts/fuzz_$name.log" 2>&1; then
 		tail -n 60 "$artifacts/fuzz_$name.log"
 		echo "fuzz_$name FOUND SOMETHING: the input is under $artifacts (log: fuzz_$name.log)" >&2
 		status=1
