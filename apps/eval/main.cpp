@@ -196,18 +196,19 @@ std::string monteCarlo(const std::vector<Evaluation>& evs, double settle_s, cons
 	const auto [lo2, hi2] = chi2MeanBounds(2, M);
 	// One row for the whole run and, with --settle, one from that time on
 	// (after the initial alignment).
-	auto row = [&](const char* from, std::size_t first) {
+	// Structured bindings by init-capture: clang before 16 cannot capture them.
+	auto row = [&, b3_lo = lo, b3_hi = hi, b2_lo = lo2, b2_hi = hi2](const char* from, std::size_t first) {
 		std::size_t in_pos = 0, in_att = 0, above_pos = 0, above_att = 0, in_h = 0, above_h = 0;
 		for (std::size_t i = first; i < n; ++i)
 		{
-			in_h += hpos[i] >= lo2 && hpos[i] <= hi2, above_h += hpos[i] > hi2;
-			in_pos += pos[i] >= lo && pos[i] <= hi, in_att += att[i] >= lo && att[i] <= hi;
-			above_pos += pos[i] > hi, above_att += att[i] > hi;
+			in_h += hpos[i] >= b2_lo && hpos[i] <= b2_hi, above_h += hpos[i] > b2_hi;
+			in_pos += pos[i] >= b3_lo && pos[i] <= b3_hi, in_att += att[i] >= b3_lo && att[i] <= b3_hi;
+			above_pos += pos[i] > b3_hi, above_att += att[i] > b3_hi;
 		}
 		const double k = std::max<double>(1.0, static_cast<double>(n - first));
 		char buf[512];
 		std::snprintf(buf, sizeof buf, "| %d | %s | %zu | [%.3f, %.3f] / [%.3f, %.3f] | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %.1f %% |\n",
-					  M, from, n - first, lo, hi, lo2, hi2, 100.0 * in_pos / k, 100.0 * above_pos / k, 100.0 * in_h / k,
+					  M, from, n - first, b3_lo, b3_hi, b2_lo, b2_hi, 100.0 * in_pos / k, 100.0 * above_pos / k, 100.0 * in_h / k,
 					  100.0 * above_h / k, 100.0 * in_att / k, 100.0 * above_att / k);
 		return std::string(buf);
 	};
