@@ -251,8 +251,11 @@ mrpt::Clock::time_point toMrptTime(TimeNs t)
 {
 	// Round to the nearest tick from the floored quotient and its remainder:
 	// t + 50 would overflow for stamps within 50 ns of the int64 limit.
+	// The remainder from t % 100, not t - ticks * 100: that product overflows
+	// for stamps within 100 ns of the int64 minimum (UBSan, import tests).
 	int64_t ticks = floorDiv(t, 100);
-	if (t - ticks * 100 >= 50) ++ticks;
+	const int64_t remainder = (t % 100 + 100) % 100;
+	if (remainder >= 50) ++ticks;
 	return mrpt::Clock::time_point(mrpt::Clock::duration(unixEpochTicks() + ticks));
 }
 
