@@ -423,7 +423,7 @@ TEST(RunExit, YamlErrorsStopTheRunInOneLine)
  *  `kill_s` and checks what it left: every text output ends in a whole line
  *  and parses to its last line, summary.json is valid JSON with completed
  *  false, rewritten during the run. */
-void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlog, double kill_s)
+void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlog, double kill_s, bool check_progress)
 {
 	SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
 	const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
@@ -434,20 +434,44 @@ void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlo
 	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
 	const fs::path out = dir / "out";
 	const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
-	EXPECT_GT(states, 500u);  // the kill came mid-run, after rows were written
-	EXPECT_GT(expectWholeTum(out / "trajectory.tum"), 500u);
-	EXPECT_GT(expectWholeCsv(out / "updates.csv", {1, 5}), 1000u);
-	EXPECT_GT(expectWholeCsv(out / "nis.csv", {2, 3, 4}), 10u);
+	const std::size_t tum = expectWholeTum(out / "trajectory.tum");
+	const std::size_t updates = expectWholeCsv(out / "updates.csv", {1, 5});
+	const std::size_t nis = expectWholeCsv(out / "nis.csv", {2, 3, 4});
 	expectWholeCsv(out / "position_fixes.csv", {2, 3});
 	expectWholeCsv(out / "health.csv");
 	const Json s = summaryOf(dir);
 	EXPECT_FALSE(s["completed"].get<bool>());
 	EXPECT_TRUE(s["running"].get<bool>());
-	EXPECT_GT(s["data_duration_s"].get<double>(), 10.0);  // rewritten since the start
-	EXPECT_GT(s["predictions"].get<double>(), 1000.0);
+	// The kill came mid-run, after rows were written and the summary was
+	// rewritten (not checked for the earliest kill: on a loaded machine the run
+	// may not have reached its first flush, 1 s of its own clock, by then).
+	if (check_progress)
+	{
+		EXPECT_GT(states, 500u);
+		EXPECT_GT(tum, 500u);
+		EXPECT_GT(updates, 1000u);
+		EXPECT_GT(nis, 10u);
+		EXPECT_GT(s["data_duration_s"].get<double>(), 10.0);
+		EXPECT_GT(s["predictions"].get<double>(), 1000.0);
+	}
 	std::printf("killed at %.0f s: %zu state rows, summary at %.0f s of data\n", kill_s, states,
 				s["data_duration_s"].get<double>());
 }
+
+// Under AddressSanitizer (the sanitizer pass, .ci/sanitize) auvnav-run starts
+// and runs tens of times slower: at 2 s it has written nothing yet, so the
+// short kills come later there, still mid-run.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr double kKillDelayScale = 5;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr double kKillDelayScale = 5;
+#else
+constexpr double kKillDelayScale = 1;
+#endif
+#else
+constexpr double kKillDelayScale = 1;
+#endif
 
 // A real SIGKILL of the real process at ~2 s and ~5 s of the sample played
 // twice (to be still running at 5 s).
@@ -456,7 +480,8 @@ TEST(RunKill, SigkillLeavesWholeLinesAndAValidSummary)
 	const auto base = workDir();
 	const fs::path twice = base / "sample_twice.rawlog";
 	writeSampleRepeated(twice, 2);
-	for (double kill_s : {2.0, 5.0}) expectKilledRunLeftWholeOutputs(base, twice, kill_s);
+	expectKilledRunLeftWholeOutputs(base, twice, 2.0 * kKillDelayScale, false);
+	expectKilledRunLeftWholeOutputs(base, twice, 5.0 * kKillDelayScale, true);
 }
 
 // The same at ~30 s, on the sample played 12 times (~2.8 h of data, ~60 s of
@@ -467,7 +492,7 @@ TEST(RunKill, SigkillAfterHalfAMinuteLeavesWholeLinesAndAValidSummary)
 	const auto base = workDir();
 	const fs::path log = base / "sample_12x.rawlog";
 	writeSampleRepeated(log, 12);
-	expectKilledRunLeftWholeOutputs(base, log, 30.0);
+	expectKilledRunLeftWholeOutputs(base, log, 30.0, true);
 	fs::remove(log);
 }
 
