@@ -16,8 +16,9 @@
 #
 # auvnav_add_observation_library(<target> SOURCES <src...> [INSTALL_DESTINATION <dir>])
 #   a SHARED library lib<target>.so with a plugin's own MRPT observation
-#   classes (a CObservation subclass per file, registered in an
-#   MRPT_INITIALIZER): the plugin links it, and the programs that read rawlogs
+#   classes (a CObservation subclass per file, registered by a namespace-scope
+#   initialiser: share/examples/compass_plugin): the plugin links it, and the
+#   programs that read rawlogs
 #   load it with `--obs-lib lib<target>.so` or the sensor's `obs_libs` config
 #   key (auvnav/obs_libraries.h). Links auvnav::obs (mrpt::obs) PUBLIC.
 #   Install it where the plugin is installed (AUVNAV_PLUGIN_INSTALL_DIR) so

@@ -38,8 +38,8 @@ std::string loadObservationLibrary(const std::string& lib, const std::vector<std
 	static std::set<std::string> loaded;
 	const std::lock_guard<std::mutex> lock(mutex);
 	if (loaded.count(where)) return where;
-	// Static initialisers run inside dlopen: the library's MRPT_INITIALIZER
-	// registers its classes now.
+	// Static initialisers run inside dlopen: the library's registering
+	// initialisers (share/examples/compass_plugin) register its classes now.
 	if (!dlopen(where.c_str(), RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE))
 	{
 		const char* e = dlerror();

@@ -1,6 +1,5 @@
 #include "CObservationTestTag.h"
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/serialization/CArchive.h>
 
 using auvnav_test::CObservationTestTag;
@@ -25,4 +24,9 @@ void CObservationTestTag::serializeFrom(mrpt::serialization::CArchive& in, uint8
 
 // Loading the library registers the class with MRPT (what dlopen of an
 // observation library relies on).
-MRPT_INITIALIZER(registerClasses_auvnav_test_obs) { mrpt::rtti::registerClass(CLASS_ID(CObservationTestTag)); }
+// Registered by a dynamic initialiser of this file, which the standard runs
+// after the class's runtime id above (share/examples/compass_plugin).
+namespace
+{
+[[maybe_unused]] const bool kRegistered = (mrpt::rtti::registerClass(CLASS_ID(CObservationTestTag)), true);
+}

@@ -1,7 +1,6 @@
 // The example's observation class (see CObservationCompass.h).
 #include "CObservationCompass.h"
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <ostream>
@@ -34,4 +33,11 @@ void CObservationCompass::getDescriptionAsText(std::ostream& o) const
 
 // Runs when the library is loaded (by the dynamic linker for the plugin, by
 // dlopen for --obs-lib): MRPT can then deserialize the class from a rawlog.
-MRPT_INITIALIZER(registerClasses_compass_obs) { mrpt::rtti::registerClass(CLASS_ID(CObservationCompass)); }
+// A dynamic initialiser of this file, not MRPT_INITIALIZER: the standard runs
+// it after the class's runtime id above, whereas MRPT_INITIALIZER is a
+// constructor function, which clang may run first (the class is then
+// registered with a null name and cannot be read).
+namespace
+{
+[[maybe_unused]] const bool kRegistered = (mrpt::rtti::registerClass(CLASS_ID(CObservationCompass)), true);
+}
