@@ -11,9 +11,13 @@
 
 #include "scene.h"
 
+// The live-view module (libauvnav_live_view.so): the only part of auvnav-run
+// that links MRPT's GUI library; see live_view.h.
 namespace auvnav::run
 {
-struct LiveView::Impl
+namespace
+{
+struct Impl
 {
 	mrpt::gui::CDisplayWindow3D window;
 	view::RunData data;
@@ -23,15 +27,20 @@ struct LiveView::Impl
 	explicit Impl(const std::string& title) : window(title, 1280, 800) {}
 };
 
-LiveView::LiveView(const std::string& title)
+class WindowLiveView final : public LiveView
 {
-	if (!std::getenv("DISPLAY")) throw std::runtime_error("--view needs a display (DISPLAY is not set; try xvfb-run)");
-	impl_ = std::make_unique<Impl>(title);
-}
+   public:
+	explicit WindowLiveView(const std::string& title) : impl_(std::make_unique<Impl>(title)) {}
+	void onState(const Navigator& nav) override;
+	void onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r) override;
+	void refresh(bool force = false) override;
+	void hold(double seconds) override;
 
-LiveView::~LiveView() = default;
+   private:
+	std::unique_ptr<Impl> impl_;
+};
 
-void LiveView::onState(const Navigator& nav)
+void WindowLiveView::onState(const Navigator& nav)
 {
 	if (nav.time() - impl_->last_t < 1.0) return;
 	impl_->last_t = nav.time();
@@ -45,14 +54,14 @@ void LiveView::onState(const Navigator& nav)
 	refresh();
 }
 
-void LiveView::onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
+void WindowLiveView::onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
 {
 	if (m.z.size() < 2) return;
 	impl_->data.fixes.push_back(
 		{t, label, {m.z[0], m.z[1]}, r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
 }
 
-void LiveView::refresh(bool force)
+void WindowLiveView::refresh(bool force)
 {
 	const auto now = std::chrono::steady_clock::now();
 	if (impl_->data.estimate.empty() || (!force && now - impl_->last_draw < std::chrono::seconds(1))) return;
@@ -66,7 +75,7 @@ void LiveView::refresh(bool force)
 	impl_->window.forceRepaint();
 }
 
-void LiveView::hold(double seconds)
+void WindowLiveView::hold(double seconds)
 {
 	refresh(true);
 	impl_->user_camera = true;
@@ -81,4 +90,21 @@ void LiveView::hold(double seconds)
 	impl_->window.waitForKey();
 }
 
+}  // namespace
 }  // namespace auvnav::run
+
+extern "C" __attribute__((visibility("default"))) auvnav::run::LiveView* auvnav_live_view_create_v1(const char* title,
+																									 std::string* error)
+{
+	try
+	{
+		if (!std::getenv("DISPLAY"))
+			throw std::runtime_error("--view needs a display (DISPLAY is not set; try xvfb-run)");
+		return new auvnav::run::WindowLiveView(title ? title : "auvnav-run");
+	}
+	catch (const std::exception& e)
+	{
+		if (error) *error = e.what();
+		return nullptr;
+	}
+}

@@ -125,7 +125,7 @@ int main(int argc, char** argv)
 	{
 		try
 		{
-			live = std::make_unique<auvnav::run::LiveView>("auvnav-run: " + rawlog.getValue());
+			live = auvnav::run::openLiveView("auvnav-run: " + rawlog.getValue());
 		}
 		catch (const std::exception& e)
 		{

@@ -52,7 +52,7 @@ endfunction()
 run("install" COMMAND ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}" --config ${BUILD_TYPE})
 set(plugin_dir "${prefix}/${LIBDIR}/auvnav/plugins")
 foreach(f
-    bin/auvnav-run bin/auvnav-sim bin/auvnav-info
+    bin/auvnav-run bin/auvnav-sim bin/auvnav-info ${LIBDIR}/auvnav/libauvnav_live_view.so
     ${LIBDIR}/libauvnav_nav.so ${LIBDIR}/libauvnav_obs.so
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_inertial.so ${LIBDIR}/auvnav/plugins/inertial.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_dvl.so ${LIBDIR}/auvnav/plugins/dvl.yaml
@@ -97,6 +97,11 @@ if(LDD)
       message(FATAL_ERROR "installed auvnav-run does not load ${prefix}/${LIBDIR}/libauvnav_${lib}.so:\n${ldd_out}")
     endif()
   endforeach()
+  # --view's module (loaded at run time) resolves the installed libauvnav_nav.
+  run("ldd live view" COMMAND ${LDD} "${prefix}/${LIBDIR}/auvnav/libauvnav_live_view.so" OUTPUT_VARIABLE ldd_view)
+  if(ldd_view MATCHES "not found" OR NOT ldd_view MATCHES "libauvnav_nav\\.so => ${prefix}/")
+    message(FATAL_ERROR "installed libauvnav_live_view.so does not resolve its libraries from ${prefix}:\n${ldd_view}")
+  endif()
 endif()
 run("installed auvnav-info --help" COMMAND "${prefix}/bin/auvnav-info" --help)
 run("installed auvnav-info on the installed sample" COMMAND "${prefix}/bin/auvnav-info"
