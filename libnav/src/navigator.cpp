@@ -2,9 +2,13 @@
 #include <auvnav/rejection_streak.h>
 #include <auvnav/so3.h>
 #include <mrpt/obs/CObservationIMU.h>
+#if AUVNAV_HAVE_CALLGRIND_H
+#include <valgrind/callgrind.h>
+#endif
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
 #include <filesystem>
 #include <stdexcept>
@@ -50,7 +54,40 @@ struct Navigator::Slot
 	// also those the plugin skips): arrival time, fix − the state's sensor point [m].
 	std::deque<std::pair<double, Eigen::Vector2d>> fix_offsets;
 	std::vector<Measurement> buffer;
+	bool profiled = false;	// AUVNAV_CALLGRIND_SENSOR names it (CallgrindStage)
 };
+
+namespace
+{
+/** bench/instructions.sh counts one sensor's instructions: run under
+ *  `valgrind --tool=callgrind --collect-atstart=no` with
+ *  AUVNAV_CALLGRIND_SENSOR=<label>, collection is on only while that sensor's
+ *  observations are prepared and applied. Outside valgrind the toggle is a few
+ *  no-op instructions, and it only runs for the named sensor. */
+class CallgrindStage
+{
+   public:
+	explicit CallgrindStage(bool on) : on_(on) { toggle(); }
+	~CallgrindStage() { toggle(); }
+	CallgrindStage(const CallgrindStage&) = delete;
+	CallgrindStage& operator=(const CallgrindStage&) = delete;
+
+   private:
+	void toggle() const
+	{
+#if AUVNAV_HAVE_CALLGRIND_H
+		if (on_) CALLGRIND_TOGGLE_COLLECT;
+#endif
+	}
+	bool on_;
+};
+
+bool profiledSensor(const std::string& label)
+{
+	const char* name = std::getenv("AUVNAV_CALLGRIND_SENSOR");
+	return name && label == name;
+}
+}  // namespace
 
 /** What re-filtering for delayed measurements needs (navigator.h): the
  *  filter's inputs since the oldest checkpoint, in the order applied, and
@@ -228,6 +265,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		auto slot = std::make_unique<Slot>();
 		slot->stats.label = s.string("label");
 		slot->stats.plugin = s.string("plugin");
+		slot->profiled = profiledSensor(slot->stats.label);
 		slot->latency_s = s.inRange("latency_s", 0, 600, 0.0);
 		s.markFreeForm("config");  // the plugin checks its own keys
 		// Observation libraries the entry declares are the program's to load
@@ -642,6 +680,7 @@ void Navigator::replayEvent(std::size_t event)
 	ctx.t_s = t_s_;
 	ctx.mean = &ukf_->state();
 	ctx.covariance = &ukf_->covariance();
+	const CallgrindStage profile(slots_[e.slot]->profiled);
 	applyMeasurements(*slots_[e.slot], e.ms, ctx, e.t_obs, false);
 }
 
@@ -844,6 +883,7 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 bool Navigator::prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m, std::size_t at)
 {
 	Slot& slot = *slots_[slot_index];
+	const CallgrindStage profile(slot.profiled);
 	SensorStats& st = slot.stats;
 	const FilterContext ctx = context(t_m);
 	std::string why;
