@@ -53,13 +53,25 @@ void ProcessModel::appendBlock(const StateBlockSpec& b)
 NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
 								 const Eigen::Vector3d& omega_ie_n, double dt) const
 {
+	return propagateTurned(x, omega_ib_b, so3::Exp(-omega_ie_n * dt), dt);
+}
+
+NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
+									   const Eigen::Matrix3d& R_earth_turn, double dt) const
+{
+	return propagateTurned(x, R_earth_turn, so3::Exp((omega_ib_b - x.b_w) * dt), dt);
+}
+
+NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
+									   const Eigen::Matrix3d& R_body_turn, double dt) const
+{
 	if (x.dim() != dim())
 		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
 									std::to_string(dim()) + " coordinates");
 	NavState y = x;
 	// Body rotation relative to inertial space, then undo the turn of the
 	// Earth-fixed navigation frame.
-	y.R_nb = so3::Exp(-omega_ie_n * dt) * x.R_nb * so3::Exp((omega_ib_b - x.b_w) * dt);
+	y.R_nb = R_earth_turn * x.R_nb * R_body_turn;
 	TangentVector e = x.euclidean();
 	const TangentVector e0 = e;
 	applyLinearRows(e, dt);
@@ -93,38 +105,59 @@ NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega
 	return y;
 }
 
-Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps, double vertical_speed_mps) const
+template <typename AddEntry>
+void ProcessModel::forEachNoiseEntry(double dt, double speed_through_water_mps, double vertical_speed_mps,
+									 AddEntry&& add) const
 {
-	Covariance Q = Covariance::Zero(dim(), dim());
-	Q.block<3, 3>(idx::att, idx::att).diagonal().setConstant(noise.gyro_arw * noise.gyro_arw * dt);
-	Q.block<3, 3>(idx::gyro_bias, idx::gyro_bias).diagonal().setConstant(noise.gyro_bias.variance(dt));
+	const double arw_var = noise.gyro_arw * noise.gyro_arw * dt, gyro_bias_var = noise.gyro_bias.variance(dt);
+	for (int k = 0; k < 3; ++k)
+	{
+		add(idx::att + k, idx::att + k, arw_var);
+		add(idx::gyro_bias + k, idx::gyro_bias + k, gyro_bias_var);
+	}
 	// White jerk integrated exactly into (p, v, a), per axis.
 	const double q = noise.jerk_psd;
 	const double dt2 = dt * dt, dt3 = dt2 * dt, dt4 = dt3 * dt, dt5 = dt4 * dt;
 	for (int k = 0; k < 3; ++k)
 	{
 		const int p = idx::pos + k, v = idx::vel + k, a = idx::acc + k;
-		Q(p, p) = q * dt5 / 20 + noise.velocity_psd * dt3 / 3;
-		Q(p, v) = Q(v, p) = q * dt4 / 8 + noise.velocity_psd * dt2 / 2;
-		Q(p, a) = Q(a, p) = q * dt3 / 6;
-		Q(v, v) = q * dt3 / 3 + noise.velocity_psd * dt;
-		Q(v, a) = Q(a, v) = q * dt2 / 2;
-		Q(a, a) = q * dt;
+		const double pv = q * dt4 / 8 + noise.velocity_psd * dt2 / 2, pa = q * dt3 / 6, va = q * dt2 / 2;
+		add(p, p, q * dt5 / 20 + noise.velocity_psd * dt3 / 3);
+		add(p, v, pv);
+		add(v, p, pv);
+		add(p, a, pa);
+		add(a, p, pa);
+		add(v, v, q * dt3 / 3 + noise.velocity_psd * dt);
+		add(v, a, va);
+		add(a, v, va);
+		add(a, a, q * dt);
 	}
-	Q(idx::gravity, idx::gravity) = noise.gravity_psd * dt;
-	Q.block<3, 3>(idx::acc_bias, idx::acc_bias).diagonal().setConstant(noise.accel_bias.variance(dt));
-	const double current_var =
-		noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
-	Q.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().setConstant(current_var);
-	Q.block<4, 4>(idx::current_vehicle, idx::current_vehicle).diagonal().array() +=
-		noise.current_vertical_var_per_m * std::abs(vertical_speed_mps) * dt;
-	Q.block<2, 2>(idx::adcp_bias, idx::adcp_bias).diagonal().setConstant(noise.adcp_bias.variance(dt));
+	add(idx::gravity, idx::gravity, noise.gravity_psd * dt);
+	const double accel_bias_var = noise.accel_bias.variance(dt);
+	for (int k = 0; k < 3; ++k) add(idx::acc_bias + k, idx::acc_bias + k, accel_bias_var);
+	double current_var = noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
+	current_var += noise.current_vertical_var_per_m * std::abs(vertical_speed_mps) * dt;
+	for (int k = 0; k < 4; ++k) add(idx::current_vehicle + k, idx::current_vehicle + k, current_var);
+	const double adcp_bias_var = noise.adcp_bias.variance(dt);
+	for (int k = 0; k < 2; ++k) add(idx::adcp_bias + k, idx::adcp_bias + k, adcp_bias_var);
 	const double phi_p = std::exp(-dt / noise.parameter_tau_s);
 	for (int i = 0; i < 18; ++i)
-		Q(idx::inertia + i, idx::inertia + i) =
-			noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p);
-	for (std::size_t i = 0; i < extra.size(); ++i) Q(idx::extra + i, idx::extra + i) = extra[i].variance(dt);
+		add(idx::inertia + i, idx::inertia + i, noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p));
+	for (std::size_t i = 0; i < extra.size(); ++i)
+		add(idx::extra + static_cast<int>(i), idx::extra + static_cast<int>(i), extra[i].variance(dt));
+}
+
+Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps, double vertical_speed_mps) const
+{
+	Covariance Q = Covariance::Zero(dim(), dim());
+	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps, [&](int i, int j, double q) { Q(i, j) = q; });
 	return Q;
+}
+
+void ProcessModel::addNoiseCovariance(Covariance& P, double dt, double speed_through_water_mps,
+									  double vertical_speed_mps) const
+{
+	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps, [&](int i, int j, double q) { P(i, j) += q; });
 }
 
 ProcessModel ProcessModel::fromConfig(const config::Node& n, const TangentVector& prior_mean)

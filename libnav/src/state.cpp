@@ -97,6 +97,27 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	// Member by member (no flat round trip through euclidean(): this runs per
 	// sigma point).
 	NavState y;
+	if (delta.segment<3>(idx::att).isZero(0))
+	{
+		// No turn (every sigma point along a Cholesky column past the
+		// attitude's): Exp(0) is exactly I, so this is the general case's
+		// result without its rotations.
+		y.R_nb = R_nb;
+		y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
+		y.g = g + delta[idx::gravity];
+		y.p_n = p_n + delta.segment<3>(idx::pos);
+		y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
+		add23(y.M_sub, M_sub, delta, idx::inertia);
+		add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
+		add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
+		y.extra = extra + delta.tail(extra.size());
+		y.v_n = v_n + delta.segment<3>(idx::vel);
+		y.a_n = a_n + delta.segment<3>(idx::acc);
+		y.current_vehicle_ne = current_vehicle_ne + delta.segment<2>(idx::current_vehicle);
+		y.current_far_ne = current_far_ne + delta.segment<2>(idx::current_far);
+		y.b_a = b_a + R_nb.transpose() * delta.segment<3>(idx::acc_bias);
+		return y;
+	}
 	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
 	y.R_nb = dR * R_nb;
 	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);

@@ -23,7 +23,19 @@ namespace
 // model parameters are affine and independent of them.
 constexpr int kNonlinear = idx::adcp_bias;
 
-void symmetrize(Covariance& P) { P = 0.5 * (P + P.transpose()).eval(); }
+/** P ← ½(P + Pᵀ), in place over one triangle (the same sums as the
+ *  expression, without its temporary: this runs after every step). */
+void symmetrize(Covariance& P)
+{
+	const Eigen::Index n = P.rows();
+	for (Eigen::Index j = 0; j < n; ++j)
+		for (Eigen::Index i = j + 1; i < n; ++i)
+		{
+			const double s = 0.5 * (P(i, j) + P(j, i));
+			P(i, j) = s;
+			P(j, i) = s;
+		}
+}
 }  // namespace
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
@@ -166,17 +178,22 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 {
 	const int n = n_;
 	if (L_.rows() != n) L_.setZero(n, n);
+	using BlockRef = Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
 	for (int attempt = 0; attempt < 2; ++attempt)
 	{
-		Eigen::LLT<Eigen::MatrixXd> llt(P_.topLeftCorner(k, k));
+		// Factorised in place in L_'s leading block (no heap, no copies).
+		BlockRef L11 = L_.topLeftCorner(k, k);
+		L11 = P_.topLeftCorner(k, k);
+		Eigen::LLT<BlockRef> llt(L11);
 		if (llt.info() == Eigen::Success)
 		{
-			const Eigen::MatrixXd L11 = llt.matrixL();
-			L_.topLeftCorner(k, k) = L11;
+			L11.triangularView<Eigen::StrictlyUpper>().setZero();  // the sigma points read whole columns
 			if (k < n)
+			{
 				// L21 = P21 L11⁻ᵀ
 				L_.bottomLeftCorner(n - k, k) =
 					L11.triangularView<Eigen::Lower>().solve(P_.bottomLeftCorner(n - k, k).transpose()).transpose();
+			}
 			return;
 		}
 		repairCovariance();
@@ -195,14 +212,22 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// Only sigma points along the first k Cholesky columns move the inertial
 	// block; the other 2(n−k) share the centre's propagation of that block.
 	std::array<NavState, 2 * k + 1>& X = sigma_scratch_;
-	X[0] = model_.propagate(x_, omega_ib_b, omega_ie_n, dt);
+	// Turns shared by sigma points: the navigation frame's (all of them) and
+	// the body's at the centre's gyro bias (those along columns past the bias).
+	const Eigen::Matrix3d R_earth_turn = so3::Exp(-omega_ie_n * dt);
+	const Eigen::Matrix3d R_body_turn = so3::Exp((omega_ib_b - x_.b_w) * dt);
+	auto propagate = [&](const NavState& x) {
+		return x.b_w == x_.b_w ? model_.propagateTurned(x, R_earth_turn, R_body_turn, dt)
+							   : model_.propagateTurned(x, omega_ib_b, R_earth_turn, dt);
+	};
+	X[0] = propagate(x_);
 	std::array<double, k> scale;
 	for (int j = 0; j < k; ++j)
 	{
 		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const TangentVector c = (g * scale[j]) * L_.col(j);
-		X[1 + 2 * j] = model_.propagate(x_.boxplus(c), omega_ib_b, omega_ie_n, dt);
-		X[2 + 2 * j] = model_.propagate(x_.boxplus(-c), omega_ib_b, omega_ie_n, dt);
+		X[1 + 2 * j] = propagate(x_.boxplus(c));
+		X[2 + 2 * j] = propagate(x_.boxplus(-c));
 	}
 	std::array<double, 2 * k + 1> wm;
 	wm.fill(w_.wi);
@@ -262,7 +287,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.topLeftCorner<k, k>() = P_NN;
 	P_.topRightCorner(k, n - k) = P_NL;
 	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
-	P_ += model_.noiseCovariance(dt, speed_through_water, x_.v_n.z());
+	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
 	applySigmaLimits();
 	mean.R_nb = so3::normalized(mean.R_nb);

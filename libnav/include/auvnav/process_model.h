@@ -80,11 +80,23 @@ struct ProcessModel
 	 *  Earth rate `omega_ie_n` (a pure function: used per sigma point). */
 	NavState propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
 					   double dt_s) const;
+	/** The same with the navigation frame's turn over the step given,
+	 *  R_earth_turn = Exp(−ω_ie_n dt) (computed once for all sigma points). */
+	NavState propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
+							 const Eigen::Matrix3d& R_earth_turn, double dt_s) const;
+	/** The same with the body's turn given too, R_body_turn =
+	 *  Exp((ω_ib_b − x.b_w) dt) (shared by sigma points with the centre's bias). */
+	NavState propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
+							 const Eigen::Matrix3d& R_body_turn, double dt_s) const;
 
 	/** Process noise covariance over `dt_s` (tangent space, dim() × dim()). `speed_through_water_mps`
 	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
 	 *  magnitude) the vertical part. */
 	Covariance noiseCovariance(double dt_s, double speed_through_water_mps, double vertical_speed_mps = 0) const;
+	/** P += noiseCovariance(…), touching only Q's non-zero entries (the same
+	 *  sums: the filter's every-tick form, without a dense Q). */
+	void addNoiseCovariance(Covariance& P, double dt_s, double speed_through_water_mps,
+							double vertical_speed_mps = 0) const;
 
 	/** The linear part (everything but attitude and gyro bias) as the map
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
@@ -93,6 +105,12 @@ struct ProcessModel
 	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const;
 
 	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
+
+   private:
+	/** Calls add(i, j, q) once for every non-zero entry q of the process noise. */
+	template <typename AddEntry>
+	void forEachNoiseEntry(double dt_s, double speed_through_water_mps, double vertical_speed_mps,
+						   AddEntry&& add) const;
 };
 
 // ---------------------------------------------------------------- inline
