@@ -249,6 +249,7 @@ RunResult readResult(const Experiment& e, const fs::path& out_dir, unsigned seed
  *  on it and writes DIR/runs/seed_N.result. */
 void runSeed(const Experiment& e, PluginHost& host, unsigned seed, const fs::path& out_dir, bool keep_rawlogs)
 {
+	fs::remove(resultPath(out_dir, seed));  // a failed rerun must not leave an older result for --collect
 	const fs::path dir = out_dir / ("seed_" + std::to_string(seed));
 	const auto summary = sim::runMission(e.spec, seed, dir.string());
 	const auto truth = io::readGroundTruth(dir / "ground_truth.csv");
@@ -413,6 +414,25 @@ std::string exitText(int status)
 	return "status " + std::to_string(status);
 }
 
+/** Runs every seed in this process, one after the other (--jobs 1, --seed).
+ *  Returns the seeds that failed, each named on stderr as runWorkers does. */
+std::vector<unsigned> runHere(const Experiment& e, PluginHost& host, const fs::path& out_dir, bool keep_rawlogs)
+{
+	std::vector<unsigned> failed;
+	for (unsigned seed : e.seeds)
+		try
+		{
+			runSeed(e, host, seed, out_dir, keep_rawlogs);
+		}
+		catch (const std::exception& x)
+		{
+			std::cerr << kProgram << ": error: the run of seed " << seed << " failed: " << oneLineReason(x.what())
+					  << "\n";
+			failed.push_back(seed);
+		}
+	return failed;
+}
+
 /** Runs every seed in a worker process (this program with --seed), at most
  *  `jobs` at a time. Returns the seeds that failed; the others' results are
  *  in DIR/runs whatever happens to the rest. */
@@ -548,9 +568,10 @@ int main(int argc, char** argv)
 		unsigned n_jobs = jobs.getValue() > 0 ? static_cast<unsigned>(jobs.getValue())
 											  : std::max(1u, std::thread::hardware_concurrency());
 		n_jobs = std::min<unsigned>(n_jobs, static_cast<unsigned>(e.seeds.size()));
-		if (n_jobs <= 1)
-			for (unsigned seed : e.seeds) runSeed(e, host, seed, out_dir, keep_rawlogs.getValue());
-		else if (const auto failed = runWorkers(e, out_dir, keep_rawlogs.getValue(), n_jobs); !failed.empty())
+		const auto failed = n_jobs <= 1 ? runHere(e, host, out_dir, keep_rawlogs.getValue())
+										: runWorkers(e, out_dir, keep_rawlogs.getValue(), n_jobs);
+		if (only_seed.isSet() && !failed.empty()) return cli::kExitBadInput;  // named above
+		if (!failed.empty())
 		{
 			std::string list;
 			for (unsigned s : failed) list += (list.empty() ? "" : " ") + std::to_string(s);
