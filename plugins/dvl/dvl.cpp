@@ -6,7 +6,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "plugin_common.h"
 
@@ -49,6 +51,28 @@ std::string frameLabel(DvlFrame f)
 {
 	return f == DvlFrame::Instrument ? "velocity" : "velocity_" + std::string(obs::dvlFrameName(f));
 }
+
+/** The scale factor's reference velocity r_b (dvl.h) travelling with a
+ *  measurement; valid 0: none, h uses (1 + s) v_s_b. */
+struct ScaleReference
+{
+	double v[3];
+	double valid;
+};
+
+/** v_s_b: the DVL point's velocity over ground in body axes, seen through
+ *  the misalignment state δ (if any; not in the Earth frames, dvl.h). */
+Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, const FilterContext& ctx,
+								 int misalignment_at, DvlFrame frame)
+{
+	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
+	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
+	Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
+	// The true mounting is Exp(δ) R_bs: the sensor sees Exp(δ)ᵀ v in body axes.
+	if (misalignment_at >= 0 && frame != DvlFrame::EarthNed && frame != DvlFrame::EarthEnu)
+		v_s_b = so3::Exp(x.extra.segment<3>(misalignment_at)).transpose() * v_s_b;
+	return v_s_b;
+}
 }  // namespace
 
 DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
@@ -61,7 +85,8 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 	  beam_sigma_mps_(cfg.positive("beam_sigma_mps", 0.01)),
 	  earth_heading_sigma_rad_(cfg.inRange("earth_heading_sigma_deg", 0, 90, 2.0) * kDeg),
 	  earth_tilt_sigma_rad_(cfg.inRange("earth_tilt_sigma_deg", 0, 90, 0.5) * kDeg),
-	  gate_probability_(gateProbabilityFrom(cfg))
+	  gate_probability_(gateProbabilityFrom(cfg)),
+	  scale_reference_lag_s_(cfg.inRange("scale_reference_lag_s", 0, 600, 10.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 	if (cfg.has("states"))
@@ -93,7 +118,7 @@ void DvlModel::bindStates(int first) noexcept
 	extra_needed_ = at;
 }
 
-PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& /*ctx*/,
+PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& ctx,
 								  std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
@@ -128,16 +153,52 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const Filter
 		case obs::DvlSign::BottomOverInstrument: sign = -1; break;
 		default: why = "unknown DVL sign code"; return PrepareStatus::Invalid;
 	}
-	switch (dvl->frame)
+	const PrepareStatus status = [&] {
+		switch (dvl->frame)
+		{
+			case DvlFrame::Instrument:
+			case DvlFrame::Vehicle:
+			case DvlFrame::EarthNed:
+			case DvlFrame::EarthEnu: return prepareVelocity(*dvl, mount, sign, out, why);
+			case DvlFrame::Beam: return prepareBeams(*dvl, mount, sign, out, why);
+		}
+		why = "unknown DVL frame code " + std::to_string(static_cast<unsigned>(dvl->frame));
+		return PrepareStatus::Invalid;
+	}();
+	if (status == PrepareStatus::Ok) setScaleReference(mount.r_s, dvl->frame, ctx, out);
+	return status;
+}
+
+void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, const FilterContext& ctx,
+								 std::vector<Measurement>& out)
+{
+	if (!has_scale_) return;
+	ScaleReference ref{{0, 0, 0}, 0};
+	if (scale_reference_lag_s_ > 0)
 	{
-		case DvlFrame::Instrument:
-		case DvlFrame::Vehicle:
-		case DvlFrame::EarthNed:
-		case DvlFrame::EarthEnu: return prepareVelocity(*dvl, mount, sign, out, why);
-		case DvlFrame::Beam: return prepareBeams(*dvl, mount, sign, out, why);
+		const double t = ctx.t_s, lag = scale_reference_lag_s_;
+		auto& history = scale_reference_history_;
+		// Re-filtering from an earlier checkpoint (delayed measurements): the
+		// pings after it are undone, so are their entries.
+		while (!history.empty() && history.back().first > t) history.pop_back();
+		if (ctx.mean && ctx.mean->extra.size() >= extra_needed_)
+			history.emplace_back(t, sensorVelocity_b(*ctx.mean, r_s, ctx, misalignment_at_, frame));
+		// Kept for twice the lag plus re-filtering (≥ 10 s, navigator.h); at
+		// most kMaxHistory entries if time stands still.
+		constexpr std::size_t kMaxHistory = 100000;
+		while (!history.empty() && (history.front().first < t - 2 * lag - 60 || history.size() > kMaxHistory))
+			history.pop_front();
+		// The newest entry at least `lag` old, if it is not older than 2 lag
+		// (after a gap in bottom lock the velocity may have changed).
+		const auto newer = std::upper_bound(history.begin(), history.end(), t - lag,
+											[](double tt, const auto& e) { return tt < e.first; });
+		if (newer != history.begin())
+		{
+			const auto& [t_ref, r] = *std::prev(newer);
+			if (t - t_ref <= 2 * lag) ref = ScaleReference{{r.x(), r.y(), r.z()}, 1};
+		}
 	}
-	why = "unknown DVL frame code " + std::to_string(static_cast<unsigned>(dvl->frame));
-	return PrepareStatus::Invalid;
+	for (Measurement& m : out) m.setPayload(ref);
 }
 
 PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
@@ -239,18 +300,21 @@ Eigen::Matrix3d DvlModel::earthAttitudeCovariance(const Eigen::Vector3d& v_n) co
 bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 						 Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
-	const Eigen::Vector3d r_s(m.aux[0], m.aux[1], m.aux[2]);
-	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
-	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
-	Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
 	if (x.extra.size() < extra_needed_) return false;  // states declared but not in this state
-	double sign = m.aux[6];
-	if (scale_at_ >= 0) sign *= 1 + x.extra[scale_at_];
+	const Eigen::Vector3d r_s(m.aux[0], m.aux[1], m.aux[2]);
+	Eigen::Vector3d v_s_b = sensorVelocity_b(x, r_s, ctx, misalignment_at_, static_cast<DvlFrame>(m.tag));
+	if (scale_at_ >= 0)
+	{
+		// (1 + s) v_s_b, with the scale's term at the lagged reference (dvl.h).
+		const double s = x.extra[scale_at_];
+		const ScaleReference& ref = m.payload<ScaleReference>();
+		if (ref.valid != 0)
+			v_s_b += s * Eigen::Vector3d(ref.v[0], ref.v[1], ref.v[2]);
+		else
+			v_s_b *= 1 + s;
+	}
+	const double sign = m.aux[6];
 	const Eigen::Vector3d a(m.aux[3], m.aux[4], m.aux[5]);
-	// The true mounting is Exp(δ) R_bs: the sensor sees Exp(δ)ᵀ v in body axes.
-	const bool misaligned = misalignment_at_ >= 0 && static_cast<DvlFrame>(m.tag) != DvlFrame::EarthNed &&
-							static_cast<DvlFrame>(m.tag) != DvlFrame::EarthEnu;
-	if (misaligned) v_s_b = so3::Exp(x.extra.segment<3>(misalignment_at_)).transpose() * v_s_b;
 	switch (static_cast<DvlFrame>(m.tag))
 	{
 		case DvlFrame::Instrument:

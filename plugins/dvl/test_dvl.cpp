@@ -820,6 +820,81 @@ TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
 	EXPECT_TRUE(at::IsWellFormed(m, *dvlObs(expected), tc.ctx(), x, opt));
 }
 
+TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
+{
+	// h = R_bsᵀ (v_s_b + s r_b): r_b is the filter's mean v_s_b of the newest ping at least
+	// scale_reference_lag_s old (dvl.h). Formed with the state's own velocity, (1 + s) v_s_b, the
+	// scale's gain carried the prior velocity error that the innovation carries with the opposite
+	// sign, and every ping pulled s low (−0.3 % on the square mission, test_plugin_states.cpp).
+	at::TestContext tc;
+	FilterContext& ctx = tc.ctx();
+	ctx.imu_position_b = kImuPos;
+	ctx.omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
+	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
+							  "scale_reference_lag_s: 10"),
+			   "DVL");
+	m.bindStates(0);
+	const Eigen::Vector3d delta = Eigen::Vector3d(0.3, -0.2, 1.0) * kDeg;
+	auto stateWithVelocity = [&](unsigned seed) {
+		NavState x = at::RandomNavState(seed, 4);
+		x.extra.setZero();
+		x.extra.segment<3>(1) = delta;
+		return x;
+	};
+	const NavState old_mean = stateWithVelocity(11), mid_mean = stateWithVelocity(12), now_mean = stateWithVelocity(13);
+	NavState x = stateWithVelocity(14);
+	const double s = 0.005;
+	x.extra[0] = s;
+	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
+	const Eigen::Vector3d v_x = trueSensorVelocity(x, ctx, R_bs_true, kDvlPos);
+	auto pingAt = [&](double t, const NavState& mean) {
+		ctx.t_s = t;
+		ctx.t_measurement_s = t;
+		ctx.mean = &mean;
+		return prepareOne(m, *dvlObs(v_x), ctx);
+	};
+	// No ping 10 s old yet: (1 + s) times the state's own sensor velocity.
+	const Measurement first = pingAt(1000.0, old_mean);
+	EXPECT_LT((at::Predict(m, first, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
+	const Measurement early = pingAt(1005.0, mid_mean);
+	EXPECT_LT((at::Predict(m, early, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
+	// 10.2 s later: the scale's term is the mean of the first ping (misalignment applied), not x's.
+	const Measurement later = pingAt(1010.2, now_mean);
+	const Eigen::Vector3d r_old = trueSensorVelocity(old_mean, ctx, R_bs_true, kDvlPos);
+	const Eigen::VectorXd h = at::Predict(m, later, ctx, x);
+	EXPECT_LT((h - (v_x + s * r_old)).norm(), 1e-12) << h.transpose() << " vs " << (v_x + s * r_old).transpose();
+	EXPECT_GT((h - (1 + s) * v_x).norm(), 1e-4);
+	// A prediction with s = 0 does not depend on the reference.
+	NavState x0 = x;
+	x0.extra[0] = 0;
+	EXPECT_LT((at::Predict(m, later, ctx, x0) - v_x).norm(), 1e-12);
+	// Re-filtering from an earlier checkpoint (a delayed measurement) undoes the pings after it:
+	// 1010.4 s after 1012 s still finds the 1000 s ping as its reference.
+	pingAt(1012.0, mid_mean);
+	const Measurement again = pingAt(1010.4, now_mean);
+	EXPECT_LT((at::Predict(m, again, ctx, x) - (v_x + s * r_old)).norm(), 1e-12);
+	// After a gap in bottom lock of more than twice the lag, no reference until the history refills.
+	const Measurement after_gap = pingAt(1100.0, now_mean);
+	EXPECT_LT((at::Predict(m, after_gap, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
+	at::WellFormedOptions opt;
+	opt.accept_skip = false;
+	EXPECT_TRUE(at::IsWellFormed(m, *dvlObs(v_x), ctx, x, opt));
+
+	// scale_reference_lag_s 0: always (1 + s) v_s_b, as before.
+	DvlModel plain(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
+								  "scale_reference_lag_s: 0"),
+				   "DVL");
+	plain.bindStates(0);
+	for (double t : {1000.0, 1010.2, 1020.4})
+	{
+		ctx.t_s = t;
+		ctx.mean = &old_mean;
+		const Measurement mm = prepareOne(plain, *dvlObs(v_x), ctx);
+		EXPECT_LT((at::Predict(plain, mm, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
+	}
+	EXPECT_THROW(DvlModel(pt::configText("scale_reference_lag_s: -1"), "DVL"), config::ConfigError);
+}
+
 TEST(DvlStates, AFilterLearnsTheScaleFactorFromVelocityKnownOtherwise)
 {
 	// The velocity is known to 1 mm/s (as from a GPS track): DVL readings 0.5 % high are explained

@@ -6,15 +6,32 @@
 //  - with the states on: both estimated within 3σ at resurfacing, and the
 //    error at resurfacing below that with the states off.
 // OPEN: the issue asks for the error within 20 % of the same seed simulated
-// without DVL errors; that is printed, not asserted. The misalignment is
-// found to 0.01–0.23° (σ), but the scale factor is observable only through
-// the 20 min of surface GPS (1.5 m error correlated over 60 s), to σ 0.22 %,
-// and it lands low on every seed measured: 0.06 / 0.29 / −0.04 % for a true
-// 0.5 % (seeds 1–3), 0.22 % (seed 4), and −0.23 % for a true 0 (seed 1) — a systematic pull
-// of about −0.3 % not yet explained. Seed 1: 0.71 m with the states, 0.21 m
-// without DVL errors, 0.27 m with the scale known, 1.84 m with the states
-// off; seed 2: 0.10 / 0.34 / – / 2.09 m; seed 3: 0.92 / 0.56 / – / 1.62 m;
-// seed 4: 0.93 / 0.66 / – / 2.31 m.
+// without DVL errors; that is printed, not asserted.
+// The scale factor used to land low on every seed (0.06 / 0.29 / −0.04 /
+// 0.22 % for a true 0.5 %, −0.23 % for a true 0): the scale's gain was formed
+// with the state's own velocity, whose error the innovation carries with the
+// opposite sign, so every DVL ping pulled s low (an errors-in-variables bias of
+// the sigma-point update, not the simulator, the GPS or the geodesy: those agree
+// with the truth to 0.001 %). The plugin now evaluates the scale's term at the
+// velocity estimate of 10 s before (plugins/dvl/dvl.h, scale_reference_lag_s);
+// ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate shows the pull with a
+// noisy velocity estimate (−2.4 % for a true 0 with lag 0, −0.01 % now).
+// Measured now (seeds 1–4; error at resurfacing [m]: no DVL error, states off
+// / no DVL error, states on / errors, states off / errors, states on; scale
+// estimate for a true 0.5 %, σ 0.20 %; scale on the error-free data, true 0):
+//   1: 0.11 / 0.08 / 1.99 / 0.25, 0.355 %, +0.068 %
+//   2: 0.18 / 0.37 / 2.01 / 0.18, 0.424 %, +0.132 %
+//   3: 0.63 / 1.25 / 1.42 / 1.10, 0.307 %, +0.022 %
+//   4: 0.60 / 0.92 / 2.17 / 0.89, 0.328 %, +0.037 %
+// (before: errors, states on 0.53 / 0.29 / 1.10 / 0.79 m). Against the states-
+// off figure only seed 2 is within 20 % (2.30 / 0.96 / 1.76 / 1.47); against
+// the same filter (states on) on the error-free data seeds 2–4 are (3.06 /
+// 0.48 / 0.88 / 0.97; seed 1: 0.25 m against 0.08 m). Not yet shown: the
+// squares are closed, so scale and heading errors largely cancel and the error
+// at resurfacing follows the position error at the dive (0.70 / 0.36 / 1.49 /
+// 0.96 m with the states on, tests/integration/probe_dvl_scale.cpp), which the
+// surface GPS (1.5 m correlated over 60 s) likely fixes less well while the
+// scale and mounting are being learnt than with a DVL trusted as exact.
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/navigator.h>
@@ -63,7 +80,8 @@ struct Outcome
 	Eigen::Vector4d estimate = Eigen::Vector4d::Zero(), sigma = Eigen::Vector4d::Zero();  // s, δx, δy, δz
 };
 
-Outcome runSquare(const fs::path& dir, bool states)
+Outcome runSquare(const fs::path& dir, bool states,
+				  const std::vector<std::pair<std::string, std::string>>& nav_overrides = {})
 {
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const auto span = diveAndResurfacing(truth);
@@ -78,6 +96,7 @@ Outcome runSquare(const fs::path& dir, bool states)
 		cfg.set("sensors.DVL.config.states.scale_factor.sigma", "0.01");
 		cfg.set("sensors.DVL.config.states.misalignment.sigma_deg", "2");
 	}
+	for (const auto& [k, v] : nav_overrides) cfg.set(k, v);
 	PluginHost host;
 	Navigator nav(cfg, host);
 	nav.addDenial({{"GPS"}, truth[dive].t_unix - t0, 1e9});
@@ -120,8 +139,8 @@ void dvlStateSeeds(const std::vector<unsigned>& seeds)
 	const Eigen::Vector4d truth(kScaleError, mis_b.x(), mis_b.y(), mis_b.z());
 	std::printf("DVL scale %.3f %%, misalignment (body) %.3f %.3f %.3f deg\n", 100 * kScaleError, mis_b.x() / kDeg,
 				mis_b.y() / kDeg, mis_b.z() / kDeg);
-	std::printf("seed | error [m]: no DVL error | errors, states off | errors, states on (2 sigma) | "
-				"scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
+	std::printf("seed | error [m]: no DVL error | no DVL error, states on | errors, states off | errors, states on "
+				"(2 sigma) | scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
 	for (unsigned seed : seeds)
 	{
 		const fs::path clean = simulate(kMission, seed,
@@ -131,6 +150,7 @@ void dvlStateSeeds(const std::vector<unsigned>& seeds)
 										 {"dvl.misalignment_ypr_deg.2", "0"}},
 										"_clean");
 		const Outcome base = runSquare(clean, false);
+		const Outcome base_on = runSquare(clean, true);
 		fs::remove_all(clean);
 		const fs::path bad = simulate(kMission, seed,
 									  {{"dvl.scale_factor_error", std::to_string(kScaleError)},
@@ -141,12 +161,15 @@ void dvlStateSeeds(const std::vector<unsigned>& seeds)
 		const Outcome off = runSquare(bad, false);
 		const Outcome on = runSquare(bad, true);
 		fs::remove_all(bad);
-		std::printf("  %u | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
-					base.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0], 100 * on.sigma[0],
+		std::printf("  %u | %.2f | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
+					base.error_m, base_on.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0],
+					100 * on.sigma[0],
 					on.estimate[1] / kDeg, on.estimate[2] / kDeg, on.estimate[3] / kDeg, on.sigma[1] / kDeg,
 					on.sigma[2] / kDeg, on.sigma[3] / kDeg);
-		std::printf("    states on / no DVL error: %.2f; states on / states off: %.2f\n", on.error_m / base.error_m,
-					on.error_m / off.error_m);
+		std::printf("    states on / no DVL error: %.2f (states on both: %.2f); states on / states off: %.2f; "
+					"scale with no DVL error: %.3f / %.3f %%\n",
+					on.error_m / base.error_m, on.error_m / base_on.error_m, on.error_m / off.error_m,
+					100 * base_on.estimate[0], 100 * base_on.sigma[0]);
 		EXPECT_LT(on.error_m, off.error_m) << "seed " << seed;
 		for (int i = 0; i < 4; ++i)
 			EXPECT_LE(std::abs(on.estimate[i] - truth[i]), 3 * on.sigma[i]) << "seed " << seed << " state " << i;
@@ -155,4 +178,36 @@ void dvlStateSeeds(const std::vector<unsigned>& seeds)
 }  // namespace
 
 TEST(DvlPluginStates, ScaleAndMisalignmentEstimatedOnTheSquareMission) { dvlStateSeeds({1}); }
+
+TEST(DvlPluginStates, ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate)
+{
+	// No DVL scale or mounting error, exact GPS fixes before the dive, and the accelerometer
+	// weakened (extra 2 m/s² per sample) so that the velocity estimate carries the DVL's beam
+	// noise (σ ≈ 1.4 cm/s). With h = (1 + s) h(v) at the state's own velocity every ping pulled
+	// s low (the gain and the innovation share the velocity error with opposite signs): −2.4 %
+	// at resurfacing for a true 0, σ 0.23 %. With the scale's term at the velocity estimate of
+	// 10 s before (dvl.h, scale_reference_lag_s) it lands within 2σ of 0.
+	const fs::path dir = simulate(kMission, 1,
+								  {{"dvl.scale_factor_error", "0"},
+								   {"dvl.misalignment_ypr_deg.0", "0"},
+								   {"dvl.misalignment_ypr_deg.1", "0"},
+								   {"dvl.misalignment_ypr_deg.2", "0"},
+								   {"gps.white_sigma_m", "0"},
+								   {"gps.correlated_sigma_m", "0"},
+								   {"gps.outlier_probability", "0"}},
+								  "_noisy_velocity");
+	const std::vector<std::pair<std::string, std::string>> weak_accelerometer = {
+		{"sensors.IMU.config.extra_sigma_mps2", "2"}};
+	auto former = weak_accelerometer;
+	former.emplace_back("sensors.DVL.config.scale_reference_lag_s", "0");
+	const Outcome now = runSquare(dir, true, weak_accelerometer);
+	const Outcome before = runSquare(dir, true, former);
+	fs::remove_all(dir);
+	std::printf("scale at resurfacing, true 0: %.3f / %.3f %% (lag 10 s), %.3f / %.3f %% (lag 0: h at the state's "
+				"velocity); error %.2f / %.2f m\n",
+				100 * now.estimate[0], 100 * now.sigma[0], 100 * before.estimate[0], 100 * before.sigma[0], now.error_m,
+				before.error_m);
+	EXPECT_LT(std::abs(now.estimate[0]), 2 * now.sigma[0]);
+	EXPECT_LT(before.estimate[0], -4 * before.sigma[0]) << "the pull the lagged reference removes";
+}
 TEST(DvlPluginStatesSlow, ThreeMoreSeedsScaleAndMisalignmentEstimated) { dvlStateSeeds({2, 3, 4}); }
