@@ -36,6 +36,48 @@ void symmetrize(Covariance& P)
 			P(j, i) = s;
 		}
 }
+
+/** P −= W Wᵀ over the whole matrix, column by column (contiguous axpys).
+ *  Entry (i, j) and (j, i) take the same products in the same order, so a
+ *  symmetric P stays exactly symmetric with no mirroring pass. */
+void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
+{
+	const Eigen::Index n = P.rows(), m = W.cols();
+	for (Eigen::Index j = 0; j < n; ++j)
+	{
+		double* Pj = &P(0, j);
+		for (Eigen::Index l = 0; l < m; ++l)
+		{
+			const double* Wl = &W(0, l);
+			const double w_jl = Wl[j];
+			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= Wl[i] * w_jl;
+		}
+	}
+}
+/** The first k columns of P's lower Cholesky factor, all n rows at once
+ *  (L11 and L21 = P21 L11⁻ᵀ together), left-looking: column j is P's
+ *  column less the axpys of the columns before it. Contiguous column
+ *  operations without a blocked solver's set-up, which dominated at these
+ *  sizes (k ≤ 25, n = 43). Rows above the diagonal are zeroed (sigma points
+ *  read whole columns). False if P's leading k×k block is not positive
+ *  definite (columns of L partly written). */
+bool choleskyColumns(const Covariance& P, int k, Covariance& L)
+{
+	const Eigen::Index n = P.rows();
+	for (Eigen::Index j = 0; j < k; ++j)
+	{
+		L.col(j).head(j).setZero();
+		auto Lj = L.col(j).tail(n - j);
+		Lj = P.col(j).tail(n - j);
+		if (j > 0) Lj.noalias() -= L.block(j, 0, n - j, j) * L.row(j).head(j).transpose();
+		const double d = Lj[0];
+		if (!(d > 0) || !std::isfinite(d)) return false;
+		const double root = std::sqrt(d);
+		Lj[0] = root;
+		Lj.tail(n - j - 1) /= root;
+	}
+	return true;
+}
 }  // namespace
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
@@ -178,24 +220,9 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 {
 	const int n = n_;
 	if (L_.rows() != n) L_.setZero(n, n);
-	using BlockRef = Eigen::Ref<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
 	for (int attempt = 0; attempt < 2; ++attempt)
 	{
-		// Factorised in place in L_'s leading block (no heap, no copies).
-		BlockRef L11 = L_.topLeftCorner(k, k);
-		L11 = P_.topLeftCorner(k, k);
-		Eigen::LLT<BlockRef> llt(L11);
-		if (llt.info() == Eigen::Success)
-		{
-			L11.triangularView<Eigen::StrictlyUpper>().setZero();  // the sigma points read whole columns
-			if (k < n)
-			{
-				// L21 = P21 L11⁻ᵀ
-				L_.bottomLeftCorner(n - k, k) =
-					L11.triangularView<Eigen::Lower>().solve(P_.bottomLeftCorner(n - k, k).transpose()).transpose();
-			}
-			return;
-		}
+		if (choleskyColumns(P_, k, L_)) return;
 		repairCovariance();
 	}
 	// Still not PD after repair (pathological): fall back to the diagonal.
@@ -248,13 +275,33 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 			y[1 + 2 * j] = m + a;
 			y[2 + 2 * j] = m - a;
 		}
+	// A sigma point whose attitude is the centre's (every one along a
+	// Cholesky column past the gyro bias's: same start, same turns) has
+	// X_i ⊟ x̄ = (X₀ ⊟ x̄) + (X_i ⊟ X₀) for any x̄ — the turn dR is shared, the
+	// rest is differences — so X_i ⊟ X₀ is taken once, not per iteration.
+	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> from_centre;
+	std::array<bool, 2 * k + 1> shares_attitude{};
+	for (int i = 1; i < 2 * k + 1; ++i)
+		if (!(scale[(i - 1) / 2] < 1.0) && X[i].R_nb == X[0].R_nb)
+		{
+			shares_attitude[i] = true;
+			from_centre[i] = X[i].boxminus(X[0]).head<k>();
+		}
 	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1>& d) {
 		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminus(X[0]).head<k>().eval()
 														  : Eigen::Matrix<double, k, 1>::Zero().eval();
 		d[0] = X[0].boxminus(mean).head<k>();
 		for (int j = 0; j < k; ++j)
 			for (int s = 1; s <= 2; ++s)
-				d[2 * j + s] = scale[j] < 1.0 ? (y[2 * j + s] - mu).eval() : X[2 * j + s].boxminus(mean).head<k>().eval();
+			{
+				const int i = 2 * j + s;
+				if (scale[j] < 1.0)
+					d[i] = y[i] - mu;
+				else if (shares_attitude[i])
+					d[i] = d[0] + from_centre[i];
+				else
+					d[i] = X[i].boxminus(mean).head<k>();
+			}
 	};
 	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
 	// already the exact mean: A x̄ + b).
@@ -274,10 +321,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
 	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim, k> Ac = L_.leftCols(k);
 	model_.applyLinearRows(Ac, dt);
-	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL =
-		Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim>::Zero(k, n - k);
-	for (int j = 0; j < k; ++j)
-		P_NL.noalias() += (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]) * Ac.col(j).tail(n - k).transpose();
+	Eigen::Matrix<double, k, k> D_pairs;
+	for (int j = 0; j < k; ++j) D_pairs.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
+	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL(k, n - k);
+	P_NL.noalias() = D_pairs * Ac.bottomRows(n - k).transpose();
 	// Affine part: A P Aᵀ exactly (rows, then columns).
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
 	model_.applyLinearRows(P_, dt);
@@ -410,11 +457,17 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			E.col(i) = r;
 		}
 	}
-	Eigen::MatrixXd S = w_center_c * E.col(0) * E.col(0).transpose() + meas.R;
-	for (int i = 1; i < count; ++i) S.noalias() += w_.wi * E.col(i) * E.col(i).transpose();
-	Eigen::MatrixXd Pxz = Eigen::MatrixXd::Zero(n, m);
-	for (int j = 0; j < k; ++j)
-		Pxz.noalias() += (w_.wi * g) * L_.col(j) * (E.col(1 + 2 * j) - E.col(2 + 2 * j)).transpose();
+	// S = Σ W_i e_i e_iᵀ + R and Pxz = Σ_j W γ L_j (e₊ⱼ − e₋ⱼ)ᵀ, each as one
+	// product (not 2k+1 small outer products).
+	Eigen::MatrixXd EW = E;
+	EW.col(0) *= w_center_c;
+	EW.rightCols(count - 1) *= w_.wi;
+	Eigen::MatrixXd S = meas.R;
+	S.noalias() += EW * E.transpose();
+	Eigen::MatrixXd D(m, k);
+	for (int j = 0; j < k; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
+	Eigen::MatrixXd Pxz(n, m);
+	Pxz.noalias() = L_.leftCols(k) * D.transpose();
 
 	Eigen::VectorXd nu(m);
 	model.residual(meas.z, z_mean, nu);
@@ -448,7 +501,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
 			{
 				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
-				P_.noalias() += beta * dx0 * dx0.transpose();
+				const TangentVector v = std::sqrt(beta) * dx0;	 // v vᵀ: exactly symmetric
+				P_.noalias() += v * v.transpose();
 				Pxz.noalias() += beta * dx0 * u.transpose();
 				S.noalias() += beta * u * u.transpose();
 				widened = true;
@@ -465,13 +519,15 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	else
 		res.status = UpdateStatus::Accepted;
-	// K = Pxz S⁻¹ via the factorisation; P −= K S Kᵀ = Pxz S⁻¹ Pxzᵀ.
-	const Eigen::MatrixXd KT = llt.solve(Pxz.transpose());	// S⁻¹ Pxzᵀ
-	const TangentVector dx = KT.transpose() * nu;
+	// With S = L Lᵀ and W = Pxz L⁻ᵀ: dx = K ν = W (L⁻¹ ν) and
+	// P −= K S Kᵀ = W Wᵀ, a rank-m downdate (P
+	// stays exactly symmetric: no symmetrize pass).
+	Eigen::MatrixXd W = Pxz;
+	llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);
+	const TangentVector dx = W * llt.matrixL().solve(nu);
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
-	P_.noalias() -= Pxz * KT;
-	symmetrize(P_);
+	downdateSymmetric(P_, W);
 	applySigmaLimits();
 	return res;
 }
