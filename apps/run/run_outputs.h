@@ -88,5 +88,6 @@ class RunOutputs
 	std::map<std::string, NisAcc> nis_acc_;
 	double nis_t0_ = -1e300;
 	std::size_t rows_ = 0;
+	std::string row_;	// states.csv row buffer (reused: no allocation per row)
 };
 }  // namespace auvnav::run
