@@ -97,20 +97,21 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	// Member by member (no flat round trip through euclidean(): this runs per
 	// sigma point).
 	NavState y;
+	// The additive members.
+	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
+	y.g = g + delta[idx::gravity];
+	y.p_n = p_n + delta.segment<3>(idx::pos);
+	y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
+	add23(y.M_sub, M_sub, delta, idx::inertia);
+	add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
+	add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
+	y.extra = extra + delta.tail(extra.size());
 	if (delta.segment<3>(idx::att).isZero(0))
 	{
 		// No turn (every sigma point along a Cholesky column past the
-		// attitude's): Exp(0) is exactly I, so this is the general case's
+		// attitude's): Exp(0) is exactly I, so this is the turned case's
 		// result without its rotations.
 		y.R_nb = R_nb;
-		y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
-		y.g = g + delta[idx::gravity];
-		y.p_n = p_n + delta.segment<3>(idx::pos);
-		y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
-		add23(y.M_sub, M_sub, delta, idx::inertia);
-		add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
-		add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
-		y.extra = extra + delta.tail(extra.size());
 		y.v_n = v_n + delta.segment<3>(idx::vel);
 		y.a_n = a_n + delta.segment<3>(idx::acc);
 		y.current_vehicle_ne = current_vehicle_ne + delta.segment<2>(idx::current_vehicle);
@@ -120,14 +121,6 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	}
 	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
 	y.R_nb = dR * R_nb;
-	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
-	y.g = g + delta[idx::gravity];
-	y.p_n = p_n + delta.segment<3>(idx::pos);
-	y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
-	add23(y.M_sub, M_sub, delta, idx::inertia);
-	add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
-	add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
-	y.extra = extra + delta.tail(extra.size());
 	// Velocity and acceleration turn with the attitude (SE_2(3)-like
 	// retraction): a heading perturbation moves the whole body-fixed motion.
 	y.v_n = dR * v_n + delta.segment<3>(idx::vel);
