@@ -316,8 +316,14 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		mean = mean.boxplus(step);
 	}
 	deviations(mean, d);
-	Eigen::Matrix<double, k, k> P_NN = (w_.wc0 + 2 * (n - k) * w_.wi) * d[0] * d[0].transpose();
-	for (int i = 1; i < 2 * k + 1; ++i) P_NN.noalias() += w_.wi * d[i] * d[i].transpose();
+	// P_NN = Σ W_i d_i d_iᵀ as one (k × 2k+1)(2k+1 × k) product: a blocked
+	// kernel instead of 2k+1 outer products.
+	Eigen::Matrix<double, k, 2 * k + 1> D, DW;
+	for (int i = 0; i < 2 * k + 1; ++i) D.col(i) = d[i];
+	DW.col(0) = (w_.wc0 + 2 * (n - k) * w_.wi) * D.col(0);
+	DW.rightCols<2 * k>() = w_.wi * D.rightCols<2 * k>();
+	Eigen::Matrix<double, k, k> P_NN;
+	P_NN.noalias() = DW * D.transpose();
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
 	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim, k> Ac = L_.leftCols(k);
 	model_.applyLinearRows(Ac, dt);
