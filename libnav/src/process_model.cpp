@@ -53,17 +53,30 @@ void ProcessModel::appendBlock(const StateBlockSpec& b)
 NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
 								 const Eigen::Vector3d& omega_ie_n, double dt) const
 {
-	return propagateTurned(x, omega_ib_b, so3::Exp(-omega_ie_n * dt), dt);
+	return propagateTurned(x, omega_ib_b, so3::Exp(-omega_ie_n * dt), decay(dt));
 }
 
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
-									   const Eigen::Matrix3d& R_earth_turn, double dt) const
+									   const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const
 {
-	return propagateTurned(x, R_earth_turn, so3::Exp((omega_ib_b - x.b_w) * dt), dt);
+	return propagateTurned(x, R_earth_turn, so3::Exp((omega_ib_b - x.b_w) * step.dt_s), step);
+}
+
+StepDecay ProcessModel::decay(double dt) const
+{
+	StepDecay d;
+	d.dt_s = dt;
+	d.gyro_bias = noise.gyro_bias.phi(dt);
+	d.accel_bias = noise.accel_bias.phi(dt);
+	d.current = noise.current.phi(dt);
+	d.adcp_bias = noise.adcp_bias.phi(dt);
+	d.parameters = std::exp(-dt / noise.parameter_tau_s);
+	for (std::size_t i = 0; i < extra.size() && i < d.extra.size(); ++i) d.extra[i] = extra[i].phi(dt);
+	return d;
 }
 
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-									   const Eigen::Matrix3d& R_body_turn, double dt) const
+									   const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const
 {
 	if (x.dim() != dim())
 		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
@@ -74,18 +87,17 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	y.R_nb = R_earth_turn * x.R_nb * R_body_turn;
 	TangentVector e = x.euclidean();
 	const TangentVector e0 = e;
-	applyLinearRows(e, dt);
+	applyLinearRows(e, step);
 	// Gauss–Markov states relax to their prior mean: x' = φ(x − μ) + μ; the
 	// rows above applied φx, add (1 − φ)μ.
 	TangentVector mu_term = TangentVector::Zero(e.size());
-	const double phi_ba = noise.accel_bias.phi(dt), phi_c = noise.current.phi(dt),
-				 phi_b = noise.adcp_bias.phi(dt), phi_p = std::exp(-dt / noise.parameter_tau_s);
+	const double phi_ba = step.accel_bias, phi_c = step.current, phi_b = step.adcp_bias, phi_p = step.parameters;
 	mu_term.segment<3>(idx::acc_bias) = (1 - phi_ba) * prior_mean.segment<3>(idx::acc_bias);
 	mu_term.segment<4>(idx::current_vehicle) = (1 - phi_c) * prior_mean.segment<4>(idx::current_vehicle);
 	mu_term.segment<2>(idx::adcp_bias) = (1 - phi_b) * prior_mean.segment<2>(idx::adcp_bias);
 	mu_term.segment<18>(idx::inertia) = (1 - phi_p) * prior_mean.segment<18>(idx::inertia);
 	for (int i = 0; i < static_cast<int>(e.size()) - idx::core_dim; ++i)
-		mu_term[idx::extra + i] = (1 - extra[i].phi(dt)) * prior_mean[idx::extra + i];
+		mu_term[idx::extra + i] = (1 - step.extra[i]) * prior_mean[idx::extra + i];
 	e += mu_term;
 	if (current_far_distance_m > 0)
 	{
@@ -98,7 +110,7 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 		e.segment<2>(idx::current_vehicle) += shift;
 		e.segment<2>(idx::current_far) += shift;
 	}
-	const double phi_g = noise.gyro_bias.phi(dt);
+	const double phi_g = step.gyro_bias;
 	e.segment<3>(idx::gyro_bias) =
 		phi_g * e0.segment<3>(idx::gyro_bias) + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
 	y.setEuclidean(e);

@@ -243,9 +243,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// the body's at the centre's gyro bias (those along columns past the bias).
 	const Eigen::Matrix3d R_earth_turn = so3::Exp(-omega_ie_n * dt);
 	const Eigen::Matrix3d R_body_turn = so3::Exp((omega_ib_b - x_.b_w) * dt);
+	const StepDecay step = model_.decay(dt);  // the Gauss–Markov φ once, not per point
 	auto propagate = [&](const NavState& x) {
-		return x.b_w == x_.b_w ? model_.propagateTurned(x, R_earth_turn, R_body_turn, dt)
-							   : model_.propagateTurned(x, omega_ib_b, R_earth_turn, dt);
+		return x.b_w == x_.b_w ? model_.propagateTurned(x, R_earth_turn, R_body_turn, step)
+							   : model_.propagateTurned(x, omega_ib_b, R_earth_turn, step);
 	};
 	X[0] = propagate(x_);
 	std::array<double, k> scale;
@@ -326,16 +327,16 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_NN.noalias() = DW * D.transpose();
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
 	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim, k> Ac = L_.leftCols(k);
-	model_.applyLinearRows(Ac, dt);
+	model_.applyLinearRows(Ac, step);
 	Eigen::Matrix<double, k, k> D_pairs;
 	for (int j = 0; j < k; ++j) D_pairs.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
 	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL(k, n - k);
 	P_NL.noalias() = D_pairs * Ac.bottomRows(n - k).transpose();
 	// Affine part: A P Aᵀ exactly (rows, then columns).
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
-	model_.applyLinearRows(P_, dt);
+	model_.applyLinearRows(P_, step);
 	Covariance Pt = P_.transpose();
-	model_.applyLinearRows(Pt, dt);
+	model_.applyLinearRows(Pt, step);
 	P_ = Pt;
 	P_.topLeftCorner<k, k>() = P_NN;
 	P_.topRightCorner(k, n - k) = P_NL;

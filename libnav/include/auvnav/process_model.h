@@ -10,6 +10,7 @@
 #include <auvnav/state.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <algorithm>
 #include <cmath>
 #include <vector>
@@ -55,6 +56,16 @@ struct ExtraStateProcess
 	double variance(double dt_s) const;
 };
 
+/** What one step of dt_s does to the Gauss–Markov states: their decay
+ *  factors φ = exp(−dt/τ) (1 for a random walk or constant), computed once
+ *  per step by ProcessModel::decay rather than per sigma point. */
+struct StepDecay
+{
+	double dt_s = 0;
+	double gyro_bias = 1, accel_bias = 1, current = 1, adcp_bias = 1, parameters = 1;
+	std::array<double, idx::max_extra> extra{};	 //!< plugin-owned coordinates, in order
+};
+
 struct ProcessModel
 {
 	ProcessNoise noise;
@@ -83,11 +94,13 @@ struct ProcessModel
 	/** The same with the navigation frame's turn over the step given,
 	 *  R_earth_turn = Exp(−ω_ie_n dt) (computed once for all sigma points). */
 	NavState propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
-							 const Eigen::Matrix3d& R_earth_turn, double dt_s) const;
+							 const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const;
 	/** The same with the body's turn given too, R_body_turn =
 	 *  Exp((ω_ib_b − x.b_w) dt) (shared by sigma points with the centre's bias). */
 	NavState propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-							 const Eigen::Matrix3d& R_body_turn, double dt_s) const;
+							 const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const;
+	/** The decay factors of a step of `dt_s` (StepDecay). */
+	StepDecay decay(double dt_s) const;
 
 	/** Process noise covariance over `dt_s` (tangent space, dim() × dim()). `speed_through_water_mps`
 	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
@@ -102,7 +115,13 @@ struct ProcessModel
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
 	 *  (tangent rows 6…; rows 0..5 untouched; rows past 43 only if M has them). */
 	template <typename Derived>
-	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const;
+	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const
+	{
+		applyLinearRows(M, decay(dt_s));
+	}
+	/** The same with the step's decay factors given. */
+	template <typename Derived>
+	void applyLinearRows(Eigen::MatrixBase<Derived>& M, const StepDecay& step) const;
 
 	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
 
@@ -115,20 +134,20 @@ struct ProcessModel
 
 // ---------------------------------------------------------------- inline
 template <typename Derived>
-void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const
+void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, const StepDecay& step) const
 {
+	const double dt_s = step.dt_s;
 	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
 	M.template middleRows<3>(idx::pos) +=
 		dt_s * M.template middleRows<3>(idx::vel) + (0.5 * dt_s * dt_s) * M.template middleRows<3>(idx::acc);
 	M.template middleRows<3>(idx::vel) += dt_s * M.template middleRows<3>(idx::acc);
-	M.template middleRows<3>(idx::acc_bias) *= noise.accel_bias.phi(dt_s);
-	const double phi_c = noise.current.phi(dt_s);
-	M.template middleRows<4>(idx::current_vehicle) *= phi_c;  // both current states
-	M.template middleRows<2>(idx::adcp_bias) *= noise.adcp_bias.phi(dt_s);
-	M.template middleRows<18>(idx::inertia) *= std::exp(-dt_s / noise.parameter_tau_s);
+	M.template middleRows<3>(idx::acc_bias) *= step.accel_bias;
+	M.template middleRows<4>(idx::current_vehicle) *= step.current;	 // both current states
+	M.template middleRows<2>(idx::adcp_bias) *= step.adcp_bias;
+	M.template middleRows<18>(idx::inertia) *= step.parameters;
 	const int extra_rows = std::min<int>(static_cast<int>(M.rows()) - idx::core_dim, static_cast<int>(extra.size()));
 	for (int i = 0; i < extra_rows; ++i)
-		if (extra[i].kind == StateProcess::GaussMarkov) M.row(idx::extra + i) *= extra[i].phi(dt_s);
+		if (extra[i].kind == StateProcess::GaussMarkov) M.row(idx::extra + i) *= step.extra[i];
 }
 
 }  // namespace auvnav
