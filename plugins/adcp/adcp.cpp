@@ -102,7 +102,6 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 			return PrepareStatus::Invalid;
 		}
 	}
-	const Eigen::Vector3d rotvec = so3::Log(R_bs);
 
 	// σ: configured, else the observation's own if usable, else the default;
 	// the profile's representation error in quadrature on top.
@@ -143,13 +142,8 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 		m.R = Eigen::Matrix3d::Identity() * var;
 		m.tag = static_cast<int>(i);
 		m.label = "cell";
-		m.aux[0] = d;
-		m.aux[1] = d_max;
-		for (int k = 0; k < 3; ++k)
-		{
-			m.aux[2 + k] = r_s[k];
-			m.aux[5 + k] = rotvec[k];
-		}
+		AdcpCell& c = m.setPayload(AdcpCell{d, d_max, {r_s[0], r_s[1], r_s[2]}, {}});
+		Eigen::Map<Eigen::Matrix3d>(c.R_bs) = R_bs;
 		out.push_back(std::move(m));
 	}
 	return PrepareStatus::Ok;
@@ -159,10 +153,11 @@ bool AdcpModel::doPredict(const NavState& x, const Measurement& m, const FilterC
 						  Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 3) return false;
-	const double w = adcpFarWeight(m.aux[0], m.aux[1]);
+	const AdcpCell& cell = m.payload<AdcpCell>();
+	const double w = adcpFarWeight(cell.distance_m, cell.max_distance_m);
 	if (!std::isfinite(w)) return false;
-	const Eigen::Vector3d r_s(m.aux[2], m.aux[3], m.aux[4]);
-	const Eigen::Matrix3d R_bs = so3::Exp(Eigen::Vector3d(m.aux[5], m.aux[6], m.aux[7]));
+	const Eigen::Map<const Eigen::Vector3d> r_s(cell.r_s);
+	const Eigen::Map<const Eigen::Matrix3d> R_bs(cell.R_bs);
 	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
 	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
 	// Sensor velocity over ground and water current, both in body axes.

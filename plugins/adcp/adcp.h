@@ -32,8 +32,8 @@
  *  configured, else the observation's velocity_sigma_mps if > 0 and finite,
  *  else 0.05 m/s. Each cell is gated on its own (χ², 3 DOF).
  *
- *  Measurement::aux: [0] = d_i [m], [1] = d_max [m], [2..4] = r_s [m, body
- *  FRD], [5..7] = rotation vector of R_bs [rad]. Measurement::tag = cell index.
+ *  What h needs travels in the typed payload AdcpCell (below);
+ *  Measurement::tag = cell index.
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -43,6 +43,17 @@
 
 namespace auvnav::plugins
 {
+/** Per-cell data from prepare to h (Measurement::payload<AdcpCell>()). R_bs
+ *  is kept as a matrix, not a rotation vector: h runs once per sigma point
+ *  and would otherwise take an exponential each time. */
+struct AdcpCell
+{
+	double distance_m;		//!< d_i, cell centre along the profile
+	double max_distance_m;	//!< d_max, the profile's far end (far-layer weight)
+	double r_s[3];			//!< sensor position [m, body FRD]
+	double R_bs[9];			//!< sensor-to-body rotation, column-major
+};
+
 /** Interpolation weight of the far current for a cell at distance `d_m` from
  *  the transducer in a profile ending at `d_max_m`: d / d_max (0 at the
  *  transducer, 1 at the far end). Not clamped; NaN if d_max ≤ 0. */

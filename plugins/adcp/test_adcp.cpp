@@ -17,6 +17,7 @@
 using namespace auvnav;
 using auvnav::obs::CObservationADCP;
 using auvnav::plugins::AdcpModel;
+using auvnav::plugins::AdcpCell;
 namespace at = auvnav::testing;
 namespace pt = auvnav::plugins::test;
 
@@ -289,19 +290,19 @@ TEST(Adcp, DistancesComeFromTheObservationGeometry)
 	for (int i = 0; i < 20; ++i)
 	{
 		EXPECT_EQ(out[i].tag, i);
-		EXPECT_DOUBLE_EQ(out[i].aux[0], 0.75 + 0.5 * i);
-		EXPECT_DOUBLE_EQ(out[i].aux[1], 10.5);
+		EXPECT_DOUBLE_EQ(out[i].payload<AdcpCell>().distance_m, 0.75 + 0.5 * i);
+		EXPECT_DOUBLE_EQ(out[i].payload<AdcpCell>().max_distance_m, 10.5);
 	}
 	// Another instrument setting: d_max follows the observation, not a fixed cell count.
 	out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{1.0, 2.0, 7}), tc.ctx());
 	ASSERT_EQ(out.size(), 7u);
-	EXPECT_DOUBLE_EQ(out[0].aux[0], 2.0);
-	EXPECT_DOUBLE_EQ(out[6].aux[0], 14.0);
-	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.aux[1], 15.0);
+	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 2.0);
+	EXPECT_DOUBLE_EQ(out[6].payload<AdcpCell>().distance_m, 14.0);
+	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.payload<AdcpCell>().max_distance_m, 15.0);
 	// Invalid cells still count in d_max (the profile's extent is the instrument's).
 	auto o = profileOf(NavState{}, tc.ctx(), Geometry{1.0, 2.0, 7}, 0, 1, 3);
 	out = prepareAll(model, *o, tc.ctx());
-	EXPECT_DOUBLE_EQ(out[2].aux[1], 15.0);
+	EXPECT_DOUBLE_EQ(out[2].payload<AdcpCell>().max_distance_m, 15.0);
 }
 
 TEST(Adcp, NavigatorFixedFarDistanceOverridesTheGeometry)
@@ -313,8 +314,8 @@ TEST(Adcp, NavigatorFixedFarDistanceOverridesTheGeometry)
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
 	ASSERT_EQ(out.size(), 20u);
-	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.aux[1], 6.0);
-	EXPECT_DOUBLE_EQ(out[0].aux[0], 0.75);	// distances still from the observation
+	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.payload<AdcpCell>().max_distance_m, 6.0);
+	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 0.75);	// distances still from the observation
 	// A cell beyond that distance extrapolates the same linear profile.
 	NavState x;
 	x.current_vehicle_ne = Eigen::Vector2d(0.1, 0.0);
@@ -337,15 +338,15 @@ TEST(Adcp, CellsAtTheEndsSeeExactlyTheTwoCurrentStates)
 	// Blank 0, three 1 m cells: the middle cell's centre is at 1.5 m = d_max / 2.
 	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
 	ASSERT_EQ(out.size(), 3u);
-	EXPECT_DOUBLE_EQ(out[1].aux[0], 1.5);
-	EXPECT_DOUBLE_EQ(out[1].aux[1], 3.0);
+	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().distance_m, 1.5);
+	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().max_distance_m, 3.0);
 	EXPECT_TRUE(at::Predict(model, out[1], tc.ctx(), x).isApprox(at::Predict(model, out[1], tc.ctx(), uni_mid), 1e-15));
 
 	// A cell centred at the transducer (d = 0) and one at the far end (d = d_max):
 	// no real geometry has them, so the carried distance is set directly.
 	Measurement at_0 = out[1], at_end = out[1];
-	at_0.aux[0] = 0.0;
-	at_end.aux[0] = at_end.aux[1];
+	at_0.payload<AdcpCell>().distance_m = 0.0;
+	at_end.payload<AdcpCell>().distance_m = at_end.payload<AdcpCell>().max_distance_m;
 	EXPECT_EQ(at::Predict(model, at_0, tc.ctx(), x), at::Predict(model, at_0, tc.ctx(), uni_v));
 	EXPECT_EQ(at::Predict(model, at_end, tc.ctx(), x), at::Predict(model, at_end, tc.ctx(), uni_f));
 	// ... and the far current has no effect at d = 0, the vehicle current none at d_max.
@@ -391,11 +392,11 @@ TEST(Adcp, HandComputedLevelHeading90Through22_5DegreeMount)
 
 	// At d = 0: water (0.2, 0) − v → body (−1, −0.2); at d_max: (0, 0.1) − v → body (−0.9, 0).
 	Measurement m = out[1];
-	m.aux[0] = 0;
+	m.payload<AdcpCell>().distance_m = 0;
 	h = at::Predict(model, m, tc.ctx(), x);
 	EXPECT_NEAR(h[0], -c + 0.2 * s, 1e-15);
 	EXPECT_NEAR(h[1], -s - 0.2 * c, 1e-15);
-	m.aux[0] = m.aux[1];
+	m.payload<AdcpCell>().distance_m = m.payload<AdcpCell>().max_distance_m;
 	h = at::Predict(model, m, tc.ctx(), x);
 	EXPECT_NEAR(h[0], -0.9 * c, 1e-15);
 	EXPECT_NEAR(h[1], -0.9 * s, 1e-15);

@@ -11,6 +11,16 @@
 
 namespace auvnav::plugins
 {
+namespace
+{
+/** From prepare to h: heading only, the level reference direction u_b
+ *  (v[0..2]); full attitude, the measured R_nb as a quaternion (w, x, y, z). */
+struct AhrsReference
+{
+	double v[4];
+};
+}  // namespace
+
 AhrsModel::AhrsModel(const config::Node& cfg, const std::string& label) : label_(label)
 {
 	// A misspelled key must not fall back to its default silently.
@@ -147,7 +157,7 @@ PrepareStatus AhrsModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 		const Eigen::Vector3d u_b = levelReferenceDirection_b(ctx.mean ? ctx.mean->R_nb : *R_meas);
 		m.z = Eigen::VectorXd::Constant(1, azimuthOf(*R_meas, u_b));
 		m.R = Eigen::MatrixXd::Constant(1, 1, sigma_heading_rad_ * sigma_heading_rad_);
-		m.aux = {u_b.x(), u_b.y(), u_b.z(), 0, 0, 0, 0, 0};
+		m.setPayload(AhrsReference{{u_b.x(), u_b.y(), u_b.z(), 0}});
 		m.label = "heading";
 	}
 	else
@@ -167,7 +177,7 @@ PrepareStatus AhrsModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 		m.R = 0.5 * (R + R.transpose());
 		m.z = Eigen::Vector3d::Zero();
 		const Eigen::Quaterniond q(*R_meas);
-		m.aux = {q.w(), q.x(), q.y(), q.z(), 0, 0, 0, 0};
+		m.setPayload(AhrsReference{{q.w(), q.x(), q.y(), q.z()}});
 		m.label = "attitude";
 	}
 	out.push_back(std::move(m));
@@ -180,13 +190,14 @@ bool AhrsModel::doPredict(const NavState& x, const Measurement& m, const FilterC
 	if (heading_only_)
 	{
 		if (z_pred.size() != 1) return false;
-		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(m.aux[0], m.aux[1], m.aux[2]));
+		const double* u_b = m.payload<AhrsReference>().v;
+		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(u_b[0], u_b[1], u_b[2]));
 	}
 	else
 	{
 		if (z_pred.size() != 3) return false;
-		const Eigen::Matrix3d R_meas =
-		    Eigen::Quaterniond(m.aux[0], m.aux[1], m.aux[2], m.aux[3]).normalized().toRotationMatrix();
+		const double* q = m.payload<AhrsReference>().v;
+		const Eigen::Matrix3d R_meas = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
 		z_pred = so3::Log(x.R_nb * R_meas.transpose());
 	}
 	return z_pred.allFinite();

@@ -20,7 +20,7 @@
  *  Measurement (full attitude, 3): the attitude residual on SO(3),
  *      r = Log(R_nb,meas · R_nbᵀ)  (left, NED axes, as so3.h),
  *  carried as z = 0 and h(x) = Log(R_nb · R_nb,measᵀ) = −r (R_nb,meas in
- *  Measurement::aux as a quaternion), so that the filter's averaging of
+ *  the payload AhrsReference as a quaternion), so that the filter's averaging of
  *  predicted measurements happens in one chart centred on the measurement.
  *  R = J diag(σ_roll², σ_pitch², σ_heading²) Jᵀ: an Euler-angle error of the
  *  AHRS mapped to NED rotation axes, J = [body x, levelled body y, down]

@@ -52,13 +52,6 @@ std::string frameLabel(DvlFrame f)
 	return f == DvlFrame::Instrument ? "velocity" : "velocity_" + std::string(obs::dvlFrameName(f));
 }
 
-/** The scale factor's reference velocity r_b (dvl.h) travelling with a
- *  measurement; valid 0: none, h uses (1 + s) v_s_b. */
-struct ScaleReference
-{
-	double v[3];
-	double valid;
-};
 
 /** v_s_b: the DVL point's velocity over ground in body axes, seen through
  *  the misalignment state δ (if any; not in the Earth frames, dvl.h). */
@@ -173,7 +166,8 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 								 std::vector<Measurement>& out)
 {
 	if (!has_scale_) return;
-	ScaleReference ref{{0, 0, 0}, 0};
+	Eigen::Vector3d ref_b = Eigen::Vector3d::Zero();
+	double ref_valid = 0;
 	if (scale_reference_lag_s_ > 0)
 	{
 		const double t = ctx.t_s, lag = scale_reference_lag_s_;
@@ -195,10 +189,19 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 		if (newer != history.begin())
 		{
 			const auto& [t_ref, r] = *std::prev(newer);
-			if (t - t_ref <= 2 * lag) ref = ScaleReference{{r.x(), r.y(), r.z()}, 1};
+			if (t - t_ref <= 2 * lag)
+			{
+				ref_b = r;
+				ref_valid = 1;
+			}
 		}
 	}
-	for (Measurement& m : out) m.setPayload(ref);
+	for (Measurement& m : out)
+	{
+		DvlPing& ping = m.payload<DvlPing>();
+		Eigen::Map<Eigen::Vector3d>(ping.scale_reference_b) = ref_b;
+		ping.scale_reference_valid = ref_valid;
+	}
 }
 
 PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
@@ -226,13 +229,8 @@ PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const M
 	}
 	m.tag = static_cast<int>(dvl.frame);
 	m.label = frameLabel(dvl.frame) + (cov_ok ? "" : "_default_cov");
-	for (int i = 0; i < 3; ++i) m.aux[i] = mount.r_s[i];
-	if (dvl.frame == DvlFrame::Instrument)
-	{
-		const Eigen::Vector3d rotvec = so3::Log(mount.R_bs);
-		for (int i = 0; i < 3; ++i) m.aux[3 + i] = rotvec[i];
-	}
-	m.aux[6] = sign;
+	DvlPing& ping = m.setPayload(DvlPing{{mount.r_s.x(), mount.r_s.y(), mount.r_s.z()}, {0, 0, 0}, sign, 0, {0, 0, 0}, 0});
+	if (dvl.frame == DvlFrame::Instrument) Eigen::Map<Eigen::Vector3d>(ping.axis) = so3::Log(mount.R_bs);
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;
 }
@@ -268,13 +266,12 @@ PrepareStatus DvlModel::prepareBeams(const obs::CObservationDVL& dvl, const Moun
 		m.R = Eigen::MatrixXd::Constant(1, 1, var);
 		m.tag = static_cast<int>(DvlFrame::Beam);
 		m.label = sigma_ok ? "beam" : "beam_default_sigma";
-		for (int k = 0; k < 3; ++k)
-		{
-			m.aux[k] = mount.r_s[k];
-			m.aux[3 + k] = u_b[k];
-		}
-		m.aux[6] = sign;
-		m.aux[7] = static_cast<double>(i);
+		m.setPayload(DvlPing{{mount.r_s.x(), mount.r_s.y(), mount.r_s.z()},
+							 {u_b.x(), u_b.y(), u_b.z()},
+							 sign,
+							 static_cast<double>(i),
+							 {0, 0, 0},
+							 0});
 		out.push_back(std::move(m));
 	}
 	// Three beams fix the 3-D velocity; fewer would let one bad beam pass unchecked.
@@ -301,20 +298,20 @@ bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterCo
 						 Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (x.extra.size() < extra_needed_) return false;  // states declared but not in this state
-	const Eigen::Vector3d r_s(m.aux[0], m.aux[1], m.aux[2]);
+	const DvlPing& ping = m.payload<DvlPing>();
+	const Eigen::Map<const Eigen::Vector3d> r_s(ping.r_s);
 	Eigen::Vector3d v_s_b = sensorVelocity_b(x, r_s, ctx, misalignment_at_, static_cast<DvlFrame>(m.tag));
 	if (scale_at_ >= 0)
 	{
 		// (1 + s) v_s_b, with the scale's term at the lagged reference (dvl.h).
 		const double s = x.extra[scale_at_];
-		const ScaleReference& ref = m.payload<ScaleReference>();
-		if (ref.valid != 0)
-			v_s_b += s * Eigen::Vector3d(ref.v[0], ref.v[1], ref.v[2]);
+		if (ping.scale_reference_valid != 0)
+			v_s_b += s * Eigen::Map<const Eigen::Vector3d>(ping.scale_reference_b);
 		else
 			v_s_b *= 1 + s;
 	}
-	const double sign = m.aux[6];
-	const Eigen::Vector3d a(m.aux[3], m.aux[4], m.aux[5]);
+	const double sign = ping.sign;
+	const Eigen::Map<const Eigen::Vector3d> a(ping.axis);
 	switch (static_cast<DvlFrame>(m.tag))
 	{
 		case DvlFrame::Instrument:

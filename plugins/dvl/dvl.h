@@ -69,13 +69,8 @@
  *
  *  The mounting comes from the configuration (default: the FlatFish nominal
  *  mounting) or, with `use_observation_pose: true`, from each observation's
- *  sensorPose. It travels to h in Measurement::aux, with tag = the frame code
- *  (auvnav::obs::DvlFrame):
- *      [0..2] r_s [m, body FRD]
- *      [3..5] Instrument: rotation vector of R_bs [rad]; Beam: R_bs u_i, the
- *             beam's unit vector in body axes; other frames: 0 (unused)
- *      [6]    +1 (VehicleOverBottom) or −1 (BottomOverInstrument)
- *      [7]    Beam: index of the beam in the observation; else 0
+ *  sensorPose. It travels to h in the typed payload DvlPing (below), with
+ *  tag = the frame code (auvnav::obs::DvlFrame).
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -93,6 +88,21 @@ enum class DvlFrame : uint8_t;
 
 namespace auvnav::plugins
 {
+/** What h needs of one DVL measurement (Measurement::payload<DvlPing>()). */
+struct DvlPing
+{
+	double r_s[3];	//!< sensor position [m, body FRD]
+	//! Instrument: rotation vector of R_bs [rad]; Beam: R_bs u_i, the beam's
+	//! unit vector in body axes; other frames: 0 (unused).
+	double axis[3];
+	double sign;		//!< +1 VehicleOverBottom, −1 BottomOverInstrument
+	double beam_index;	//!< Beam: index of the beam in the observation; else 0
+	//! The scale factor's reference velocity r_b (above) and whether there is
+	//! one (0: none, h uses (1 + s) v_s_b).
+	double scale_reference_b[3];
+	double scale_reference_valid;
+};
+
 class DvlModel final : public SafeMeasurementModel
 {
    public:

@@ -539,13 +539,15 @@ TEST(DvlFrames, AuxLayoutAndLabels)
 			const Measurement& m = ms[k];
 			EXPECT_EQ(m.tag, int(f));
 			EXPECT_EQ(m.label, label);
-			EXPECT_TRUE(Eigen::Vector3d(m.aux[0], m.aux[1], m.aux[2]) == kDvlPos);
-			EXPECT_EQ(m.aux[6], -1.0);
-			EXPECT_EQ(m.aux[7], f == DvlFrame::Beam ? double(k) : 0.0);
+			const auto& ping = m.payload<plugins::DvlPing>();
+			EXPECT_TRUE(Eigen::Vector3d(ping.r_s[0], ping.r_s[1], ping.r_s[2]) == kDvlPos);
+			EXPECT_EQ(ping.sign, -1.0);
+			EXPECT_EQ(ping.beam_index, f == DvlFrame::Beam ? double(k) : 0.0);
 		}
 		if (f == DvlFrame::Instrument)
 		{
-			const Eigen::Vector3d rotvec(ms[0].aux[3], ms[0].aux[4], ms[0].aux[5]);
+			const auto& ping = ms[0].payload<plugins::DvlPing>();
+			const Eigen::Vector3d rotvec(ping.axis[0], ping.axis[1], ping.axis[2]);
 			EXPECT_TRUE(so3::Exp(rotvec).isApprox(nominalRbs(), 1e-14));
 		}
 	}
@@ -568,11 +570,12 @@ TEST(DvlBeams, OneScalarPerValidBeamWithTheBeamGeometry)
 		{
 			ASSERT_EQ(m.z.size(), 1);
 			ASSERT_EQ(m.R.rows(), 1);
-			const int i = int(m.aux[7]);
+			const auto& ping = m.payload<plugins::DvlPing>();
+			const int i = int(ping.beam_index);
 			used.push_back(i);
 			EXPECT_EQ(m.z[0], o->beams[i].velocity_mps);
-			// aux[3..5]: the beam's unit vector in body axes, R_bs u_i.
-			const Eigen::Vector3d u_b(m.aux[3], m.aux[4], m.aux[5]);
+			// The beam's unit vector in body axes, R_bs u_i.
+			const Eigen::Vector3d u_b(ping.axis[0], ping.axis[1], ping.axis[2]);
 			EXPECT_TRUE(u_b.isApprox(nominalRbs() * beamUnit(30 * kDeg, o->beams[i].azimuth_rad), 1e-14)) << i;
 			EXPECT_NEAR(u_b.norm(), 1.0, 1e-14);
 			// The observation's beam sigma plus the extra sigma.

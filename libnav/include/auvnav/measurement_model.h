@@ -122,8 +122,10 @@ struct Measurement
 	Eigen::VectorXd z;	//!< measured value, dimension m
 	Eigen::MatrixXd R;	//!< noise covariance (m × m), SPD
 	int tag = 0;		//!< plugin-private (e.g. ADCP cell index)
-	//! Plugin-private numbers h needs (e.g. cell distance). Kept for existing
-	//! plugins; new code uses the typed payload below.
+	//! Deprecated: untyped numbers for h. No plugin of this project uses it
+	//! (all use the typed payload below); it stays so that plugins written
+	//! before the payload existed build and run unchanged under this ABI, and
+	//! goes at the next ABI bump.
 	std::array<double, 8> aux{};
 	//! Plugin-private typed data for h (see MeasurementPayload): e.g.
 	//! `struct Pole { double north_m, east_m; };` written with
