@@ -68,6 +68,30 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 	flush();  // the headers: a run killed before its first row still names its columns
 }
 
+namespace
+{
+/** Appends v as printf's "%.<precision>f" would print it. */
+void appendFixed(std::string& s, double v, int precision)
+{
+	char buf[64];
+	const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, precision);
+	s.append(buf, r.ptr);
+}
+/** Appends v as printf's "%.<precision>g" would print it. */
+void appendGeneral(std::string& s, double v, int precision)
+{
+	char buf[40];
+	const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, precision);
+	s.append(buf, r.ptr);
+}
+/** Appends ",v" as "%.10g" would print v. */
+void appendG10(std::string& s, double v)
+{
+	s.push_back(',');
+	appendGeneral(s, v, 10);
+}
+}  // namespace
+
 void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s,
 							 const UpdateResult& r)
 {
@@ -77,10 +101,25 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 						 : r.status == UpdateStatus::Rejected  ? "rejected"
 															   : "invalid";
 	const bool has_nis = r.status != UpdateStatus::Invalid || r.nis > 0;
-	char line[320];
-	std::snprintf(line, sizeof line, "%.6f,%.6f,%s,%s,%.6g,%d,\"%s\"", t_filter_s, t_measurement_s, label.c_str(), status,
-				  has_nis ? r.nis : NAN, r.dim, r.status == UpdateStatus::Accepted ? "" : oneLine(r.why ? r.why : "").c_str());
-	updates_.line(line);
+	// One row per update of every sensor (~25 per IMU tick with an ADCP):
+	// std::to_chars, as printf's "%.6f,%.6f,%s,%s,%.6g,%d" would write it.
+	std::string& s = update_row_;
+	s.clear();
+	appendFixed(s, t_filter_s, 6);
+	s.push_back(',');
+	appendFixed(s, t_measurement_s, 6);
+	s.push_back(',');
+	s += label;
+	s.push_back(',');
+	s += status;
+	s.push_back(',');
+	appendGeneral(s, has_nis ? r.nis : NAN, 6);
+	s.push_back(',');
+	s += std::to_string(r.dim);
+	s += ",\"";
+	if (r.status != UpdateStatus::Accepted) s += oneLine(r.why ? r.why : "");
+	s.push_back('"');
+	updates_.line(s);
 }
 
 void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
@@ -96,25 +135,6 @@ void RunOutputs::onPositionFix(const std::string& label, double t, const Measure
 	fixes_.flush();  // rare (GPS, USBL), and what a person watching a run reads
 }
 
-namespace
-{
-/** Appends ",v" as "%.10g" would print v. */
-void appendG10(std::string& s, double v)
-{
-	char buf[40];
-	buf[0] = ',';
-	const auto r = std::to_chars(buf + 1, buf + sizeof buf, v, std::chars_format::general, 10);
-	s.append(buf, r.ptr);
-}
-/** Appends v as "%.10f" would print it (the time column, no comma). */
-void appendFixed10(std::string& s, double v)
-{
-	char buf[64];
-	const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, 10);
-	s.append(buf, r.ptr);
-}
-}  // namespace
-
 void RunOutputs::onState(const Navigator& nav)
 {
 	const double t = nav.time();
@@ -124,19 +144,28 @@ void RunOutputs::onState(const Navigator& nav)
 	const NavState& x = nav.filter().state();
 	const Eigen::Quaterniond q(x.R_nb);
 	const Eigen::Vector3d p = nav.bodyPosition_n();
-	char line[256];
-	std::snprintf(line, sizeof line, "%.6f %.6f %.6f %.6f %.9f %.9f %.9f %.9f", t, p.x(), p.y(), p.z(), q.x(), q.y(),
-				  q.z(), q.w());
-	tum_.line(line);
+	std::string& s = row_;
+	s.clear();
+	appendFixed(s, t, 6);  // TUM: "%.6f" time and position, "%.9f" quaternion
+	for (double v : {p.x(), p.y(), p.z()})
+	{
+		s.push_back(' ');
+		appendFixed(s, v, 6);
+	}
+	for (double v : {q.x(), q.y(), q.z(), q.w()})
+	{
+		s.push_back(' ');
+		appendFixed(s, v, 9);
+	}
+	tum_.line(s);
 	const Eigen::Matrix3d& R = x.R_nb;
 	const double roll = std::atan2(R(2, 1), R(2, 2)) * kRad2Deg;
 	const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0)) * kRad2Deg;
 	const double yaw = std::atan2(R(1, 0), R(0, 0)) * kRad2Deg;
 	// std::to_chars writes what "%.10g" (and an ostream at precision 10)
 	// writes, at a fraction of the cost: this row is the run's biggest output.
-	std::string& s = row_;
 	s.clear();
-	appendFixed10(s, t);
+	appendFixed(s, t, 10);
 	for (double v : {q.w(), q.x(), q.y(), q.z(), roll, pitch, yaw}) appendG10(s, v);
 	const TangentVector e = x.euclidean();
 	for (int i = 3; i < e.size(); ++i) appendG10(s, e[i]);

@@ -88,6 +88,7 @@ class RunOutputs
 	std::map<std::string, NisAcc> nis_acc_;
 	double nis_t0_ = -1e300;
 	std::size_t rows_ = 0;
-	std::string row_;	// states.csv row buffer (reused: no allocation per row)
+	std::string row_;			// states.csv and trajectory.tum row buffer (reused: no allocation per row)
+	std::string update_row_;	// updates.csv row buffer
 };
 }  // namespace auvnav::run
