@@ -230,7 +230,8 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 	for (int j = 0; j < k; ++j) L_(j, j) = std::sqrt(std::max(P_(j, j), 1e-15));
 }
 
-void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
+void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
+						  Covariance* P_cross)
 {
 	constexpr int k = kNonlinear;
 	const int n = n_;
@@ -335,9 +336,19 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	for (int j = 0; j < k; ++j) D_pairs.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
 	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL(k, n - k);
 	P_NL.noalias() = D_pairs.lazyProduct(Ac.bottomRows(n - k).transpose());	// small: no blocked kernel
+	if (P_cross)
+	{
+		// Cov(x_k, x_k+1): sigma point i deviates from x̄_k by ±γ L_j, so the
+		// new inertial block's columns are Σ_j L_j (W γ (d₊ⱼ − d₋ⱼ))ᵀ (pairs
+		// along columns j ≥ k leave that block at the centre's: d₊ = d₋);
+		// the affine block's are P Aᵀ, set below.
+		P_cross->resize(n, n);
+		P_cross->leftCols(k).noalias() = L_.leftCols(k) * D_pairs.transpose();
+	}
 	// Affine part: A P Aᵀ exactly (rows, then columns).
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
 	model_.applyLinearRows(P_, step);
+	if (P_cross) P_cross->rightCols(n - k) = P_.bottomRows(n - k).transpose();  // (A P)ᵀ: Cov(x, A x + b)
 	Covariance Pt = P_.transpose();
 	model_.applyLinearRows(Pt, step);
 	P_ = Pt;

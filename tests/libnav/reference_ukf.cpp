@@ -66,10 +66,12 @@ NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>&
 
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
 					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
-					  const SigmaWeights& w, NavState& x_out, Covariance& P_out, double max_spread_rad)
+					  const SigmaWeights& w, NavState& x_out, Covariance& P_out, double max_spread_rad,
+					  Covariance* P_cross)
 {
 	const std::vector<double> scale = spreadScales(P, w.gamma, max_spread_rad);
-	std::vector<NavState> Y = sigmaPoints(x, P, w.gamma, scale);
+	const std::vector<NavState> X = sigmaPoints(x, P, w.gamma, scale);
+	std::vector<NavState> Y = X;
 	for (auto& y : Y) y = model.propagate(y, omega_ib_b, omega_ie_n, dt);
 	// A scaled pair (ukf.h) has no point of its own: its deviations from Y_0
 	// are ŷ± = ±a/s + m, and from a mean x̄ they are ŷ± − (x̄ ⊟ Y_0).
@@ -100,6 +102,19 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 	{
 		const TangentVector d = deviation(i, mean);
 		Pn += w.wc[i] * d * d.transpose();
+	}
+	if (P_cross)
+	{
+		// State deviations as in unscentedTransform: a scaled pair at its full step ±γ L_j.
+		const Covariance L = Eigen::LLT<Covariance>(P).matrixL();
+		P_cross->setZero(n, n);
+		for (std::size_t i = 1; i < Y.size(); ++i)
+		{
+			const int j = static_cast<int>(i - 1) / 2;
+			const TangentVector dx = scale[j] < 1.0 ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col(j))
+													: X[i].boxminus(x);
+			*P_cross += w.wc[i] * dx * deviation(i, mean).transpose();
+		}
 	}
 	const double speed_through_water = (x.v_n.head<2>() - x.current_vehicle_ne).norm();
 	Pn += model.noiseCovariance(dt, speed_through_water, x.v_n.z());
@@ -187,9 +202,10 @@ void ReferenceUkf::initialize(const NavState& x0, const Covariance& P0)
 	P_ = 0.5 * (P0 + P0.transpose());
 }
 
-void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt)
+void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
+						   Covariance* P_cross)
 {
-	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_, max_spread_rad_);
+	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_, max_spread_rad_, P_cross);
 }
 
 bool ReferenceUkf::update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx)

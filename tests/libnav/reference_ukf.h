@@ -55,7 +55,7 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
 					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
 					  const SigmaWeights& w, NavState& x_out, Covariance& P_out,
-					  double max_spread_rad = UtParams{}.max_attitude_spread_rad);
+					  double max_spread_rad = UtParams{}.max_attitude_spread_rad, Covariance* P_cross = nullptr);
 
 class ReferenceUkf
 {
@@ -65,7 +65,10 @@ class ReferenceUkf
 	const NavState& state() const { return x_; }
 	const Covariance& covariance() const { return P_; }
 
-	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
+	/** P_cross, if given: Cov(x_k, x_k+1) over all 2n+1 sigma points (the
+	 *  smoother's oracle, smoother.h). */
+	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
+				 Covariance* P_cross = nullptr);
 	/** Ungated update; false if h could not be evaluated or S is not PD. */
 	bool update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx);
 

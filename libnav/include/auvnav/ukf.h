@@ -138,8 +138,14 @@ class ManifoldUkf
 	const NavState& state() const { return x_; }
 	const Covariance& covariance() const { return P_; }
 
-	/** Propagates by dt_s with the raw gyro sample (IMU axes) and the Earth rate. */
-	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
+	/** Propagates by dt_s with the raw gyro sample (IMU axes) and the Earth
+	 *  rate. `P_cross`, if given, receives the prediction's cross covariance
+	 *  Cov(x_k, x_k+1) = Σ W_i (X_i ⊟ x̄_k)(Y_i ⊟ x̄_k+1)ᵀ (n × n; rows in the
+	 *  tangent space at the prior mean, columns at the predicted one): what
+	 *  a Rauch–Tung–Striebel smoother's gain needs (smoother.h). It costs an
+	 *  n × k × k product and a copy, nothing when not asked for. */
+	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
+				 Covariance* P_cross = nullptr);
 
 	/** One measurement update; `recovery` says how one failing the gate is
 	 *  applied anyway (see Recovery). */

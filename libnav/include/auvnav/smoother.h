@@ -1,0 +1,72 @@
+#pragma once
+/** @file smoother.h
+ *  Unscented Rauch–Tung–Striebel smoothing (Särkkä 2008, "Unscented
+ *  Rauch–Tung–Striebel smoother", IEEE Trans. Automatic Control 53(3)) on
+ *  the filter's manifold state: the backward pass over what a forward
+ *  ManifoldUkf recorded.
+ *
+ *  One RtsStep per prediction k → k+1 holds the filtered mean and covariance
+ *  at k (after every update applied at tick k), the predicted ones at k+1
+ *  (before its updates) and the prediction's cross covariance
+ *  C = Cov(x_k, x_k+1) (ManifoldUkf::predict's P_cross). The updates between
+ *  two predictions need nothing more: they are part of "filtered at k+1".
+ *
+ *  The backward step, in the tangent spaces of the filter's retraction
+ *  (state.h: attitude on SO(3), never angles):
+ *      G  = C (P⁻_k+1)⁻¹                 (a Cholesky solve, no inverse)
+ *      x̂_k = x_k ⊞ G (x̂_k+1 ⊟ x⁻_k+1)
+ *      P̂_k = P_k + G (P̂_k+1 − P⁻_k+1) Gᵀ
+ *  P̂_k is taken in the tangent space at x_k, as the filter itself keeps P
+ *  across an update (its small re-centring is neglected there too).
+ *
+ *  A step whose P⁻_k+1 is not positive definite, or whose result is not
+ *  finite or has a variance that is not positive, keeps the filtered
+ *  estimate at k (`smoothed` false) and the pass continues from it.
+ *
+ *  Memory: a step holds three n × n matrices (n = 43: 44 KB). This is the
+ *  in-memory form; a whole run is smoothed from steps streamed to disk.
+ */
+#include <auvnav/state.h>
+#include <auvnav/ukf.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace auvnav
+{
+struct RtsStep
+{
+	double t_s = 0;				//!< time of the filtered estimate (tick k)
+	NavState x_filtered;		//!< x_k
+	Covariance P_filtered;		//!< P_k
+	NavState x_predicted;		//!< x⁻_k+1
+	Covariance P_predicted;		//!< P⁻_k+1 (process noise included)
+	Covariance P_cross;			//!< Cov(x_k, x_k+1)
+};
+
+/** ukf.predict(omega_ib_b, omega_ie_n, dt_s) that also returns the step;
+ *  `t_s` is the time of the state before the prediction. */
+RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
+						double dt_s, double t_s);
+
+struct SmoothedEstimate
+{
+	double t_s = 0;
+	NavState x;
+	Covariance P;
+	bool smoothed = true;  //!< false: the filtered estimate kept (failed step, see above)
+};
+
+/** One backward step from the smoothed estimate at k+1. False (and x_out,
+ *  P_out = the filtered ones) if the step failed (see above). */
+bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covariance& P_next, NavState& x_out,
+					 Covariance& P_out);
+
+/** The backward pass over a whole recorded run: one estimate per step (at
+ *  steps[k].t_s) and, last, the end state (x_end, P_end at t_end_s: the
+ *  filter's estimate after the last step's updates, which smoothing leaves
+ *  as it is). */
+std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const NavState& x_end,
+										const Covariance& P_end, double t_end_s);
+
+}  // namespace auvnav
