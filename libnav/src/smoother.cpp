@@ -53,4 +53,81 @@ std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const
 	return out;
 }
 
+void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
+{
+	const int n = ukf.dim();
+	current_ = RtsStretch{};
+	current_.t_s = t_s;
+	current_.x_filtered = ukf.state();
+	current_.P_filtered = ukf.covariance();
+	current_.M = Covariance::Identity(n, n);
+	current_.sum_dx = TangentVector::Zero(n);
+	current_.sum_dP = Covariance::Zero(n, n);
+	open_ = true;
+	predicted_ = false;
+}
+
+void RtsStretchRecorder::foldUpdates(const ManifoldUkf& ukf)
+{
+	// Tick t's updates: dx_t = x_t ⊟ x⁻_t and ΔP_t = P⁻_t − P_t, carried back by M_t.
+	if (!predicted_) return;
+	const TangentVector dx = ukf.state().boxminus(x_predicted_);
+	current_.sum_dx.noalias() += current_.M * dx;
+	scratch_.noalias() = current_.M * (P_predicted_ - ukf.covariance());
+	current_.sum_dP.noalias() += scratch_ * current_.M.transpose();
+	predicted_ = false;
+}
+
+bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
+								 const Eigen::Vector3d& omega_ie_n, double dt_s)
+{
+	if (!open_)
+	{
+		ukf.predict(omega_ib_b, omega_ie_n, dt_s);
+		return true;
+	}
+	foldUpdates(ukf);
+	ukf.predict(omega_ib_b, omega_ie_n, dt_s, &P_cross_);
+	x_predicted_ = ukf.state();
+	P_predicted_ = ukf.covariance();
+	predicted_ = true;
+	++current_.ticks;
+	const Eigen::LLT<Covariance> llt(P_predicted_);
+	if (llt.info() != Eigen::Success || current_.broken)
+	{
+		current_.broken = true;
+		return false;
+	}
+	G_ = llt.solve(P_cross_.transpose()).transpose();  // G_t = C P⁻⁻¹
+	scratch_.noalias() = current_.M * G_;
+	current_.M.swap(scratch_);
+	return true;
+}
+
+RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
+{
+	foldUpdates(ukf);
+	RtsStretch done = std::move(current_);
+	begin(ukf, t_s);
+	return done;
+}
+
+bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, const Covariance& P_end_filtered,
+						const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
+						Covariance& P_out)
+{
+	x_out = s.x_filtered;
+	P_out = s.P_filtered;
+	if (s.broken) return false;
+	const TangentVector dx = s.sum_dx + s.M * x_end_smoothed.boxminus(x_end_filtered);
+	Covariance P = s.P_filtered - s.sum_dP;
+	P.noalias() += s.M * (P_end_smoothed - P_end_filtered) * s.M.transpose();
+	P = 0.5 * (P + P.transpose());
+	if (!dx.allFinite() || !P.allFinite() || !(P.diagonal().array() > 0).all()) return false;
+	x_out = s.x_filtered.boxplus(dx);
+	x_out.R_nb = so3::normalized(x_out.R_nb);
+	P_out = P;
+	return true;
+}
+
 }  // namespace auvnav

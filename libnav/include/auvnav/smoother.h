@@ -69,4 +69,57 @@ bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covarian
 std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const NavState& x_end,
 										const Covariance& P_end, double t_end_s);
 
+/** What the backward pass needs of one stretch between kept ticks k and k′
+ *  (docs/smoother.md): the per-tick recursion telescoped,
+ *      x̂_k = x_k ⊞ (sum_dx + M (x̂_k′ ⊟ x_k′)),
+ *      P̂_k = P_k − sum_dP + M (P̂_k′ − P_k′) Mᵀ,
+ *  with M = G_k ⋯ G_k′−1 and the sums over the ticks t in (k, k′] of
+ *  M_t (x_t ⊟ x⁻_t) and M_t (P⁻_t − P_t) M_tᵀ. Equal to the per-tick pass in a
+ *  vector space; on SO(3) to second order in the corrections (the
+ *  per-tick pass composes them one ⊞ at a time). */
+struct RtsStretch
+{
+	double t_s = 0;		  //!< time of tick k
+	NavState x_filtered;  //!< x_k
+	Covariance P_filtered;
+	Covariance M;
+	TangentVector sum_dx;
+	Covariance sum_dP;
+	std::size_t ticks = 0;	//!< predictions in the stretch
+	bool broken = false;	//!< a tick's P⁻ was not positive definite: smoothing keeps x_k
+};
+
+/** Forward bookkeeping for RtsStretch: call predict() in place of the
+ *  filter's, and close() at a kept tick (after its updates). Each tick costs
+ *  a Cholesky solve of P⁻ and two n × n × n products (docs/smoother.md). */
+class RtsStretchRecorder
+{
+   public:
+	/** Opens the first stretch at the filter's current estimate. */
+	void begin(const ManifoldUkf& ukf, double t_s);
+	bool open() const { return open_; }
+	/** ukf.predict(...), with the tick's gain and its updates folded in.
+	 *  False if P⁻ was not positive definite (the stretch is then marked
+	 *  broken: it keeps the filtered estimate when smoothed). */
+	bool predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
+	/** Ends the stretch at the filter's current estimate (tick k′, after its
+	 *  updates), returns it and opens the next one there. */
+	RtsStretch close(const ManifoldUkf& ukf, double t_s);
+
+   private:
+	void foldUpdates(const ManifoldUkf& ukf);
+	RtsStretch current_;
+	NavState x_predicted_;
+	Covariance P_predicted_, P_cross_, G_, scratch_;
+	bool open_ = false, predicted_ = false;
+};
+
+/** One backward step over a stretch, from the filtered and smoothed
+ *  estimates at its end (tick k′). False (outputs = the filtered estimate at
+ *  k) if the stretch is broken or the result is not finite or has a
+ *  variance that is not positive. */
+bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, const Covariance& P_end_filtered,
+						const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
+						Covariance& P_out);
+
 }  // namespace auvnav
