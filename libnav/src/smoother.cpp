@@ -61,6 +61,7 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	current_.x_filtered = ukf.state();
 	current_.P_filtered = ukf.covariance();
 	current_.M = Covariance::Identity(n, n);
+	current_.M_mean = Covariance::Identity(n, n);
 	current_.sum_dx = TangentVector::Zero(n);
 	current_.sum_dP = Covariance::Zero(n, n);
 	open_ = true;
@@ -71,10 +72,30 @@ void RtsStretchRecorder::foldUpdates(const ManifoldUkf& ukf)
 {
 	// Tick t's updates: dx_t = x_t ⊟ x⁻_t and ΔP_t = P⁻_t − P_t, carried back by M_t.
 	if (!predicted_) return;
-	const TangentVector dx = ukf.state().boxminus(x_predicted_);
-	current_.sum_dx.noalias() += current_.M * dx;
+	const NavState& x = ukf.state();
+	const TangentVector dx = x.boxminus(x_predicted_);
+	current_.sum_dx.noalias() += current_.M_mean * dx;
 	scratch_.noalias() = current_.M * (P_predicted_ - ukf.covariance());
 	current_.sum_dP.noalias() += scratch_ * current_.M.transpose();
+	// M_mean ← M_mean T_t on the columns where T_t is not the identity:
+	// attitude (velocity, acceleration and currents turn with it) and the
+	// accelerometer bias (kept in IMU axes). Central differences at a step
+	// far below any σ and far above rounding.
+	constexpr double kEps = 1e-6;
+	const int n = x.dim();
+	Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> T(n, 6);
+	TangentVector e = TangentVector::Zero(n);
+	int c = 0;
+	for (int first : {static_cast<int>(idx::att), static_cast<int>(idx::acc_bias)})
+		for (int i = first; i < first + 3; ++i, ++c)
+		{
+			e[i] = kEps;
+			T.col(c) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
+			e[i] = 0;
+		}
+	const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> MT = current_.M_mean * T;
+	current_.M_mean.middleCols<3>(idx::att) = MT.leftCols<3>();
+	current_.M_mean.middleCols<3>(idx::acc_bias) = MT.rightCols<3>();
 	predicted_ = false;
 }
 
@@ -101,6 +122,8 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 	G_ = llt.solve(P_cross_.transpose()).transpose();  // G_t = C P⁻⁻¹
 	scratch_.noalias() = current_.M * G_;
 	current_.M.swap(scratch_);
+	scratch_.noalias() = current_.M_mean * G_;
+	current_.M_mean.swap(scratch_);
 	return true;
 }
 
@@ -119,7 +142,7 @@ bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, con
 	x_out = s.x_filtered;
 	P_out = s.P_filtered;
 	if (s.broken) return false;
-	const TangentVector dx = s.sum_dx + s.M * x_end_smoothed.boxminus(x_end_filtered);
+	const TangentVector dx = s.sum_dx + s.M_mean * x_end_smoothed.boxminus(x_end_filtered);
 	Covariance P = s.P_filtered - s.sum_dP;
 	P.noalias() += s.M * (P_end_smoothed - P_end_filtered) * s.M.transpose();
 	P = 0.5 * (P + P.transpose());

@@ -74,15 +74,22 @@ std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const
  *      x̂_k = x_k ⊞ (sum_dx + M (x̂_k′ ⊟ x_k′)),
  *      P̂_k = P_k − sum_dP + M (P̂_k′ − P_k′) Mᵀ,
  *  with M = G_k ⋯ G_k′−1 and the sums over the ticks t in (k, k′] of
- *  M_t (x_t ⊟ x⁻_t) and M_t (P⁻_t − P_t) M_tᵀ. Equal to the per-tick pass in a
- *  vector space; on SO(3) to second order in the corrections (the
- *  per-tick pass composes them one ⊞ at a time). */
+ *  M_t (x_t ⊟ x⁻_t) and M_t (P⁻_t − P_t) M_tᵀ. The covariance is the per-tick
+ *  pass's exactly. The mean is where a vector space would have it: this
+ *  state's retraction turns velocity, acceleration and currents with the
+ *  attitude (state.h), so the per-tick pass's x̂_t ⊟ x⁻_t is not
+ *  (x̂_t ⊟ x_t) + (x_t ⊟ x⁻_t) but (x_t ⊟ x⁻_t) + T_t (x̂_t ⊟ x_t) + O(2) with
+ *  T_t = ∂/∂b [(x_t ⊞ b) ⊟ x⁻_t] at b = 0 (identity but for the attitude and
+ *  accelerometer-bias columns, taken by central differences): the mean uses
+ *  M_mean, the product of G_t T_t+1, and agrees with the per-tick pass to
+ *  second order in the smoothing corrections. */
 struct RtsStretch
 {
 	double t_s = 0;		  //!< time of tick k
 	NavState x_filtered;  //!< x_k
 	Covariance P_filtered;
-	Covariance M;
+	Covariance M;		  //!< G_k ⋯ G_k′−1 (the covariance's)
+	Covariance M_mean;	  //!< the same with each tick's correction transport (below)
 	TangentVector sum_dx;
 	Covariance sum_dP;
 	std::size_t ticks = 0;	//!< predictions in the stretch
