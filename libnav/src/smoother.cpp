@@ -6,6 +6,22 @@
 
 namespace auvnav
 {
+namespace
+{
+/** The smoothed estimate x_f ⊞ dx with covariance P (symmetrised) into the
+ *  outputs, or false (outputs untouched: the caller's filtered estimate) if
+ *  it is not finite or a variance is not positive. */
+bool acceptSmoothed(const NavState& x_f, const TangentVector& dx, Covariance& P, NavState& x_out, Covariance& P_out)
+{
+	P = 0.5 * (P + P.transpose());
+	if (!dx.allFinite() || !P.allFinite() || !(P.diagonal().array() > 0).all()) return false;
+	x_out = x_f.boxplus(dx);
+	x_out.R_nb = so3::normalized(x_out.R_nb);
+	P_out = P;
+	return true;
+}
+}  // namespace
+
 RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
 						double dt_s, double t_s)
 {
@@ -31,12 +47,7 @@ bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covarian
 	const TangentVector dx = G * x_next.boxminus(step.x_predicted);
 	Covariance P = step.P_filtered;
 	P.noalias() += G * (P_next - step.P_predicted) * G.transpose();
-	P = 0.5 * (P + P.transpose());
-	if (!dx.allFinite() || !P.allFinite() || !(P.diagonal().array() > 0).all()) return false;
-	x_out = step.x_filtered.boxplus(dx);
-	x_out.R_nb = so3::normalized(x_out.R_nb);
-	P_out = P;
-	return true;
+	return acceptSmoothed(step.x_filtered, dx, P, x_out, P_out);
 }
 
 std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const NavState& x_end,
@@ -145,12 +156,7 @@ bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, con
 	const TangentVector dx = s.sum_dx + s.M_mean * x_end_smoothed.boxminus(x_end_filtered);
 	Covariance P = s.P_filtered - s.sum_dP;
 	P.noalias() += s.M * (P_end_smoothed - P_end_filtered) * s.M.transpose();
-	P = 0.5 * (P + P.transpose());
-	if (!dx.allFinite() || !P.allFinite() || !(P.diagonal().array() > 0).all()) return false;
-	x_out = s.x_filtered.boxplus(dx);
-	x_out.R_nb = so3::normalized(x_out.R_nb);
-	P_out = P;
-	return true;
+	return acceptSmoothed(s.x_filtered, dx, P, x_out, P_out);
 }
 
 }  // namespace auvnav

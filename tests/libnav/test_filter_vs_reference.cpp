@@ -342,6 +342,18 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 	return md;
 }
 
+/** 0.5 s steps at up to ~4 rad/s with a 0.2 rad/s gyro-bias σ, an update every step. */
+Case largeStepsCase()
+{
+	Case c{Eigen::Vector3d(8, 6, 20) * kDeg, -100 * kDeg, 5};
+	c.dt = 0.5;
+	c.steps = 30;
+	c.update_every = 1;
+	c.gyro_bias_sigma = 0.2;
+	c.rate_scale = 5;
+	return c;
+}
+
 std::vector<std::unique_ptr<TestModel>> allModels()
 {
 	std::vector<std::unique_ptr<TestModel>> v;
@@ -404,13 +416,7 @@ TEST(FilterVsReference, StronglyNonlinearLargeStepsAgreeWithDenseUkf)
 	// 0.5 s steps at up to ~4 rad/s with a 0.2 rad/s gyro-bias uncertainty:
 	// the attitude/bias part of the prediction is far from linear, and the
 	// cross-covariance with the affine part carries real nonlinear terms.
-	Case c{Eigen::Vector3d(8, 6, 20) * kDeg, -100 * kDeg, 5};
-	c.dt = 0.5;
-	c.steps = 30;
-	c.update_every = 1;
-	c.gyro_bias_sigma = 0.2;
-	c.rate_scale = 5;
-	const MaxDiffs md = runSideBySide(c, allModels());
+	const MaxDiffs md = runSideBySide(largeStepsCase(), allModels());
 	report("0.5 s steps, 4 rad/s, gyro bias sigma 0.2 rad/s", md);
 	expectAgreement(md);
 }
@@ -571,13 +577,7 @@ TEST(SmootherVsReference, ScaledSigmaPointsAndPluginStatesAgreeWithDenseRts)
 
 TEST(SmootherVsReference, StronglyNonlinearLargeStepsAgreeWithDenseRts)
 {
-	Case c{Eigen::Vector3d(8, 6, 20) * kDeg, -100 * kDeg, 5};
-	c.dt = 0.5;
-	c.steps = 30;
-	c.update_every = 1;
-	c.gyro_bias_sigma = 0.2;
-	c.rate_scale = 5;
-	expectSmootherAgreement(smoothSideBySide(c, allModels()));
+	expectSmootherAgreement(smoothSideBySide(largeStepsCase(), allModels()));
 }
 
 TEST(SmootherVsReference, AWrongCrossCovarianceIsSeen)
