@@ -115,7 +115,8 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 	s.push_back(',');
 	appendGeneral(s, has_nis ? r.nis : NAN, 6);
 	s.push_back(',');
-	s += std::to_string(r.dim);
+	char dim[16];
+	s.append(dim, std::to_chars(dim, dim + sizeof dim, r.dim).ptr);
 	s += ",\"";
 	if (r.status != UpdateStatus::Accepted) s += oneLine(r.why ? r.why : "");
 	s.push_back('"');

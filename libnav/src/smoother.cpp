@@ -20,6 +20,12 @@ bool acceptSmoothed(const NavState& x_f, const TangentVector& dx, Covariance& P,
 	P_out = P;
 	return true;
 }
+/** The RTS gain G = C P⁻⁻¹, i.e. Gᵀ = P⁻⁻¹ Cᵀ (P⁻ symmetric), by the
+ *  factor of P⁻: no inverse is formed. */
+Covariance rtsGain(const Eigen::LLT<Covariance>& llt_P_predicted, const Covariance& P_cross)
+{
+	return llt_P_predicted.solve(P_cross.transpose()).transpose();
+}
 }  // namespace
 
 RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
@@ -42,8 +48,7 @@ bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covarian
 	P_out = step.P_filtered;
 	const Eigen::LLT<Covariance> llt(step.P_predicted);
 	if (llt.info() != Eigen::Success) return false;
-	// G = C P⁻⁻¹, i.e. Gᵀ = P⁻⁻¹ Cᵀ (P⁻ symmetric).
-	const Covariance G = llt.solve(step.P_cross.transpose()).transpose();
+	const Covariance G = rtsGain(llt, step.P_cross);
 	const TangentVector dx = G * x_next.boxminus(step.x_predicted);
 	Covariance P = step.P_filtered;
 	P.noalias() += G * (P_next - step.P_predicted) * G.transpose();
@@ -124,13 +129,14 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 	P_predicted_ = ukf.covariance();
 	predicted_ = true;
 	++current_.ticks;
+	if (current_.broken) return false;	// the stretch keeps its filtered estimate anyway
 	const Eigen::LLT<Covariance> llt(P_predicted_);
-	if (llt.info() != Eigen::Success || current_.broken)
+	if (llt.info() != Eigen::Success)
 	{
 		current_.broken = true;
 		return false;
 	}
-	G_ = llt.solve(P_cross_.transpose()).transpose();  // G_t = C P⁻⁻¹
+	G_ = rtsGain(llt, P_cross_);
 	scratch_.noalias() = current_.M * G_;
 	current_.M.swap(scratch_);
 	scratch_.noalias() = current_.M_mean * G_;

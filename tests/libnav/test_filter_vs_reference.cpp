@@ -365,6 +365,15 @@ std::vector<std::unique_ptr<TestModel>> allModels()
 	return v;
 }
 
+/** allModels() and the two that read the test's plugin-owned states. */
+std::vector<std::unique_ptr<TestModel>> allModelsWithPluginStates()
+{
+	auto models = allModels();
+	models.emplace_back(std::make_unique<PluginStateDvlModel>());
+	models.emplace_back(std::make_unique<BiasedFixModel>());
+	return models;
+}
+
 void report(const char* title, const MaxDiffs& md)
 {
 	std::printf("[%s] max |fast - reference| over %d predictions and %d updates\n", title, md.predictions,
@@ -428,10 +437,7 @@ TEST(FilterVsReference, PluginOwnedStatesAgreeWithDenseUkf)
 	// their short prefixes of the now 49-dimensional state.
 	Case c{Eigen::Vector3d(4, 3, 20) * kDeg, 60 * kDeg, 37};
 	c.plugin_states = true;
-	auto models = allModels();
-	models.emplace_back(std::make_unique<PluginStateDvlModel>());
-	models.emplace_back(std::make_unique<BiasedFixModel>());
-	const MaxDiffs md = runSideBySide(c, models);
+	const MaxDiffs md = runSideBySide(c, allModelsWithPluginStates());
 	report("43 + 6 plugin-owned states", md);
 	expectAgreement(md);
 	EXPECT_EQ(md.updates, 40);
@@ -569,10 +575,7 @@ TEST(SmootherVsReference, ScaledSigmaPointsAndPluginStatesAgreeWithDenseRts)
 	// 1.9e-9 in correlation units), so the bound is 1e-8 for this case.
 	Case c{Eigen::Vector3d(3, 3, 180) * kDeg, 100 * kDeg, 29};
 	c.plugin_states = true;
-	auto models = allModels();
-	models.emplace_back(std::make_unique<PluginStateDvlModel>());
-	models.emplace_back(std::make_unique<BiasedFixModel>());
-	expectSmootherAgreement(smoothSideBySide(c, models), 1e-8);
+	expectSmootherAgreement(smoothSideBySide(c, allModelsWithPluginStates()), 1e-8);
 }
 
 TEST(SmootherVsReference, StronglyNonlinearLargeStepsAgreeWithDenseRts)

@@ -23,8 +23,10 @@
  *  finite or has a variance that is not positive, keeps the filtered
  *  estimate at k (`smoothed` false) and the pass continues from it.
  *
- *  Memory: a step holds three n × n matrices (n = 43: 44 KB). This is the
- *  in-memory form; a whole run is smoothed from steps streamed to disk.
+ *  Memory: a step holds three n × n matrices (n = 43: 44 KB) per tick, so
+ *  this form is for short runs and tests; RtsStretch (below) keeps one
+ *  record per kept tick. Streaming those to disk is not built yet
+ *  (docs/smoother.md).
  */
 #include <auvnav/state.h>
 #include <auvnav/ukf.h>
