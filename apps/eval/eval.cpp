@@ -92,6 +92,7 @@ Sample sampleOf(const io::CsvTable& c, const StateColumns& k, const io::Trajecto
 		s.damping_hi[i] = std::exp(mu + 2 * sg);
 	}
 	s.distance_m = tr.distance_m;
+	s.depth_true_m = tr.p_n.z();
 	s.nees_pos = mahalanobis(s.pos_err_ned, s.P_pos);
 	s.nees_att = mahalanobis(s.att_err, s.P_att);
 	const Eigen::Matrix2d Ph = s.P_pos.topLeftCorner<2, 2>();
@@ -101,14 +102,15 @@ Sample sampleOf(const io::CsvTable& c, const StateColumns& k, const io::Trajecto
 }
 }  // namespace
 
-Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s)
+Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s,
+					const std::string& states_file)
 {
 	// The states are stamped at IMU times, between the truth's (10 Hz) rows:
 	// at a 19 deg/s turn the nearest row alone is up to 1 deg off in heading,
 	// so the truth is interpolated to them (io::interpolate, as everywhere).
 	const io::Trajectory truth = io::readGroundTruth(truth_csv);
 	Evaluation ev;
-	io::CsvTable c(run_dir + "/states.csv");
+	io::CsvTable c(run_dir + "/" + states_file);
 	const StateColumns k(c);
 	double next_t = -1e300;
 	while (c.next())
@@ -120,7 +122,7 @@ Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, do
 		next_t = time + every_s;
 		ev.samples.push_back(sampleOf(c, k, *tr));
 	}
-	if (ev.samples.empty()) throw std::runtime_error(run_dir + "/states.csv: no state within the truth's time span");
+	if (ev.samples.empty()) throw std::runtime_error(run_dir + "/" + states_file + ": no state within the truth's time span");
 	std::ifstream probe(run_dir + "/nis.csv");
 	if (probe)
 	{
@@ -136,11 +138,12 @@ Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, do
 	return ev;
 }
 
-std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s)
+std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s,
+							   const std::string& states_file)
 {
 	const io::Trajectory truth = io::readGroundTruth(truth_csv);
 	const double t_unix = truth.front().t_unix + after_truth_start_s;
-	io::CsvTable c(run_dir + "/states.csv");
+	io::CsvTable c(run_dir + "/" + states_file);
 	const StateColumns k(c);
 	while (c.next())
 	{

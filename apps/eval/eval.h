@@ -28,6 +28,7 @@ struct Sample
 	Eigen::Vector4d damping = Eigen::Vector4d::Zero(), damping_lo = Eigen::Vector4d::Zero(),
 					damping_hi = Eigen::Vector4d::Zero();
 	double distance_m = 0;	//!< travelled so far (truth)
+	double depth_true_m = 0;  //!< truth's depth (dive: > 0.5 m)
 	double nees_pos = 0, nees_att = 0;
 	double nees_hpos = 0;  //!< horizontal position only (2 dof)
 };
@@ -45,15 +46,18 @@ struct Evaluation
 	std::map<std::string, std::vector<NisBin>> nis;	 //!< per sensor label
 };
 
-/** Reads RUN/states.csv (and RUN/nis.csv if present) and the truth CSV;
- *  keeps one sample per `every_s`. Throws std::runtime_error naming file/line. */
-Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s = 1.0);
+/** Reads RUN/states.csv (or `states_file`: smoothed_states.csv) and
+ *  RUN/nis.csv if present, and the truth CSV; keeps one sample per
+ *  `every_s`. Throws std::runtime_error naming file/line. */
+Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s = 1.0,
+					const std::string& states_file = "states.csv");
 
 /** The sample of the first state at or after `after_truth_start_s` seconds
  *  after the truth's first row (every state, no subsampling); nullopt if
  *  there is none or no truth there. auvnav-experiment takes its error at the
  *  same instant (the first prediction at or after the end of the denial). */
-std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s);
+std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s,
+							   const std::string& states_file = "states.csv");
 
 /** Two-sided 95 % bounds of the mean of `runs` independent χ²(dof) values. */
 std::pair<double, double> chi2MeanBounds(int dof, int runs, double probability = 0.95);

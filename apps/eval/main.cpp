@@ -227,10 +227,86 @@ std::string monteCarlo(const std::vector<Evaluation>& evs, double settle_s, cons
 	return buf;
 }
 /** The --at line: the horizontal error at one instant. */
-std::string errorAt(const std::string& run, const std::string& truth, double after_start_s)
+/** Filtered against smoothed (auvnav-run --smooth) for the runs that have
+ *  smoothed_states.csv: horizontal RMS over the dive (truth deeper than
+ *  0.5 m), the NEES fractions inside the 95 % bounds over the dive, and a
+ *  figure of the first such run. Empty if no run has one. */
+std::string smoothedComparison(const std::vector<std::string>& runs, const std::vector<std::string>& truths,
+							   const std::vector<Evaluation>& filtered, double every_s, const fs::path& out,
+							   std::vector<std::string>& figures)
 {
-	const auto s = sampleAt(run, truth, after_start_s);
-	if (!s) throw std::runtime_error(run + "/states.csv: no state with truth at or after " + std::to_string(after_start_s) + " s");
+	const auto [lo, hi] = chi2MeanBounds(3, 1);
+	struct Dive
+	{
+		double rms = 0, in_pos = 0, in_att = 0;
+		std::size_t n = 0;
+	};
+	auto dive = [&](const Evaluation& e) {
+		Dive d;
+		double sq = 0;
+		for (const auto& x : e.samples)
+		{
+			if (x.depth_true_m <= 0.5) continue;
+			++d.n;
+			sq += x.pos_err_ned.head<2>().squaredNorm();
+			d.in_pos += x.nees_pos >= lo && x.nees_pos <= hi;
+			d.in_att += x.nees_att >= lo && x.nees_att <= hi;
+		}
+		if (d.n) d.rms = std::sqrt(sq / d.n), d.in_pos /= d.n, d.in_att /= d.n;
+		return d;
+	};
+	std::string md;
+	double ratio_sum = 0, ratio_max = 0, in_pos = 0, in_att = 0;
+	std::size_t n_runs = 0, samples = 0;
+	for (std::size_t i = 0; i < runs.size(); ++i)
+	{
+		if (!fs::exists(fs::path(runs[i]) / "smoothed_states.csv")) continue;
+		const Evaluation sm = evaluate(runs[i], truths.size() == 1 ? truths[0] : truths[i], every_s, "smoothed_states.csv");
+		const Dive f = dive(filtered[i]), s = dive(sm);
+		if (!f.n || !s.n) continue;
+		if (md.empty())
+		{
+			md = "| run | dive samples | filtered RMS [m] | smoothed RMS [m] | ratio | smoothed NEES pos / att in 95 % | "
+				 "filtered NEES pos / att in 95 % |\n|---|---|---|---|---|---|---|\n";
+			const auto& ss = sm.samples;
+			const auto& fs_ = filtered[i].samples;
+			const double t0 = std::min(ss.front().t, fs_.front().t);
+			std::vector<double> tf, ts;
+			for (const auto& x : fs_) tf.push_back((x.t - t0) / 60);
+			for (const auto& x : ss) ts.push_back((x.t - t0) / 60);
+			Plot p("Horizontal position error: filtered, smoothed (2 sigma band: smoothed)", "time [min]", "[m]");
+			std::vector<double> zero(ss.size(), 0.0);
+			p.band(ts, zero, col(ss, [](const Sample& x) { return 2 * std::sqrt(x.P_pos(0, 0) + x.P_pos(1, 1)); }), kGrey,
+				   "2 sigma smoothed");
+			p.line(tf, col(fs_, [](const Sample& x) { return x.pos_err_ned.head<2>().norm(); }), kRed, "filtered");
+			p.line(ts, col(ss, [](const Sample& x) { return x.pos_err_ned.head<2>().norm(); }), kBlue, "smoothed");
+			p.save((out / "smoothed_vs_filtered.png").string());
+			figures.push_back("smoothed_vs_filtered.png");
+		}
+		char row[400];
+		std::snprintf(row, sizeof row, "| %s | %zu | %.3f | %.3f | %.3f | %.1f / %.1f %% | %.1f / %.1f %% |\n",
+					  runs[i].c_str(), s.n, f.rms, s.rms, s.rms / f.rms, 100 * s.in_pos, 100 * s.in_att, 100 * f.in_pos,
+					  100 * f.in_att);
+		md += row;
+		ratio_sum += s.rms / f.rms;
+		ratio_max = std::max(ratio_max, s.rms / f.rms);
+		in_pos += s.in_pos * s.n, in_att += s.in_att * s.n;
+		samples += s.n;
+		++n_runs;
+	}
+	if (!n_runs) return "";
+	char tail[300];
+	std::snprintf(tail, sizeof tail,
+				  "\nSmoothed/filtered dive RMS: mean %.3f, worst %.3f over %zu run(s); smoothed NEES inside the 95 %% "
+				  "bounds over the dive: position %.1f %%, attitude %.1f %%.\n",
+				  ratio_sum / n_runs, ratio_max, n_runs, 100 * in_pos / samples, 100 * in_att / samples);
+	return "## Filtered vs smoothed (auvnav-run --smooth)\n\n" + md + tail;
+}
+
+std::string errorAt(const std::string& run, const std::string& truth, double after_start_s, const std::string& file)
+{
+	const auto s = sampleAt(run, truth, after_start_s, file);
+	if (!s) throw std::runtime_error(run + "/" + file + ": no state with truth at or after " + std::to_string(after_start_s) + " s");
 	char line[256];
 	std::snprintf(line, sizeof line, "Horizontal error at %.3f s after the truth's start: %.6f m (state at %.6f)\n",
 				  after_start_s, s->pos_err_ned.head<2>().norm(), s->t);
@@ -247,6 +323,7 @@ int main(int argc, char** argv)
 	TCLAP::ValueArg<std::string> out("o", "out", "Output folder", true, "", "DIR", cmd);
 	TCLAP::ValueArg<double> every("", "every", "Seconds between evaluated samples", false, 1.0, "S", cmd);
 	TCLAP::ValueArg<double> settle("", "settle", "Monte Carlo: also report the NEES fractions from S seconds after the start (after the initial alignment)", false, 0.0, "S", cmd);
+	TCLAP::SwitchArg smoothed("", "smoothed", "Evaluate the runs' smoothed_states.csv (auvnav-run --smooth) instead of states.csv; without it, a run that has one also gets a filtered-vs-smoothed table and figure", cmd);
 	TCLAP::ValueArg<double> at("", "at", "Also report the first run's horizontal error at the first state S seconds or more after the truth's first row (as auvnav-experiment measures it: give it initialization_s + denial_s; needs a state per prediction, e.g. auvnav-run --set outputs.rate_hz=1000)", false, NAN, "S", cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-eval")) return *code;
 	try
@@ -260,11 +337,16 @@ int main(int argc, char** argv)
 		fs::create_directories(out.getValue());
 		std::vector<Evaluation> evs;
 		for (std::size_t i = 0; i < r.size(); ++i)
-			evs.push_back(evaluate(r[i], tr.size() == 1 ? tr[0] : tr[i], every.getValue()));
+			evs.push_back(evaluate(r[i], tr.size() == 1 ? tr[0] : tr[i], every.getValue(),
+								   smoothed.getValue() ? "smoothed_states.csv" : "states.csv"));
 		std::vector<std::string> figures;
 		std::string md = "# Evaluation of " + r.front() + "\n\n" + singleRun(evs.front(), out.getValue(), figures);
 		if (evs.size() > 1) md += "\n## Monte Carlo\n\n" + monteCarlo(evs, settle.getValue(), out.getValue(), figures);
-		if (!std::isnan(at.getValue())) md += "\n" + errorAt(r.front(), tr.front(), at.getValue());
+		if (!smoothed.getValue())
+			if (const std::string cmp = smoothedComparison(r, tr, evs, every.getValue(), out.getValue(), figures); !cmp.empty())
+				md += "\n" + cmp;
+		if (!std::isnan(at.getValue()))
+			md += "\n" + errorAt(r.front(), tr.front(), at.getValue(), smoothed.getValue() ? "smoothed_states.csv" : "states.csv");
 		md += "\nFigures:";
 		for (const auto& f : figures) md += " " + f;
 		md += "\n";

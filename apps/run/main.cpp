@@ -14,6 +14,7 @@
 
 #include "live_view.h"
 #include "run_outputs.h"
+#include "smooth_outputs.h"
 
 namespace
 {
@@ -47,6 +48,11 @@ int main(int argc, char** argv)
 	TCLAP::SwitchArg view("", "view", "Live MRPT 3D window of the run (needs a display; xvfb-run works)", cmd);
 	TCLAP::ValueArg<double> view_hold("", "view-hold", "With --view: keep the window S seconds after the run (0: until a key)",
 									  false, 0, "S", cmd);
+	TCLAP::SwitchArg smooth("", "smooth",
+							"Also smooth the run (unscented RTS, backward over the whole run): DIR/smoothed_trajectory.tum, "
+							"DIR/smoothed_states.csv, DIR/smoother.json; the forward pass records DIR/smoother/stretches.bin "
+							"(smoother.keep_every_s)",
+							cmd);
 	const auvnav::cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-run")) return *code;
 	auvnav::obs::registerAllClasses();
@@ -100,6 +106,12 @@ int main(int argc, char** argv)
 		cfg.checkAllKeysUsed();	 // the navigator checked its sections; this adds plugin_paths and outputs
 		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
 															   nav->storedStateNames(), write_updates);
+		if (smooth.getValue())
+		{
+			const std::string file = auvnav::run::stretchFileOf(out.getValue());
+			std::filesystem::create_directories(std::filesystem::path(file).parent_path());
+			nav->enableSmoothing(file);
+		}
 	}
 	catch (const std::exception& e)
 	{
@@ -194,8 +206,30 @@ int main(int argc, char** argv)
 	}
 
 	const double data_s = nav->time() - nav->startTime();
-	std::printf("auvnav-run: %.1f s of data in %.2f s (%.0fx real time)%s\n", data_s, wall(), data_s / wall(),
-				g_stop ? " [interrupted]" : "");
+	const double forward_wall_s = wall();
+	std::printf("auvnav-run: %.1f s of data in %.2f s (%.0fx real time)%s\n", data_s, forward_wall_s,
+				data_s / forward_wall_s, g_stop ? " [interrupted]" : "");
+	std::string smooth_error = nav->smootherError();
+	if (smooth.getValue() && smooth_error.empty())
+	{
+		if (g_stop)
+			std::printf("  smoothing: not run (interrupted); auvnav-smooth %s smooths what was recorded\n",
+						out.getValue().c_str());
+		else if (!nav->initialized())
+			std::printf("  smoothing: nothing to smooth (the filter never started)\n");
+		else
+			try
+			{
+				const auto r = auvnav::run::smoothRun(out.getValue());
+				std::printf("  smoothing: %zu estimates (%zu smoothed, %zu segment ends, %zu kept filtered) in %.2f s; "
+							"stretch file %.1f MB\n",
+							r.rows, r.smoothed, r.segment_ends, r.kept, r.wall_s, r.stretch_bytes / 1e6);
+			}
+			catch (const std::exception& e)
+			{
+				smooth_error = e.what();
+			}
+	}
 	std::printf("  %-10s %-14s %9s %9s %8s %8s %8s %8s  %s\n", "sensor", "plugin", "accepted", "rejected", "invalid",
 				"skipped", "denied", "recov.", "NIS/dim");
 	for (const auto& s : nav->stats())
@@ -222,6 +256,7 @@ int main(int argc, char** argv)
 				health.reason().empty() ? "" : (health.reason() + ")").c_str());
 	std::fflush(stdout);
 	if (!error.empty()) return cli::fail("auvnav-run", error);
+	if (!smooth_error.empty()) return cli::fail("auvnav-run", "smoothing: " + smooth_error);
 	// Exit codes (cli.h, README): a signal first (the outputs are partial
 	// whatever the status), then the status: 0 ok or degraded, 3 never
 	// initialised, 4 diverged.

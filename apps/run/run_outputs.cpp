@@ -47,13 +47,7 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 	fixes_ = io::LineFile(file("position_fixes.csv"));
 	fixes_.line("time_s,label,north_m,east_m,status");
 	tum_.line("# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav-run)");
-	std::string header = "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
-	for (std::size_t i = 3; i < stored_names_.size(); ++i) header += ',' + stored_names_[i];
-	header += ",body_n_m,body_e_m,body_d_m";
-	for (const auto& n : names_) header += ",sigma_" + n;
-	// Off-diagonal covariances of position and attitude (for NEES in auvnav-eval).
-	header += ",cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed";
-	csv_.line(header);
+	csv_.line(statesCsvHeader(names_, stored_names_));
 	nis_ = io::LineFile(file("nis.csv"));
 	nis_.line("time_s,label,updates,nis_sum,dim_sum");
 	health_ = io::LineFile(file("health.csv"));
@@ -136,16 +130,20 @@ void RunOutputs::onPositionFix(const std::string& label, double t, const Measure
 	fixes_.flush();  // rare (GPS, USBL), and what a person watching a run reads
 }
 
-void RunOutputs::onState(const Navigator& nav)
+std::string statesCsvHeader(const std::vector<std::string>& tangent_names, const std::vector<std::string>& stored_names)
 {
-	const double t = nav.time();
-	if (t < last_t_) last_t_ = -1e300;	// the clock went back (a jump, clock.on_jump: reinitialize)
-	if (t - last_t_ < period_s_ - 1e-9) return;
-	last_t_ = t;
-	const NavState& x = nav.filter().state();
+	std::string header = "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
+	for (std::size_t i = 3; i < stored_names.size(); ++i) header += ',' + stored_names[i];
+	header += ",body_n_m,body_e_m,body_d_m";
+	for (const auto& n : tangent_names) header += ",sigma_" + n;
+	// Off-diagonal covariances of position and attitude (for NEES in auvnav-eval).
+	header += ",cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed";
+	return header;
+}
+
+void formatTumRow(std::string& s, double t, const NavState& x, const Eigen::Vector3d& p)
+{
 	const Eigen::Quaterniond q(x.R_nb);
-	const Eigen::Vector3d p = nav.bodyPosition_n();
-	std::string& s = row_;
 	s.clear();
 	appendFixed(s, t, 6);  // TUM: "%.6f" time and position, "%.9f" quaternion
 	for (double v : {p.x(), p.y(), p.z()})
@@ -158,7 +156,12 @@ void RunOutputs::onState(const Navigator& nav)
 		s.push_back(' ');
 		appendFixed(s, v, 9);
 	}
-	tum_.line(s);
+}
+
+void formatStatesRow(std::string& s, double t, const NavState& x, const Eigen::Vector3d& p, const double* sigma,
+					 const double* cov_offdiag)
+{
+	const Eigen::Quaterniond q(x.R_nb);
 	const Eigen::Matrix3d& R = x.R_nb;
 	const double roll = std::atan2(R(2, 1), R(2, 2)) * kRad2Deg;
 	const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0)) * kRad2Deg;
@@ -171,11 +174,32 @@ void RunOutputs::onState(const Navigator& nav)
 	const TangentVector e = x.euclidean();
 	for (int i = 3; i < e.size(); ++i) appendG10(s, e[i]);
 	for (double v : {p.x(), p.y(), p.z()}) appendG10(s, v);
-	const auto& P = nav.filter().covariance();
-	for (int i = 0; i < P.rows(); ++i) appendG10(s, std::sqrt(std::max(P(i, i), 0.0)));
+	for (int i = 0; i < x.dim(); ++i) appendG10(s, sigma[i]);
+	for (int i = 0; i < 6; ++i) appendG10(s, cov_offdiag[i]);
+}
+
+void sigmaAndOffDiagonals(const Covariance& P, double* sigma, double* cov_offdiag)
+{
+	for (int i = 0; i < P.rows(); ++i) sigma[i] = std::sqrt(std::max(P(i, i), 0.0));
+	int k = 0;
 	for (int b : {idx::pos, idx::att})
-		for (double v : {P(b, b + 1), P(b, b + 2), P(b + 1, b + 2)}) appendG10(s, v);
-	csv_.line(s);
+		for (double v : {P(b, b + 1), P(b, b + 2), P(b + 1, b + 2)}) cov_offdiag[k++] = v;
+}
+
+void RunOutputs::onState(const Navigator& nav)
+{
+	const double t = nav.time();
+	if (t < last_t_) last_t_ = -1e300;	// the clock went back (a jump, clock.on_jump: reinitialize)
+	if (t - last_t_ < period_s_ - 1e-9) return;
+	last_t_ = t;
+	const NavState& x = nav.filter().state();
+	const Eigen::Vector3d p = nav.bodyPosition_n();
+	formatTumRow(row_, t, x, p);
+	tum_.line(row_);
+	double sigma[idx::max_dim], cov[6];
+	sigmaAndOffDiagonals(nav.filter().covariance(), sigma, cov);
+	formatStatesRow(row_, t, x, p, sigma, cov);
+	csv_.line(row_);
 	++rows_;
 }
 

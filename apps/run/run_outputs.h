@@ -36,6 +36,16 @@
 
 namespace auvnav::run
 {
+/** states.csv's header row (also smoothed_states.csv's). */
+std::string statesCsvHeader(const std::vector<std::string>& tangent_names, const std::vector<std::string>& stored_names);
+/** A trajectory.tum row (no newline) for time t, attitude of x and body-origin position p [m, NED]. */
+void formatTumRow(std::string& row, double t, const NavState& x, const Eigen::Vector3d& p);
+/** A states.csv row: x, body position p, x.dim() σ and the six off-diagonal
+ *  position/attitude covariances (sigmaAndOffDiagonals). */
+void formatStatesRow(std::string& row, double t, const NavState& x, const Eigen::Vector3d& p, const double* sigma,
+					 const double* cov_offdiag);
+void sigmaAndOffDiagonals(const Covariance& P, double* sigma, double* cov_offdiag);
+
 class RunOutputs
 {
    public:

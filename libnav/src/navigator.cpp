@@ -118,6 +118,7 @@ struct Navigator::History
 		Covariance P;
 		Eigen::Vector3d omega_ib_b, alpha_b;
 		std::vector<Gate> gates;
+		std::optional<SmoothingRecorder::Snapshot> smoother;
 	};
 	std::deque<Event> events;
 	std::size_t first = 0;	// absolute index of events.front()
@@ -231,6 +232,12 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		imu.fail("max_gap_s", "must not exceed clock.max_forward_jump_s (" + std::to_string(max_forward_jump_s_) +
 								  " s): longer steps are clock jumps, not gaps");
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
+	if (cfg.has("smoother"))
+	{
+		const auto sm = cfg.child("smoother");
+		sm.allowOnly({"keep_every_s"});
+		smoother_keep_every_s_ = sm.inRange("keep_every_s", 0.005, 3600, smoother_keep_every_s_);
+	}
 	if (cfg.has("gates"))
 	{
 		const auto g = cfg.child("gates");
@@ -592,6 +599,11 @@ void Navigator::clockJump(double t, double dt)
 	// Start again from this sample: levelling, then the first fix, as at the start.
 	++clock_jumps_;
 	imu_stats_.last_problem = std::string(what) + "; re-initialised";
+	if (smoother_ && initialized_)
+	{
+		smoother_->endSegment(*ukf_, t_s_);
+		smoother_->commit(std::numeric_limits<std::size_t>::max());	// the checkpoints go below
+	}
 	initialized_ = false;
 	leveling_samples_ = 0;
 	leveling_start_s_ = -1;
@@ -614,7 +626,14 @@ void Navigator::propagate(const Eigen::Vector3d& w, double t)
 	const double dt = t - t_s_;
 	// A gap: predict in steps no longer than the nominal limit with the new rate.
 	const int steps = dt > max_gap_s_ ? static_cast<int>(std::ceil(dt / 0.01)) : 1;
-	for (int i = 0; i < steps; ++i) ukf_->predict(w, earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero(), dt / steps);
+	const Eigen::Vector3d omega_ie_n = earth_rate_ ? frame_->earthRate() : Eigen::Vector3d::Zero();
+	for (int i = 0; i < steps; ++i)
+	{
+		if (smoother_)
+			smoother_->predict(*ukf_, w, omega_ie_n, dt / steps, t_s_ + i * (dt / steps));
+		else
+			ukf_->predict(w, omega_ie_n, dt / steps);
+	}
 	// Angular acceleration: first-order low-pass of the gyro's derivative.
 	alpha_b_ += ((w - omega_ib_b_) / dt - alpha_b_) * (dt / (alpha_tau_s_ + dt));
 	t_s_ = t;
@@ -634,6 +653,7 @@ void Navigator::checkpointIfDue(std::size_t event)
 	c.alpha_b = alpha_b_;
 	c.gates.reserve(slots_.size());
 	for (const auto& slot : slots_) c.gates.push_back({slot->rejecting_since_s, slot->streak, slot->fix_run});
+	if (smoother_) c.smoother = smoother_->snapshot();
 	cps.push_back(std::move(c));
 }
 
@@ -649,6 +669,26 @@ void Navigator::trimHistory()
 		H.events.pop_front();
 		++H.first;
 	}
+	commitSmoother();
+}
+
+void Navigator::commitSmoother()
+{
+	if (!smoother_) return;
+	// Records from before the oldest checkpoint can no longer be rewound.
+	const bool can_rewind = history_ && !history_->checkpoints.empty() && history_->checkpoints.front().smoother;
+	smoother_->commit(can_rewind ? history_->checkpoints.front().smoother->emitted
+								 : std::numeric_limits<std::size_t>::max());
+}
+
+void Navigator::enableSmoothing(const std::string& path)
+{
+	StretchFileHeader h;
+	h.n = ukf_->dim();
+	h.imu_position_b = imu_position_b_;
+	h.tangent_names = state_names_;
+	h.stored_names = stored_names_;
+	smoother_ = std::make_unique<SmoothingRecorder>(path, h, smoother_keep_every_s_);
 }
 
 void Navigator::restoreLastCheckpoint()
@@ -658,6 +698,7 @@ void Navigator::restoreLastCheckpoint()
 	t_s_ = c.t_s;
 	omega_ib_b_ = c.omega_ib_b;
 	alpha_b_ = c.alpha_b;
+	if (smoother_ && c.smoother) smoother_->restore(*c.smoother);
 	for (std::size_t i = 0; i < slots_.size(); ++i)
 	{
 		slots_[i]->rejecting_since_s = c.gates[i].rejecting_since_s;
@@ -770,6 +811,8 @@ bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, co
 	// Move onto the newest (the older innovations were taken against a state
 	// recovery steps have moved since) and forget what the position was
 	// correlated with, as at the start.
+	// The smoother does not carry information across the reset (smoother_stream.h).
+	if (smoother_) smoother_->endSegment(*ukf_, t_s_);
 	NavState x = ukf_->state();
 	Covariance P = ukf_->covariance();
 	x.p_n.head<2>() += nu;
@@ -819,6 +862,14 @@ std::string Navigator::waitingFor() const
 void Navigator::finish()
 {
 	if (!initialized_) health_.setNotInitialized(waitingFor());
+	if (smoother_ && initialized_) try
+		{
+			smoother_->finish(*ukf_, t_s_);
+		}
+		catch (const std::exception& e)	 // a full disk: the filter's run stands, the smoothing cannot
+		{
+			smoother_error_ = e.what();
+		}
 }
 
 FilterContext Navigator::context(double t_obs) const

@@ -5,12 +5,16 @@
 // covariances in correlation units, max_ij |ΔP_ij|/√(P_ii P_jj).
 #include <auvnav/measurement_model.h>
 #include <auvnav/smoother.h>
+#include <auvnav/smoother_stream.h>
 #include <auvnav/so3.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <array>
+#include <filesystem>
+#include <fstream>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -732,4 +736,150 @@ TEST(SmootherStretches, StretchesAreConsistentOverTwentySeeds)
 	EXPECT_LT(sum.nees_per_tick / n, 6.0);
 	EXPECT_GT(sum.nees_stretches / n, 2.0);
 	EXPECT_NEAR(sum.nees_stretches / n, sum.nees_per_tick / n, 0.05 * sum.nees_per_tick / n);
+}
+
+namespace
+{
+/** The stretches of seed 11 written to a stretch file as the navigator
+ *  does (smoother_stream.h), the final estimate as the segment end; a
+ *  segment end after stretch `break_after` if given. */
+std::string writeStretchFile(const Recorded& rec, const std::string& name, int break_after = -1)
+{
+	const std::string path = (std::filesystem::temp_directory_path() / name).string();
+	StretchFileHeader h;
+	h.n = rec.fast_end.dim();
+	h.tangent_names.assign(h.n, "t");
+	h.stored_names.assign(h.n, "s");
+	StretchWriter w(path, h);
+	for (std::size_t i = 0; i < rec.stretches.size(); ++i)
+	{
+		StretchRecord r;
+		r.stretch = rec.stretches[i];
+		w.write(r);
+		if (static_cast<int>(i) == break_after)
+		{
+			StretchRecord end;
+			end.ends_segment = true;
+			end.stretch.t_s = rec.stretches[i + 1].t_s;
+			end.stretch.x_filtered = rec.stretches[i + 1].x_filtered;
+			end.stretch.P_filtered = rec.stretches[i + 1].P_filtered;
+			w.write(end);
+		}
+	}
+	StretchRecord end;
+	end.ends_segment = true;
+	end.stretch.t_s = rec.t_end;
+	end.stretch.x_filtered = rec.fast_end;
+	end.stretch.P_filtered = rec.fast_end_P;
+	w.write(end);
+	w.flush();
+	return path;
+}
+
+struct FileRow
+{
+	double t;
+	NavState x;
+	Covariance P;
+	SmoothedKind kind;
+};
+std::vector<FileRow> smoothFile(const std::string& path, BackwardPassSummary* sum = nullptr)
+{
+	std::vector<FileRow> rows;
+	const auto s = smoothStretchFile(path, [&](double t, const NavState& x, const Covariance& P, SmoothedKind k) {
+		rows.push_back({t, x, P, k});
+	});
+	if (sum) *sum = s;
+	std::reverse(rows.begin(), rows.end());
+	return rows;
+}
+}  // namespace
+
+TEST(SmootherStream, StretchFileGivesTheInMemoryPass)
+{
+	Recorded rec;
+	rec.keep_every = 10;
+	runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), {}, {}, &rec);
+	ASSERT_EQ(rec.stretches.size(), 20u);
+	const std::string path = writeStretchFile(rec, "auvnav_test_stretches.bin");
+	BackwardPassSummary sum;
+	const auto rows = smoothFile(path, &sum);
+	ASSERT_EQ(rows.size(), 21u);
+	EXPECT_EQ(sum.smoothed, 20u);
+	EXPECT_EQ(sum.segment_ends, 1u);
+	EXPECT_FALSE(sum.partial_tail);
+	// In memory, the same recursion (compareStretches): equal but for the
+	// file's symmetrised triangles.
+	NavState x_s = rec.fast_end, x_f = rec.fast_end;
+	Covariance P_s = rec.fast_end_P, P_f = rec.fast_end_P;
+	double worst_mean = 0, worst_cov = 0;
+	for (std::size_t i = rec.stretches.size(); i-- > 0;)
+	{
+		NavState x;
+		Covariance P;
+		ASSERT_TRUE(rtsStretchBackward(rec.stretches[i], x_f, P_f, x_s, P_s, x, P));
+		EXPECT_EQ(rows[i].t, rec.stretches[i].t_s);
+		EXPECT_EQ(rows[i].kind, SmoothedKind::Smoothed);
+		const Eigen::VectorXd d = rows[i].x.boxminus(x).array() / P.diagonal().array().sqrt();
+		worst_mean = std::max(worst_mean, d.cwiseAbs().maxCoeff());
+		worst_cov = std::max(worst_cov, test::covDiff(rows[i].P, P));
+		x_s = x, P_s = P, x_f = rec.stretches[i].x_filtered, P_f = rec.stretches[i].P_filtered;
+	}
+	std::printf("stretch file vs in memory: mean %.2e sd, cov %.2e (corr.)\n", worst_mean, worst_cov);
+	EXPECT_LT(worst_mean, 1e-9);
+	EXPECT_LT(worst_cov, 1e-9);
+	// The smoothed position σ at the start is below the filtered one.
+	EXPECT_LT(rows[0].P(idx::pos, idx::pos), rec.stretches[0].P_filtered(idx::pos, idx::pos));
+
+	// A run cut short inside its last record (kill -9): the whole records
+	// before it are smoothed, the last whole one is the end.
+	const auto full = std::filesystem::file_size(path);
+	std::filesystem::resize_file(path, full - stretchRecordBytes(rec.fast_end.dim()) / 2);
+	const auto cut = smoothFile(path, &sum);
+	EXPECT_TRUE(sum.partial_tail);
+	ASSERT_EQ(cut.size(), 20u);
+	EXPECT_EQ(cut.back().kind, SmoothedKind::SegmentEnd);
+	EXPECT_LT(cut.back().x.boxminus(rec.stretches.back().x_filtered).norm(), 1e-12);
+	EXPECT_EQ(cut[0].kind, SmoothedKind::Smoothed);
+	std::filesystem::remove(path);
+}
+
+TEST(SmootherStream, NoSmoothingAcrossASegmentEnd)
+{
+	Recorded rec;
+	rec.keep_every = 10;
+	runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), {}, {}, &rec);
+	const std::string whole = writeStretchFile(rec, "auvnav_test_whole.bin");
+	const std::string split = writeStretchFile(rec, "auvnav_test_split.bin", 9);
+	const auto a = smoothFile(whole), b = smoothFile(split);
+	ASSERT_EQ(b.size(), a.size() + 1);
+	// After the break: the same pass. At it: the filtered estimate.
+	for (std::size_t i = 10; i < a.size(); ++i) EXPECT_LT(b[i + 1].x.boxminus(a[i].x).norm(), 1e-12) << i;
+	EXPECT_EQ(b[10].kind, SmoothedKind::SegmentEnd);
+	EXPECT_LT(b[10].x.boxminus(rec.stretches[10].x_filtered).norm(), 1e-12);
+	EXPECT_LT(test::covDiff(b[10].P, rec.stretches[10].P_filtered), 1e-14);
+	// Before it, smoothing uses nothing after the break: the stretch before
+	// ends on the filtered estimate, so its result differs from the whole pass's.
+	EXPECT_EQ(b[9].kind, SmoothedKind::Smoothed);
+	EXPECT_GT((b[9].P - a[9].P).diagonal().maxCoeff(), 0.0);
+	std::filesystem::remove(whole);
+	std::filesystem::remove(split);
+}
+
+TEST(SmootherStream, RefusesWhatIsNotAStretchFile)
+{
+	const std::string path = (std::filesystem::temp_directory_path() / "auvnav_not_stretches.bin").string();
+	std::ofstream(path) << "not a stretch file at all";
+	try
+	{
+		StretchReader r(path);
+		FAIL() << "read a text file as stretches";
+	}
+	catch (const std::runtime_error& e)
+	{
+		EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("not an auvnav stretch file"), std::string::npos) << e.what();
+	}
+	std::filesystem::remove(path);
+	EXPECT_THROW(StretchReader("/nonexistent/auvnav/stretches.bin"), std::runtime_error);
 }

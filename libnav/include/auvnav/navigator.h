@@ -67,6 +67,7 @@
 #include <auvnav/fix_consensus.h>
 #include <auvnav/health.h>
 #include <auvnav/plugin_host.h>
+#include <auvnav/smoother_stream.h>
 #include <auvnav/ukf.h>
 #include <mrpt/obs/CObservation.h>
 
@@ -164,6 +165,17 @@ class Navigator
 	/** Position of the body origin (CG) and attitude, from the IMU state. */
 	Eigen::Vector3d bodyPosition_n() const;
 
+	/** Records the run for the RTS smoother (smoother_stream.h): one
+	 *  stretch per `smoother.keep_every_s` of filter time (default 1 s) to
+	 *  the stretch file at `path`. Call before the first observation; the
+	 *  file is complete after finish(). Throws std::runtime_error if the
+	 *  file cannot be created. */
+	void enableSmoothing(const std::string& path);
+	const SmoothingRecorder* smoothingRecorder() const { return smoother_.get(); }
+	double smootherKeepEvery_s() const { return smoother_keep_every_s_; }
+	//! Why the smoother's file could not be finished in finish() (empty: it was).
+	const std::string& smootherError() const { return smoother_error_; }
+
 	/** Adds a data-denial window (as the config's `denial` list does). */
 	void addDenial(const DenialWindow& w) { denial_.push_back(w); }
 
@@ -240,6 +252,11 @@ class Navigator
 	double apply_now_within_s_ = 0.05, max_delay_s_ = 10, checkpoint_every_s_ = 0.25;
 	std::unique_ptr<History> history_;
 	std::size_t replayed_predictions_ = 0;
+	std::unique_ptr<SmoothingRecorder> smoother_;  // enableSmoothing
+	double smoother_keep_every_s_ = 1.0;			// smoother.keep_every_s
+	std::string smoother_error_;
+	/** Writes the smoother's records no re-filtering can rewind any more. */
+	void commitSmoother();
 	// clock: jumps of the IMU's time beyond these are not predicted through.
 	double max_forward_jump_s_ = 10, max_backward_jump_s_ = 1;
 	bool stop_on_jump_ = true;
