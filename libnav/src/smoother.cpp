@@ -3,6 +3,7 @@
 #include <auvnav/so3.h>
 
 #include <Eigen/Cholesky>
+#include <array>
 
 namespace auvnav
 {
@@ -76,43 +77,100 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	current_.t_s = t_s;
 	current_.x_filtered = ukf.state();
 	current_.P_filtered = ukf.covariance();
-	current_.M = Covariance::Identity(n, n);
-	current_.M_mean = Covariance::Identity(n, n);
 	current_.sum_dx = TangentVector::Zero(n);
 	current_.sum_dP = Covariance::Zero(n, n);
+	X_ = ukf.covariance();	// M = I
+	X_mean_ = X_;
+	repairs_at_begin_ = ukf.choleskyRepairs();
 	open_ = true;
 	predicted_ = false;
 }
 
-void RtsStretchRecorder::foldUpdates(const ManifoldUkf& ukf)
+void RtsStretchRecorder::onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
+								   const ProcessModel& model, const StepDecay& step)
 {
-	// Tick t's updates: dx_t = x_t ⊟ x⁻_t and ΔP_t = P⁻_t − P_t, carried back by M_t.
+	if (!open_) return;
+	// X ← X⁺ Fᵀ with F = [D L11⁻¹, 0; 0, A_rest] (ukf.h StepObserver): the
+	// first k columns X_{:,1:k} L11⁻ᵀ Dᵀ, the others as A scales P's rows.
+	const int k = static_cast<int>(L11.rows()), n = static_cast<int>(X_.rows());
+	for (Covariance* X : {&X_, &X_mean_})
+	{
+		scratch_ = X->transpose();
+		model.applyLinearRows(scratch_, step);
+		Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, idx::max_dim> Y = X->leftCols(k);
+		L11.triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(Y);
+		X->leftCols(k).noalias() = Y * D.transpose();
+		X->rightCols(n - k) = scratch_.bottomRows(n - k).transpose();
+	}
+}
+
+void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
+								  const Eigen::Ref<const Eigen::MatrixXd>& W)
+{
+	if (!open_ || current_.broken) return;
+	const int k = static_cast<int>(B.rows());
+	// M W = X P⁻¹ W = X_{:,1:k} B (and the same for the mean's M).
+	const Eigen::MatrixXd MW = X_.leftCols(k) * B, MmW = X_mean_.leftCols(k) * B;
+	current_.sum_dx.noalias() += MmW * u;
+	current_.sum_dP.noalias() += MW * MW.transpose();
+	X_.noalias() -= MW * W.transpose();
+	X_mean_.noalias() -= MmW * W.transpose();
+}
+
+void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
+{
+	if (!open_ || current_.broken) return;
+	// M itself is unchanged (X P⁻¹ before); X follows P, and the change
+	// enters the sums as an update's would.
+	const Eigen::LLT<Covariance> llt(P_before);
+	if (llt.info() != Eigen::Success)
+	{
+		current_.broken = true;
+		return;
+	}
+	const Covariance M = llt.solve(X_.transpose()).transpose(), Mm = llt.solve(X_mean_.transpose()).transpose();
+	current_.sum_dx.noalias() += Mm * dx;
+	scratch_.noalias() = M * (P_before - P_after);
+	current_.sum_dP.noalias() += scratch_ * M.transpose();
+	X_.noalias() = M * P_after;
+	X_mean_.noalias() = Mm * P_after;
+}
+
+void RtsStretchRecorder::foldTransport(const ManifoldUkf& ukf)
+{
 	if (!predicted_) return;
-	const NavState& x = ukf.state();
-	const TangentVector dx = x.boxminus(x_predicted_);
-	current_.sum_dx.noalias() += current_.M_mean * dx;
-	scratch_.noalias() = current_.M * (P_predicted_ - ukf.covariance());
-	current_.sum_dP.noalias() += scratch_ * current_.M.transpose();
-	// M_mean ← M_mean T_t on the columns where T_t is not the identity:
-	// attitude (velocity, acceleration and currents turn with it) and the
-	// accelerometer bias (kept in IMU axes). Central differences at a step
-	// far below any σ and far above rounding.
+	predicted_ = false;
+	if (current_.broken) return;
+	// M_mean ← M_mean T_t, T_t = I + E on the columns where T_t is not the
+	// identity: attitude (velocity, acceleration and currents turn with it)
+	// and the accelerometer bias (kept in IMU axes); central differences at
+	// a step far below any σ and far above rounding. On X_mean = M_mean P:
+	// X_mean += (M_mean E) P, M_mean E = X_mean P⁻¹ E (six columns).
 	constexpr double kEps = 1e-6;
+	const NavState& x = ukf.state();
+	const Covariance& P = ukf.covariance();
 	const int n = x.dim();
-	Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> T(n, 6);
+	Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> E(n, 6);
 	TangentVector e = TangentVector::Zero(n);
+	std::array<int, 6> cols{};
 	int c = 0;
 	for (int first : {static_cast<int>(idx::att), static_cast<int>(idx::acc_bias)})
 		for (int i = first; i < first + 3; ++i, ++c)
 		{
 			e[i] = kEps;
-			T.col(c) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
+			E.col(c) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
+			E(i, c) -= 1;
 			e[i] = 0;
+			cols[c] = i;
 		}
-	const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> MT = current_.M_mean * T;
-	current_.M_mean.middleCols<3>(idx::att) = MT.leftCols<3>();
-	current_.M_mean.middleCols<3>(idx::acc_bias) = MT.rightCols<3>();
-	predicted_ = false;
+	const Eigen::LLT<Covariance> llt(P);
+	if (llt.info() != Eigen::Success)
+	{
+		current_.broken = true;
+		return;
+	}
+	const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> ME = X_mean_ * llt.solve(E);
+	for (int j = 0; j < 6; ++j) X_mean_.noalias() += ME.col(j) * P.row(cols[j]);
 }
 
 bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
@@ -123,31 +181,29 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 		ukf.predict(omega_ib_b, omega_ie_n, dt_s);
 		return true;
 	}
-	foldUpdates(ukf);
-	ukf.predict(omega_ib_b, omega_ie_n, dt_s, &P_cross_);
+	foldTransport(ukf);
+	ukf.setStepObserver(this);
+	ukf.predict(omega_ib_b, omega_ie_n, dt_s);
 	x_predicted_ = ukf.state();
-	P_predicted_ = ukf.covariance();
 	predicted_ = true;
 	++current_.ticks;
-	if (current_.broken) return false;	// the stretch keeps its filtered estimate anyway
-	const Eigen::LLT<Covariance> llt(P_predicted_);
-	if (llt.info() != Eigen::Success)
-	{
-		current_.broken = true;
-		return false;
-	}
-	G_ = rtsGain(llt, P_cross_);
-	scratch_.noalias() = current_.M * G_;
-	current_.M.swap(scratch_);
-	scratch_.noalias() = current_.M_mean * G_;
-	current_.M_mean.swap(scratch_);
-	return true;
+	if (ukf.choleskyRepairs() != repairs_at_begin_) current_.broken = true;
+	return !current_.broken;
 }
 
 RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 {
-	foldUpdates(ukf);
+	foldTransport(ukf);
 	RtsStretch done = std::move(current_);
+	// A repaired P is not a Bayesian step: the stretch keeps its filtered estimate.
+	if (ukf.choleskyRepairs() != repairs_at_begin_) done.broken = true;
+	const Eigen::LLT<Covariance> llt(ukf.covariance());
+	if (llt.info() != Eigen::Success) done.broken = true;
+	if (!done.broken)
+	{
+		done.M = llt.solve(X_.transpose()).transpose();	// M = X P⁻¹ (P symmetric)
+		done.M_mean = llt.solve(X_mean_.transpose()).transpose();
+	}
 	begin(ukf, t_s);
 	return done;
 }

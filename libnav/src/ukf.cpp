@@ -207,7 +207,11 @@ void ManifoldUkf::setSigmaLimits(const TangentVector& min_sigma, const TangentVe
 
 void ManifoldUkf::applySigmaLimits()
 {
-	if (min_sigma_.size() == n_) sigma_limit_hits_ += static_cast<std::size_t>(limitSigmas(P_, min_sigma_, max_sigma_));
+	if (min_sigma_.size() != n_) return;
+	if (observer_) P_before_ = P_;
+	const int hits = limitSigmas(P_, min_sigma_, max_sigma_);
+	sigma_limit_hits_ += static_cast<std::size_t>(hits);
+	if (observer_ && hits) observer_->onOtherChange(P_before_, P_, TangentVector::Zero(n_));
 }
 
 void ManifoldUkf::repairCovariance()
@@ -357,6 +361,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
+	if (observer_) observer_->onPredict(L_.topLeftCorner(k, k), D_pairs, model_, step);
 	applySigmaLimits();
 	mean.R_nb = so3::normalized(mean.R_nb);
 	x_ = mean;
@@ -501,6 +506,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	res.nis = nu.dot(llt.solve(nu));
 	res.innovation = nu;
 	const double gate = chiSquareQuantile(m, model.gateProbability());
+	bool inflated = false;	// P widened along the correction (Recovery::State)
 	if (res.nis > gate)
 	{
 		if (recovery == Recovery::None)
@@ -521,6 +527,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			const double beta = inflationAlongCorrection(llt, nu, Si_nu, u, gate);
 			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
 			{
+				if (observer_) P_before_ = P_;	// the whole update is reported as one change
+				inflated = true;
 				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
 				const TangentVector v = std::sqrt(beta) * dx0;	 // v vᵀ: exactly symmetric
 				P_.noalias() += v * v.transpose();
@@ -545,10 +553,23 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// stays exactly symmetric: no symmetrize pass).
 	Eigen::MatrixXd W = Pxz;
 	llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);
-	const TangentVector dx = W * llt.matrixL().solve(nu);
+	const Eigen::VectorXd u = llt.matrixL().solve(nu);
+	const TangentVector dx = W * u;
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
 	downdateSymmetric(P_, W);
+	if (observer_)
+	{
+		if (inflated)
+			observer_->onOtherChange(P_before_, P_, dx);
+		else
+		{
+			// P⁻¹ W = P⁻¹ L_{:,1:k} Dᵀ L_S⁻ᵀ = [L11⁻ᵀ (L_S⁻¹ D)ᵀ; 0].
+			Eigen::MatrixXd B = llt.matrixL().solve(D).transpose();
+			L_.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace(B);
+			observer_->onUpdate(B, u, W);
+		}
+	}
 	applySigmaLimits();
 	return res;
 }

@@ -883,3 +883,51 @@ TEST(SmootherStream, RefusesWhatIsNotAStretchFile)
 	std::filesystem::remove(path);
 	EXPECT_THROW(StretchReader("/nonexistent/auvnav/stretches.bin"), std::runtime_error);
 }
+
+// The recorder's general path (a change of P reported as a whole: sigma
+// limits, a recovery's inflation; an n³ solve) against its factored update
+// path, fed the same rank-m update: the same stretch.
+TEST(SmootherStretches, AChangeReportedWholeEqualsTheFactoredUpdate)
+{
+	ProcessModel pm = test::makeProcessModel();
+	const NavState x0 = test::makeState(0.3);
+	const Covariance P0 = test::correlatedCovariance(test::makeSigmas(Eigen::Vector3d(4, 3, 6) * kDeg), 5);
+	ManifoldUkf ukf(pm, UtParams{});
+	ukf.initialize(x0, P0);
+	RtsStretchRecorder factored, whole;
+	factored.begin(ukf, 0.0);
+	whole.begin(ukf, 0.0);
+	for (RtsStretchRecorder* r : {&factored, &whole})
+	{
+		ManifoldUkf copy = ukf;
+		r->predict(copy, Eigen::Vector3d(0.01, -0.02, 0.03), Eigen::Vector3d::Zero(), 0.01);
+	}
+	ManifoldUkf after = ukf;
+	after.predict(Eigen::Vector3d(0.01, -0.02, 0.03), Eigen::Vector3d::Zero(), 0.01);
+	const Covariance& P = after.covariance();
+	const int n = P.rows(), k = 13, m = 3;
+	std::mt19937 rng(7);
+	std::normal_distribution<double> N01;
+	Eigen::MatrixXd Bk(k, m);
+	for (int i = 0; i < k; ++i)
+		for (int j = 0; j < m; ++j) Bk(i, j) = 0.3 * N01(rng);
+	const Eigen::MatrixXd W = P.leftCols(k) * Bk;	// P⁻¹ W = [Bk; 0]
+	Eigen::VectorXd u(m);
+	u << 0.5, -1.0, 0.2;
+	const TangentVector dx = W * u;
+	factored.onUpdate(Bk, u, W);
+	const Covariance P_after = P - W * W.transpose();
+	whole.onOtherChange(P, P_after, dx);
+	NavState x_after = after.state().boxplus(dx);
+	ManifoldUkf closing = after;
+	closing.restore(x_after, P_after);
+	const RtsStretch a = factored.close(closing, 0.01), b = whole.close(closing, 0.01);
+	ASSERT_FALSE(a.broken);
+	ASSERT_FALSE(b.broken);
+	EXPECT_LT((a.M - b.M).cwiseAbs().maxCoeff(), 1e-9 * a.M.cwiseAbs().maxCoeff());
+	EXPECT_LT((a.M_mean - b.M_mean).cwiseAbs().maxCoeff(), 1e-9 * a.M_mean.cwiseAbs().maxCoeff());
+	EXPECT_LT((a.sum_dx - b.sum_dx).norm(), 1e-9 * a.sum_dx.norm());
+	EXPECT_LT((a.sum_dP - b.sum_dP).cwiseAbs().maxCoeff(), 1e-9 * a.sum_dP.cwiseAbs().maxCoeff());
+	EXPECT_GT(a.sum_dP.diagonal().maxCoeff(), 0.0);	 // the update is there at all
+	(void)n;
+}

@@ -99,27 +99,51 @@ struct RtsStretch
 };
 
 /** Forward bookkeeping for RtsStretch: call predict() in place of the
- *  filter's, and close() at a kept tick (after its updates). Each tick costs
- *  a Cholesky solve of P⁻ and two n × n × n products (docs/smoother.md). */
-class RtsStretchRecorder
+ *  filter's, and close() at a kept tick (after its updates).
+ *
+ *  It keeps, as the filter runs, X = M P (the cross covariance of x_k with
+ *  the current state: a clone of x_k carried through the filter by
+ *  statistical linearisation, whose regression on the current state is M)
+ *  and X_mean = M_mean P, from the factors the filter already has
+ *  (StepObserver): a prediction moves X's first k columns by L11⁻ᵀ Dᵀ and
+ *  scales the rest; an update is X −= (M W) Wᵀ with M W = X_{:,1:k} B,
+ *  Σ M dx += (M_mean W) u and Σ M ΔP Mᵀ += (M W)(M W)ᵀ. M = X P⁻¹ is solved
+ *  once per kept tick. Per tick that is O(n k²) for the prediction and
+ *  O(n² m) per update, plus one Cholesky of P for the correction transport,
+ *  instead of the O(n³) gain products of the per-tick recursion; the
+ *  result is the same (tested against it, SmootherStretches.*). A change
+ *  of P reported otherwise (sigma limits, a recovery's inflation) costs an
+ *  n³ solve. A stretch during which the filter repaired its covariance,
+ *  or whose P is not positive definite when it closes, is `broken`.
+ *
+ *  The recorder registers itself as the filter's StepObserver in
+ *  predict(); it must stay at the same address while the filter runs. */
+class RtsStretchRecorder : public StepObserver
 {
    public:
 	/** Opens the first stretch at the filter's current estimate. */
 	void begin(const ManifoldUkf& ukf, double t_s);
 	bool open() const { return open_; }
-	/** ukf.predict(...), with the tick's gain and its updates folded in.
-	 *  False if P⁻ was not positive definite (the stretch is then marked
-	 *  broken: it keeps the filtered estimate when smoothed). */
+	/** ukf.predict(...), with the tick's updates folded in. False if the
+	 *  stretch is broken (it keeps the filtered estimate when smoothed). */
 	bool predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
 	/** Ends the stretch at the filter's current estimate (tick k′, after its
 	 *  updates), returns it and opens the next one there. */
 	RtsStretch close(const ManifoldUkf& ukf, double t_s);
 
+	void onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
+				   const ProcessModel& model, const StepDecay& step) override;
+	void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
+				  const Eigen::Ref<const Eigen::MatrixXd>& W) override;
+	void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) override;
+
    private:
-	void foldUpdates(const ManifoldUkf& ukf);
+	/** The tick's correction transport T_t applied to M_mean (X_mean). */
+	void foldTransport(const ManifoldUkf& ukf);
 	RtsStretch current_;
 	NavState x_predicted_;
-	Covariance P_predicted_, P_cross_, G_, scratch_;
+	Covariance X_, X_mean_, scratch_;
+	std::size_t repairs_at_begin_ = 0;
 	bool open_ = false, predicted_ = false;
 };
 

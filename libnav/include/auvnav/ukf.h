@@ -123,6 +123,31 @@ void repairCovariance(Covariance& P, const TangentVector& variance_floor);
  *  meaning. Returns how many states were moved. */
 int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVector& max_sigma);
 
+/** What an RTS smoother's forward bookkeeping needs of each filter step
+ *  (smoother.h, RtsStretchRecorder): the statistical linearisation the
+ *  filter used, in the factored form it already has, so that the
+ *  bookkeeping costs O(n² m) per update instead of O(n³). Each call comes at
+ *  the end of the step it describes. */
+class StepObserver
+{
+   public:
+	virtual ~StepObserver() = default;
+	/** predict(): L11 is the leading k × k block of the prior P's Cholesky
+	 *  factor L and D the k × k inertial pair differences, so that the cross
+	 *  covariance's first k columns are L_{:,1:k} Dᵀ (the prediction's
+	 *  effective transition on the first k states is D L11⁻¹); the rows k… of
+	 *  the transition are model.applyLinearRows(·, step). */
+	virtual void onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
+						   const ProcessModel& model, const StepDecay& step) = 0;
+	/** update(): the correction dx = W u and P ← P − W Wᵀ, with
+	 *  P⁻¹ W = [B; 0] (B: k × m, P the covariance before the update). */
+	virtual void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
+						  const Eigen::Ref<const Eigen::MatrixXd>& W) = 0;
+	/** Any other change of P (sigma limits, a recovery's inflation with its
+	 *  update) and of the mean by dx (tangent at the mean before). */
+	virtual void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) = 0;
+};
+
 class ManifoldUkf
 {
    public:
@@ -164,6 +189,10 @@ class ManifoldUkf
 	std::size_t sigmaLimitHits() const { return sigma_limit_hits_; }
 
 	std::size_t choleskyRepairs() const { return repairs_; }
+	/** Reports every predict and update from now on (nullptr: none, the
+	 *  default); restore() is not reported. Not owned; a copy of the filter
+	 *  reports to the same observer. */
+	void setStepObserver(StepObserver* observer) { observer_ = observer; }
 	const UtWeights& weights() const { return w_; }
 	const ProcessModel& processModel() const { return model_; }
 	const UtParams& utParams() const { return ut_; }
@@ -191,6 +220,8 @@ class ManifoldUkf
 	std::size_t sigma_limit_hits_ = 0;
 	void applySigmaLimits();
 	TangentVector variance_floor_;	// 1e-12 × the initial variances (repairCovariance)
+	StepObserver* observer_ = nullptr;
+	Covariance P_before_;  // scratch: P before a change reported as onOtherChange
 };
 
 }  // namespace auvnav
