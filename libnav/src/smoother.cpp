@@ -70,6 +70,17 @@ std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const
 	return out;
 }
 
+namespace
+{
+//! The columns where the correction transport T_t is not the identity:
+//! attitude (velocity, acceleration and currents turn with it) and the
+//! accelerometer bias (kept in IMU axes).
+//! The prediction's nonlinear (sigma-point) block: the states before the ADCP bias (ukf.cpp).
+constexpr int kNonlinearStates = idx::adcp_bias;
+constexpr std::array<int, 6> kTransportColumns{idx::att,	  idx::att + 1,		 idx::att + 2,
+											   idx::acc_bias, idx::acc_bias + 1, idx::acc_bias + 2};
+}  // namespace
+
 void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 {
 	const int n = ukf.dim();
@@ -79,42 +90,61 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	current_.P_filtered = ukf.covariance();
 	current_.sum_dx = TangentVector::Zero(n);
 	current_.sum_dP = Covariance::Zero(n, n);
-	X_ = ukf.covariance();	// M = I
-	X_mean_ = X_;
+	XX_.resize(2 * n, n);
+	XX_.topRows(n) = ukf.covariance();	// M = I
+	XX_.bottomRows(n) = ukf.covariance();
 	repairs_at_begin_ = ukf.choleskyRepairs();
 	open_ = true;
-	predicted_ = false;
+	predicted_ = transport_pending_ = false;
 }
 
-void RtsStretchRecorder::onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
+void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
 								   const ProcessModel& model, const StepDecay& step)
 {
-	if (!open_) return;
-	// X ← X⁺ Fᵀ with F = [D L11⁻¹, 0; 0, A_rest] (ukf.h StepObserver): the
-	// first k columns X_{:,1:k} L11⁻ᵀ Dᵀ, the others as A scales P's rows.
-	const int k = static_cast<int>(L11.rows()), n = static_cast<int>(X_.rows());
-	for (Covariance* X : {&X_, &X_mean_})
+	if (!open_ || current_.broken) return;
+	const int k = static_cast<int>(D.rows()), n = static_cast<int>(L.rows());
+	if (!full || k != kNonlinearStates)
 	{
-		scratch_ = X->transpose();
-		model.applyLinearRows(scratch_, step);
-		Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, idx::max_dim> Y = X->leftCols(k);
-		L11.triangularView<Eigen::Lower>().transpose().solveInPlace<Eigen::OnTheRight>(Y);
-		X->leftCols(k).noalias() = Y * D.transpose();
-		X->rightCols(n - k) = scratch_.bottomRows(n - k).transpose();
+		current_.broken = true;	// P not positive definite: no gain
+		return;
 	}
+	if (transport_pending_)
+	{
+		// P⁻¹ E = L⁻ᵀ L⁻¹ E; P's rows at the six columns from L (row c of L has c + 1 entries).
+		SixColumns S = E_;
+		L.triangularView<Eigen::Lower>().solveInPlace(S);
+		L.triangularView<Eigen::Lower>().transpose().solveInPlace(S);
+		scratch_.resize(6, n);
+		for (int j = 0; j < 6; ++j)
+		{
+			const int c = kTransportColumns[j];
+			scratch_.row(j).noalias() = L.row(c).head(c + 1) * L.leftCols(c + 1).transpose();
+		}
+		const SixColumns ME = XX_.bottomRows(n) * S;
+		XX_.bottomRows(n).noalias() += ME * scratch_.topRows(6);
+		transport_pending_ = false;
+	}
+	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
+	// StepObserver): the first k columns times L11⁻ᵀ Dᵀ, the others scaled.
+	Eigen::Matrix<double, kNonlinearStates, kNonlinearStates> F = D;  // F L11 = D
+	L.topLeftCorner(k, k).triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(F);
+	const Stacked Y = XX_.leftCols(k) * F.transpose();
+	XX_.leftCols(k) = Y;
+	TangentVector a = TangentVector::Ones(n);
+	model.applyLinearRows(a, step);	 // rows k… only scale: their factors
+	XX_.rightCols(n - k) *= a.tail(n - k).asDiagonal();
 }
 
 void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
 								  const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	if (!open_ || current_.broken) return;
-	const int k = static_cast<int>(B.rows());
-	// M W = X P⁻¹ W = X_{:,1:k} B (and the same for the mean's M).
-	const Eigen::MatrixXd MW = X_.leftCols(k) * B, MmW = X_mean_.leftCols(k) * B;
-	current_.sum_dx.noalias() += MmW * u;
-	current_.sum_dP.noalias() += MW * MW.transpose();
-	X_.noalias() -= MW * W.transpose();
-	X_mean_.noalias() -= MmW * W.transpose();
+	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
+	// M W = X P⁻¹ W = X_{:,1:k} B, for X and X_mean at once.
+	const Eigen::MatrixXd MW = XX_.leftCols(k) * B;
+	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
+	current_.sum_dP.noalias() += MW.topRows(n) * MW.topRows(n).transpose();
+	XX_.noalias() -= MW * W.transpose();
 }
 
 void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
@@ -122,55 +152,42 @@ void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covaria
 	if (!open_ || current_.broken) return;
 	// M itself is unchanged (X P⁻¹ before); X follows P, and the change
 	// enters the sums as an update's would.
+	const int n = static_cast<int>(P_before.rows());
 	const Eigen::LLT<Covariance> llt(P_before);
 	if (llt.info() != Eigen::Success)
 	{
 		current_.broken = true;
 		return;
 	}
-	const Covariance M = llt.solve(X_.transpose()).transpose(), Mm = llt.solve(X_mean_.transpose()).transpose();
+	const Covariance M = llt.solve(XX_.topRows(n).transpose()).transpose(),
+					 Mm = llt.solve(XX_.bottomRows(n).transpose()).transpose();
 	current_.sum_dx.noalias() += Mm * dx;
 	scratch_.noalias() = M * (P_before - P_after);
 	current_.sum_dP.noalias() += scratch_ * M.transpose();
-	X_.noalias() = M * P_after;
-	X_mean_.noalias() = Mm * P_after;
+	XX_.topRows(n).noalias() = M * P_after;
+	XX_.bottomRows(n).noalias() = Mm * P_after;
 }
 
-void RtsStretchRecorder::foldTransport(const ManifoldUkf& ukf)
+void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf)
 {
 	if (!predicted_) return;
 	predicted_ = false;
-	if (current_.broken) return;
-	// M_mean ← M_mean T_t, T_t = I + E on the columns where T_t is not the
-	// identity: attitude (velocity, acceleration and currents turn with it)
-	// and the accelerometer bias (kept in IMU axes); central differences at
-	// a step far below any σ and far above rounding. On X_mean = M_mean P:
-	// X_mean += (M_mean E) P, M_mean E = X_mean P⁻¹ E (six columns).
+	// T_t = ∂/∂b [(x_t ⊞ b) ⊟ x⁻_t] at b = 0 on its six columns, by central
+	// differences at a step far below any σ and far above rounding; E = T − I.
 	constexpr double kEps = 1e-6;
 	const NavState& x = ukf.state();
-	const Covariance& P = ukf.covariance();
 	const int n = x.dim();
-	Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> E(n, 6);
+	E_.resize(n, 6);
 	TangentVector e = TangentVector::Zero(n);
-	std::array<int, 6> cols{};
-	int c = 0;
-	for (int first : {static_cast<int>(idx::att), static_cast<int>(idx::acc_bias)})
-		for (int i = first; i < first + 3; ++i, ++c)
-		{
-			e[i] = kEps;
-			E.col(c) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
-			E(i, c) -= 1;
-			e[i] = 0;
-			cols[c] = i;
-		}
-	const Eigen::LLT<Covariance> llt(P);
-	if (llt.info() != Eigen::Success)
+	for (int j = 0; j < 6; ++j)
 	{
-		current_.broken = true;
-		return;
+		const int i = kTransportColumns[j];
+		e[i] = kEps;
+		E_.col(j) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
+		E_(i, j) -= 1;
+		e[i] = 0;
 	}
-	const Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> ME = X_mean_ * llt.solve(E);
-	for (int j = 0; j < 6; ++j) X_mean_.noalias() += ME.col(j) * P.row(cols[j]);
+	transport_pending_ = true;
 }
 
 bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
@@ -181,7 +198,7 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 		ukf.predict(omega_ib_b, omega_ie_n, dt_s);
 		return true;
 	}
-	foldTransport(ukf);
+	takeTransport(ukf);
 	ukf.setStepObserver(this);
 	ukf.predict(omega_ib_b, omega_ie_n, dt_s);
 	x_predicted_ = ukf.state();
@@ -193,7 +210,8 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 
 RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 {
-	foldTransport(ukf);
+	takeTransport(ukf);
+	const int n = ukf.dim();
 	RtsStretch done = std::move(current_);
 	// A repaired P is not a Bayesian step: the stretch keeps its filtered estimate.
 	if (ukf.choleskyRepairs() != repairs_at_begin_) done.broken = true;
@@ -201,8 +219,14 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 	if (llt.info() != Eigen::Success) done.broken = true;
 	if (!done.broken)
 	{
-		done.M = llt.solve(X_.transpose()).transpose();	// M = X P⁻¹ (P symmetric)
-		done.M_mean = llt.solve(X_mean_.transpose()).transpose();
+		if (transport_pending_)
+		{
+			const Covariance& P = ukf.covariance();
+			const SixColumns ME = XX_.bottomRows(n) * llt.solve(E_);
+			for (int j = 0; j < 6; ++j) XX_.bottomRows(n).noalias() += ME.col(j) * P.row(kTransportColumns[j]);
+		}
+		done.M = llt.solve(XX_.topRows(n).transpose()).transpose();	 // M = X P⁻¹ (P symmetric)
+		done.M_mean = llt.solve(XX_.bottomRows(n).transpose()).transpose();
 	}
 	begin(ukf, t_s);
 	return done;

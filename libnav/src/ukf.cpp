@@ -61,10 +61,12 @@ void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
  *  sizes (k ≤ 25, n = 43). Rows above the diagonal are zeroed (sigma points
  *  read whole columns). False if P's leading k×k block is not positive
  *  definite (columns of L partly written). */
-bool choleskyColumns(const Covariance& P, int k, Covariance& L)
+/** Columns [from, to) of the lower Cholesky factor of P, the columns
+ *  before `from` already in L; false if P is not positive definite there. */
+bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L)
 {
 	const Eigen::Index n = P.rows();
-	for (Eigen::Index j = 0; j < k; ++j)
+	for (Eigen::Index j = from; j < to; ++j)
 	{
 		L.col(j).head(j).setZero();
 		auto Lj = L.col(j).tail(n - j);
@@ -226,7 +228,7 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 	if (L_.rows() != n) L_.setZero(n, n);
 	for (int attempt = 0; attempt < 2; ++attempt)
 	{
-		if (choleskyColumns(P_, k, L_)) return;
+		if (choleskyColumns(P_, 0, k, L_)) return;
 		repairCovariance();
 	}
 	// Still not PD after repair (pathological): fall back to the diagonal.
@@ -240,6 +242,9 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	constexpr int k = kNonlinear;
 	const int n = n_;
 	leadingCholeskyColumns(k);
+	// The observer (a smoother) also needs P's inverse: the remaining columns,
+	// without a repair (the filter must not change because it is observed).
+	const bool full_factor = observer_ && choleskyColumns(P_, k, n, L_);
 	const double g = w_.gamma;
 	// Only sigma points along the first k Cholesky columns move the inertial
 	// block; the other 2(n−k) share the centre's propagation of that block.
@@ -361,7 +366,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
-	if (observer_) observer_->onPredict(L_.topLeftCorner(k, k), D_pairs, model_, step);
+	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits();
 	mean.R_nb = so3::normalized(mean.R_nb);
 	x_ = mean;

@@ -131,20 +131,26 @@ class RtsStretchRecorder : public StepObserver
 	 *  updates), returns it and opens the next one there. */
 	RtsStretch close(const ManifoldUkf& ukf, double t_s);
 
-	void onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
-				   const ProcessModel& model, const StepDecay& step) override;
+	void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D, const ProcessModel& model,
+				   const StepDecay& step) override;
 	void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
 				  const Eigen::Ref<const Eigen::MatrixXd>& W) override;
 	void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) override;
 
    private:
-	/** The tick's correction transport T_t applied to M_mean (X_mean). */
-	void foldTransport(const ManifoldUkf& ukf);
+	using Stacked = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * idx::max_dim, idx::max_dim>;
+	using SixColumns = Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6>;
+	/** The tick's correction transport T_t = I + E (six columns) for
+	 *  M_mean, taken after the tick's updates; applied by the next
+	 *  prediction (which factors P anyway) or by close(). */
+	void takeTransport(const ManifoldUkf& ukf);
 	RtsStretch current_;
 	NavState x_predicted_;
-	Covariance X_, X_mean_, scratch_;
+	Stacked XX_;  // [X; X_mean], 2n × n
+	SixColumns E_;
+	Covariance scratch_;
 	std::size_t repairs_at_begin_ = 0;
-	bool open_ = false, predicted_ = false;
+	bool open_ = false, predicted_ = false, transport_pending_ = false;
 };
 
 /** One backward step over a stretch, from the filtered and smoothed

@@ -132,12 +132,14 @@ class StepObserver
 {
    public:
 	virtual ~StepObserver() = default;
-	/** predict(): L11 is the leading k × k block of the prior P's Cholesky
-	 *  factor L and D the k × k inertial pair differences, so that the cross
-	 *  covariance's first k columns are L_{:,1:k} Dᵀ (the prediction's
-	 *  effective transition on the first k states is D L11⁻¹); the rows k… of
-	 *  the transition are model.applyLinearRows(·, step). */
-	virtual void onPredict(const Eigen::Ref<const Eigen::MatrixXd>& L11, const Eigen::Ref<const Eigen::MatrixXd>& D,
+	/** predict(): L is the prior P's lower Cholesky factor (n × n; only its
+	 *  first k columns unless `full`, P not positive definite past them) and
+	 *  D the k × k inertial pair differences, so that the cross covariance's
+	 *  first k columns are L_{:,1:k} Dᵀ (the prediction's effective
+	 *  transition on the first k states is D L11⁻¹, L11 = L's leading k × k
+	 *  block); the rows k… of the transition only scale (diagonal), as
+	 *  model.applyLinearRows(·, step) does. */
+	virtual void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
 						   const ProcessModel& model, const StepDecay& step) = 0;
 	/** update(): the correction dx = W u and P ← P − W Wᵀ, with
 	 *  P⁻¹ W = [B; 0] (B: k × m, P the covariance before the update). */
