@@ -17,7 +17,8 @@
 
 int main(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd("MRPT 3D view of an auvnav-run output folder: trajectory, ground truth, 2-sigma ellipsoids, "
+	TCLAP::CmdLine cmd("MRPT 3D view of an auvnav-run output folder: trajectory (blue; the smoothed one orange when "
+					   "the run has smoothed_states.csv), ground truth, 2-sigma ellipsoids, "
 					   "vehicle, position fixes of every fix sensor (GPS, USBL: accepted in the sensor's colour, the first "
 					   "yellow, the second cyan; rejected magenta), seabed.",
 					   ' ', "0.1.0");
@@ -41,8 +42,8 @@ int main(int argc, char** argv)
 		if (!(every.getValue() > 0)) throw std::runtime_error("--ellipsoid-every must be positive");
 		opt.ellipsoid_every_s = every.getValue();
 		const auto scene = auvnav::view::buildScene(data, opt);
-		std::printf("auvnav-view: %zu states, %zu truth rows, %zu position fixes\n", data.estimate.size(),
-					data.truth.size(), data.fixes.size());
+		std::printf("auvnav-view: %zu states, %zu smoothed, %zu truth rows, %zu position fixes\n", data.estimate.size(),
+					data.smoothed.size(), data.truth.size(), data.fixes.size());
 		if (!save.getValue().empty())
 		{
 			if (!scene->saveToFile(save.getValue())) throw std::runtime_error("cannot write " + save.getValue());

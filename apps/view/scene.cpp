@@ -41,10 +41,13 @@ mrpt::opengl::CSetOfLines::Ptr strip(const std::vector<TrackPoint>& pts, const u
 }
 }  // namespace
 
-RunData loadRun(const std::string& dir)
+namespace
 {
-	RunData run;
-	io::CsvTable csv((fs::path(dir) / "states.csv").string());
+/** Positions, attitudes and position σ of a states.csv-format file. */
+std::vector<TrackPoint> loadStates(const fs::path& file)
+{
+	std::vector<TrackPoint> out;
+	io::CsvTable csv(file.string());
 	const std::size_t t = csv.column("time_s"), qw = csv.column("qw"), qx = csv.column("qx"), qy = csv.column("qy"),
 					  qz = csv.column("qz"), n = csv.column("body_n_m"), e = csv.column("body_e_m"),
 					  d = csv.column("body_d_m"), sn = csv.column("sigma_pos_n"), se = csv.column("sigma_pos_e"),
@@ -57,9 +60,18 @@ RunData loadRun(const std::string& dir)
 		p.p_ned = {csv.number(n), csv.number(e), csv.number(d)};
 		p.sigma_ned = {csv.number(sn), csv.number(se), csv.number(sd)};
 		if (!p.p_ned.allFinite()) throw std::runtime_error(csv.where() + ": non-finite position");
-		run.estimate.push_back(p);
+		out.push_back(p);
 	}
-	if (run.estimate.empty()) throw std::runtime_error(csv.file() + ": no states");
+	if (out.empty()) throw std::runtime_error(csv.file() + ": no states");
+	return out;
+}
+}  // namespace
+
+RunData loadRun(const std::string& dir)
+{
+	RunData run;
+	run.estimate = loadStates(fs::path(dir) / "states.csv");
+	if (fs::exists(fs::path(dir) / "smoothed_states.csv")) run.smoothed = loadStates(fs::path(dir) / "smoothed_states.csv");
 	const fs::path fixes = fs::path(dir) / "position_fixes.csv";
 	if (fs::exists(fixes))
 	{
@@ -134,6 +146,12 @@ mrpt::opengl::COpenGLScene::Ptr buildScene(const RunData& run, const SceneOption
 	auto est = strip(run.estimate, kEstimateRgb, 3);
 	est->setName("estimate");
 	scene->insert(est);
+	if (!run.smoothed.empty())
+	{
+		auto sm = strip(run.smoothed, kSmoothedRgb, 3);
+		sm->setName("smoothed");
+		scene->insert(sm);
+	}
 
 	// 2σ position ellipsoids along the way.
 	double next_t = -1e300;

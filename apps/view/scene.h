@@ -37,10 +37,11 @@ struct PositionFix
 struct RunData
 {
 	std::vector<TrackPoint> estimate, truth;
+	std::vector<TrackPoint> smoothed;  //!< smoothed_states.csv (auvnav-run --smooth), empty if none
 	std::vector<PositionFix> fixes;
 };
 
-/** Reads DIR/trajectory.tum and, when present, DIR/states.csv (σ) and
+/** Reads DIR/states.csv and, when present, DIR/smoothed_states.csv and
  *  DIR/position_fixes.csv. Throws std::runtime_error naming file and line. */
 RunData loadRun(const std::string& dir);
 /** Reads an auvnav-sim ground_truth.csv (positions, attitude, seabed depth). */
@@ -52,10 +53,11 @@ struct SceneOptions
 	double ellipsoid_min_sigma_m = 0.05;
 };
 
-/** Colours, for tests and the legend: trajectory blue, truth green,
+/** Colours, for tests and the legend: trajectory blue, smoothed orange, truth green,
  *  ellipsoids red, GPS accepted yellow / rejected magenta. */
 inline constexpr unsigned char kEstimateRgb[3] = {30, 90, 255};
 inline constexpr unsigned char kTruthRgb[3] = {20, 200, 60};
+inline constexpr unsigned char kSmoothedRgb[3] = {255, 140, 0};  //!< the smoothed trajectory: orange
 
 mrpt::opengl::COpenGLScene::Ptr buildScene(const RunData& run, const SceneOptions& opt = {});
 

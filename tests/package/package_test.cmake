@@ -61,7 +61,7 @@ foreach(f
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_magnetometer.so ${LIBDIR}/auvnav/plugins/magnetometer.yaml
     ${LIBDIR}/auvnav/plugins/libauvnav_plugin_ahrs.so ${LIBDIR}/auvnav/plugins/ahrs.yaml
     bin/auvnav-calibrate-mag bin/auvnav-export bin/auvnav-import bin/auvnav-sonar bin/auvnav-eval
-    bin/auvnav-view bin/auvnav-experiment bin/auvnav-heading-plot
+    bin/auvnav-view bin/auvnav-experiment bin/auvnav-heading-plot bin/auvnav-smooth
     share/auvnav/sample/sample.rawlog share/auvnav/sample/ground_truth.csv share/auvnav/sample/ground_truth.tum
     share/auvnav/config/compass_hello.yaml share/auvnav/config/missions/compass_hello.yaml
     share/auvnav/examples/compass_plugin/CObservationCompass.h

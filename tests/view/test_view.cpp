@@ -4,6 +4,7 @@
 #include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CEllipsoid3D.h>
+#include <mrpt/opengl/CSetOfLines.h>
 
 #include <cmath>
 #include <filesystem>
@@ -121,4 +122,18 @@ TEST(View, BadRunFolderIsRefusedNamingTheFile)
 	{
 		EXPECT_NE(std::string(e.what()).find("states.csv:2"), std::string::npos) << e.what();
 	}
+}
+
+// A smoothed run (auvnav-run --smooth) is drawn beside the filtered one.
+TEST(View, ASmoothedTrajectoryIsDrawnBesideTheFilteredOne)
+{
+	RunData r = squareRun();
+	EXPECT_EQ(countNamed(*buildScene(r), "smoothed"), 0u);
+	for (std::size_t i = 0; i < r.estimate.size(); i += 10) r.smoothed.push_back(r.truth[i]);
+	const auto scene = buildScene(r);
+	EXPECT_EQ(countNamed(*scene, "smoothed"), 1u);
+	EXPECT_EQ(countNamed(*scene, "estimate"), 1u);
+	const auto lines = std::dynamic_pointer_cast<mrpt::opengl::CSetOfLines>(scene->getByName("smoothed"));
+	ASSERT_TRUE(lines);
+	EXPECT_EQ(lines->getLineCount(), r.smoothed.size() - 1);
 }
