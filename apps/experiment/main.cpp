@@ -61,6 +61,9 @@ struct Experiment
 	std::vector<unsigned> seeds;
 	std::vector<Configuration> configs;
 	double init_s = NAN, denial_s = NAN;  // denial_table
+	//! denial_table `smooth: true`: each run also smoothed (auvnav-run
+	//! --smooth's smoother); the error at mid-denial, filtered and smoothed.
+	bool smooth = false;
 	double from_s = NAN, min_gap_s = NAN;  // dvl_dropout
 	std::string dvl_label;
 };
@@ -80,6 +83,7 @@ Experiment loadExperiment(const std::string& file, int max_seeds)
 	{
 		e.init_s = ex.positive("initialization_s");
 		e.denial_s = ex.positive("denial_s");
+		e.smooth = ex.boolean("smooth", false);
 	}
 	else
 	{
@@ -103,14 +107,22 @@ Experiment loadExperiment(const std::string& file, int max_seeds)
 struct Outcome
 {
 	double error_m = NAN, two_sigma_m = NAN;
+	//! smooth: at the first kept tick at or after mid-denial, the filter's
+	//! and the smoother's horizontal error and the smoother's 2σ.
+	double mid_filtered_m = NAN, mid_smoothed_m = NAN, mid_smoothed_two_sigma_m = NAN;
 	bool inside() const { return error_m <= two_sigma_m; }
 };
+
+/** The kind line of a result: a smoothed denial table's numbers differ. */
+std::string resultKind(const Experiment& e) { return e.kind + (e.smooth ? " smoothed" : ""); }
+/** Numbers per configuration in a denial_table result. */
+std::size_t denialNumbers(const Experiment& e) { return e.smooth ? 5 : 2; }
 
 /** Runs the navigator on `rawlog` with the denial and returns the error and
  *  2σ at the end of the denial window: at the first prediction at or after
  *  it, against the truth interpolated there (io::at, as auvnav-eval does). */
 Outcome runDenial(const config::Node& nav_cfg, PluginHost& host, const fs::path& rawlog, const io::Trajectory& truth,
-				  const Configuration& c, double init_s, double denial_s)
+				  const Configuration& c, double init_s, double denial_s, const fs::path& stretch_file = {})
 {
 	Navigator nav(nav_cfg, host);
 	DenialWindow w;
@@ -118,9 +130,16 @@ Outcome runDenial(const config::Node& nav_cfg, PluginHost& host, const fs::path&
 	w.from_s = init_s;
 	w.to_s = init_s + denial_s;
 	nav.addDenial(w);
+	if (!stretch_file.empty()) nav.enableSmoothing(stretch_file.string());
 	const double t_eval = truth.front().t_unix + init_s + denial_s;
+	const double t_mid = truth.front().t_unix + init_s + 0.5 * denial_s;
 	Outcome o;
+	// The filter's error at each prediction from mid-denial until the
+	// smoother's next kept tick is certainly past (a kept tick is an IMU tick).
+	std::map<double, double> filtered_after_mid;
 	nav.on_predict = [&](const Navigator& n) {
+		if (!stretch_file.empty() && n.time() >= t_mid && n.time() <= t_mid + 2 * nav.smootherKeepEvery_s() + 1)
+			filtered_after_mid[n.time()] = (n.bodyPosition_n() - io::at(truth, n.time()).p_n).head<2>().norm();
 		if (!std::isnan(o.error_m) || n.time() < t_eval) return;
 		const auto tr = io::at(truth, n.time());
 		o.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
@@ -129,6 +148,20 @@ Outcome runDenial(const config::Node& nav_cfg, PluginHost& host, const fs::path&
 		o.two_sigma_m = 2 * std::sqrt(P(idx::pos, idx::pos) + P(idx::pos + 1, idx::pos + 1));
 	};
 	runRawlog(nav, rawlog.string()).rethrow();
+	if (stretch_file.empty()) return o;
+	if (!nav.smootherError().empty()) throw std::runtime_error(nav.smootherError());
+	// The backward pass, newest first: the last kept tick at or after mid-denial is the first one.
+	const Eigen::Vector3d lever_b = nav.imuPosition_b();
+	smoothStretchFile(stretch_file.string(), [&](double t, const NavState& x, const Covariance& P, SmoothedKind) {
+		if (t < t_mid) return;
+		const auto f = filtered_after_mid.find(t);
+		if (f == filtered_after_mid.end()) return;
+		const Eigen::Vector3d p_body = x.p_n - x.R_nb * lever_b;
+		o.mid_smoothed_m = (p_body - io::at(truth, t).p_n).head<2>().norm();
+		o.mid_filtered_m = f->second;
+		o.mid_smoothed_two_sigma_m = 2 * std::sqrt(P(idx::pos, idx::pos) + P(idx::pos + 1, idx::pos + 1));
+	});
+	fs::remove(stretch_file);
 	return o;
 }
 /** Position drift during DVL dropouts of one run: the horizontal error vector
@@ -199,7 +232,7 @@ void writeResult(const Experiment& e, const fs::path& out_dir, unsigned seed, co
 	const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
 	{
 		std::ofstream f(tmp);
-		f << "auvnav-experiment result 1\nkind " << e.kind << "\nseed " << seed << "\n";
+		f << "auvnav-experiment result 1\nkind " << resultKind(e) << "\nseed " << seed << "\n";
 		for (std::size_t i = 0; i < r.size(); ++i)
 		{
 			f << "configuration " << e.configs[i].name << "\n";
@@ -226,9 +259,9 @@ RunResult readResult(const Experiment& e, const fs::path& out_dir, unsigned seed
 	const auto bad = [&](const std::string& why) { return std::runtime_error(path.string() + ": " + why); };
 	std::string line;
 	if (!std::getline(f, line) || line != "auvnav-experiment result 1") throw bad("not an auvnav-experiment result");
-	if (!std::getline(f, line) || line != "kind " + e.kind) throw bad("not a " + e.kind + " result");
+	if (!std::getline(f, line) || line != "kind " + resultKind(e)) throw bad("not a " + resultKind(e) + " result");
 	if (!std::getline(f, line) || line != "seed " + std::to_string(seed)) throw bad("not the result of seed " + std::to_string(seed));
-	const std::size_t per_config = e.kind == "denial_table" ? 2 : 3;
+	const std::size_t per_config = e.kind == "denial_table" ? denialNumbers(e) : 3;
 	RunResult r;
 	for (const auto& c : e.configs)
 	{
@@ -258,10 +291,15 @@ void runSeed(const Experiment& e, PluginHost& host, unsigned seed, const fs::pat
 	{
 		if (e.kind == "denial_table")
 		{
-			const Outcome o = runDenial(e.nav_cfg, host, summary.rawlog_path, truth, c, e.init_s, e.denial_s);
+			const fs::path stretches = e.smooth ? dir / ("stretches_" + std::to_string(r.size()) + ".bin") : fs::path();
+			const Outcome o = runDenial(e.nav_cfg, host, summary.rawlog_path, truth, c, e.init_s, e.denial_s, stretches);
 			r.push_back({o.error_m, o.two_sigma_m});
-			std::printf("seed %2u  %-26s error %6.2f m   2 sigma %6.2f m\n", seed, c.name.c_str(), o.error_m,
+			if (e.smooth) r.back().insert(r.back().end(), {o.mid_filtered_m, o.mid_smoothed_m, o.mid_smoothed_two_sigma_m});
+			std::printf("seed %2u  %-26s error %6.2f m   2 sigma %6.2f m", seed, c.name.c_str(), o.error_m,
 						o.two_sigma_m);
+			if (e.smooth)
+				std::printf("   mid-denial %6.2f m filtered, %6.2f m smoothed", o.mid_filtered_m, o.mid_smoothed_m);
+			std::printf("\n");
 		}
 		else
 		{
@@ -314,6 +352,29 @@ void writeDenialTables(const Experiment& e, const std::vector<RunResult>& runs, 
 	}
 	md << "\n" << e.seeds.size() << " seeds of " << e.spec.name << "; denial of the listed sensors from " << e.init_s
 	   << " s to " << e.init_s + e.denial_s << " s; 2σ = 2·sqrt(σ_N² + σ_E²).\n";
+	if (e.smooth)
+	{
+		md << "\nSmoothed (`smooth: true`, the smoother of auvnav-run --smooth), at mid-denial ("
+		   << e.init_s + 0.5 * e.denial_s << " s, the first kept tick at or after it):\n\n"
+		   << "| Filter measurements used | filtered error (mean) | smoothed error (mean) | smoothed / filtered (of the "
+			  "means) | worst per-seed ratio | smoothed 2σ (mean) | smoothed inside 2σ |\n|---|---|---|---|---|---|---|\n";
+		for (std::size_t i = 0; i < e.configs.size(); ++i)
+		{
+			double f = 0, sm = 0, s2 = 0, worst = 0;
+			int inside = 0;
+			for (const auto& run : runs)
+			{
+				f += run[i][2], sm += run[i][3], s2 += run[i][4];
+				worst = std::max(worst, run[i][3] / run[i][2]);
+				inside += run[i][3] <= run[i][4];
+			}
+			const std::size_t n = runs.size();
+			char line[512];
+			std::snprintf(line, sizeof line, "| %s | %.2f m | %.2f m | %.2f | %.2f | %.2f m | %d/%zu |\n",
+						  e.configs[i].name.c_str(), f / n, sm / n, sm / f, worst, s2 / n, inside, n);
+			md << line;
+		}
+	}
 	std::ofstream(out_dir / "denial_table.md") << md.str();
 	std::cout << "\n" << md.str();
 }

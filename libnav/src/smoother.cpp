@@ -110,18 +110,29 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 	}
 	if (transport_pending_)
 	{
-		// P⁻¹ E = L⁻ᵀ L⁻¹ E; P's rows at the six columns from L (row c of L has c + 1 entries).
+		// P⁻¹ E = L⁻ᵀ L⁻¹ E by substitution (six right-hand sides: plain
+		// loops beat the blocked triangular solver at this size); P's rows
+		// at the six columns from L (row c of L has c + 1 entries).
 		SixColumns S = E_;
-		L.triangularView<Eigen::Lower>().solveInPlace(S);
-		L.triangularView<Eigen::Lower>().transpose().solveInPlace(S);
-		scratch_.resize(6, n);
+		for (int i = 0; i < n; ++i)
+		{
+			for (int l = 0; l < i; ++l) S.row(i) -= L(i, l) * S.row(l);
+			S.row(i) /= L(i, i);
+		}
+		for (int i = n; i-- > 0;)
+		{
+			for (int l = i + 1; l < n; ++l) S.row(i) -= L(l, i) * S.row(l);
+			S.row(i) /= L(i, i);
+		}
 		for (int j = 0; j < 6; ++j)
 		{
 			const int c = kTransportColumns[j];
-			scratch_.row(j).noalias() = L.row(c).head(c + 1) * L.leftCols(c + 1).transpose();
+			P_row_[j].noalias() = L.leftCols(c + 1) * L.row(c).head(c + 1).transpose();
 		}
-		const SixColumns ME = XX_.bottomRows(n) * S;
-		XX_.bottomRows(n).noalias() += ME * scratch_.topRows(6);
+		// X_mean += (X_mean S) P_{cols,:}: six gemv and six outer products.
+		ME_.resize(n, 6);
+		for (int j = 0; j < 6; ++j) ME_.col(j).noalias() = XX_.bottomRows(n) * S.col(j);
+		for (int j = 0; j < 6; ++j) XX_.bottomRows(n).noalias() += ME_.col(j) * P_row_[j].transpose();
 		transport_pending_ = false;
 	}
 	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
@@ -140,11 +151,16 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 {
 	if (!open_ || current_.broken) return;
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
-	// M W = X P⁻¹ W = X_{:,1:k} B, for X and X_mean at once.
-	const Eigen::MatrixXd MW = XX_.leftCols(k) * B;
-	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
-	current_.sum_dP.noalias() += MW.topRows(n) * MW.topRows(n).transpose();
-	XX_.noalias() -= MW * W.transpose();
+	// M W = X P⁻¹ W = X_{:,1:k} B, for X and X_mean at once; m is small
+	// (3 for most sensors): gemv and outer products, not the blocked kernel.
+	const int m = static_cast<int>(B.cols());
+	MW_.resize(2 * n, m);
+	for (int j = 0; j < m; ++j) MW_.col(j).noalias() = XX_.leftCols(k) * B.col(j);
+	current_.sum_dx.noalias() += MW_.bottomRows(n) * u;
+	// One pass over each matrix (they are swept per update): the lower
+	// triangle of Σ M ΔP Mᵀ (mirrored at close), and X, X_mean.
+	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_.topRows(n));
+	XX_.noalias() -= MW_.lazyProduct(W.transpose());
 }
 
 void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
@@ -213,6 +229,7 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 	takeTransport(ukf);
 	const int n = ukf.dim();
 	RtsStretch done = std::move(current_);
+	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();	// onUpdate kept the lower triangle
 	// A repaired P is not a Bayesian step: the stretch keeps its filtered estimate.
 	if (ukf.choleskyRepairs() != repairs_at_begin_) done.broken = true;
 	const Eigen::LLT<Covariance> llt(ukf.covariance());

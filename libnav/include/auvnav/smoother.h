@@ -32,6 +32,7 @@
 #include <auvnav/ukf.h>
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 namespace auvnav
@@ -147,7 +148,9 @@ class RtsStretchRecorder : public StepObserver
 	RtsStretch current_;
 	NavState x_predicted_;
 	Stacked XX_;  // [X; X_mean], 2n × n
-	SixColumns E_;
+	SixColumns E_, ME_;
+	std::array<TangentVector, 6> P_row_;
+	Eigen::MatrixXd MW_;  // an update's M W for X and X_mean (2n × m)
 	Covariance scratch_;
 	std::size_t repairs_at_begin_ = 0;
 	bool open_ = false, predicted_ = false, transport_pending_ = false;
