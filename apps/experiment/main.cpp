@@ -374,6 +374,9 @@ void writeDenialTables(const Experiment& e, const std::vector<RunResult>& runs, 
 						  e.configs[i].name.c_str(), f / n, sm / n, sm / f, worst, s2 / n, inside, n);
 			md << line;
 		}
+		md << "\nThe navigator's `smoother:` settings apply (across_recoveries: "
+		   << (e.nav_cfg.has("smoother") && e.nav_cfg.child("smoother").boolean("across_recoveries", false) ? "true" : "false")
+		   << "; false ends a segment before each recovery update).\n";
 	}
 	std::ofstream(out_dir / "denial_table.md") << md.str();
 	std::cout << "\n" << md.str();

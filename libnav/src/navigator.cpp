@@ -235,8 +235,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	if (cfg.has("smoother"))
 	{
 		const auto sm = cfg.child("smoother");
-		sm.allowOnly({"keep_every_s"});
+		sm.allowOnly({"keep_every_s", "across_recoveries"});
 		smoother_keep_every_s_ = sm.inRange("keep_every_s", 0.005, 3600, smoother_keep_every_s_);
+		smooth_across_recoveries_ = sm.boolean("across_recoveries", smooth_across_recoveries_);
 	}
 	if (cfg.has("gates"))
 	{
@@ -991,7 +992,10 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 			r.why = "position re-initialised onto agreeing rejected fixes";
 		}
 		else if (r.status == UpdateStatus::Rejected && recovery)
+		{
+			if (smoother_ && !smooth_across_recoveries_) smoother_->endSegment(*ukf_, t_s_);
 			r = ukf_->update(*slot.model, m, ctx, Recovery::Noise);
+		}
 		else if (r.status == UpdateStatus::Rejected && consistent_rejections_ > 0)
 		{
 			// Rejected but agreeing with the aid's previous rejections: the
@@ -1009,6 +1013,7 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 				// (Plugin states such as a heading bias widen with the state.)
 				constexpr uint32_t kAbsolute = kAttitude | kPosition | kGravity | kPluginStates;
 				const bool absolute = (slot.model->uses() & ~kAbsolute) == 0;
+				if (smoother_ && !smooth_across_recoveries_) smoother_->endSegment(*ukf_, t_s_);
 				r = ukf_->update(*slot.model, m, ctx, absolute ? Recovery::State : Recovery::Noise);
 			}
 		}

@@ -511,7 +511,6 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	res.nis = nu.dot(llt.solve(nu));
 	res.innovation = nu;
 	const double gate = chiSquareQuantile(m, model.gateProbability());
-	bool inflated = false;	// P widened along the correction (Recovery::State)
 	if (res.nis > gate)
 	{
 		if (recovery == Recovery::None)
@@ -532,8 +531,6 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			const double beta = inflationAlongCorrection(llt, nu, Si_nu, u, gate);
 			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
 			{
-				if (observer_) P_before_ = P_;	// the whole update is reported as one change
-				inflated = true;
 				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
 				const TangentVector v = std::sqrt(beta) * dx0;	 // v vᵀ: exactly symmetric
 				P_.noalias() += v * v.transpose();
@@ -565,15 +562,14 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	downdateSymmetric(P_, W);
 	if (observer_)
 	{
-		if (inflated)
-			observer_->onOtherChange(P_before_, P_, dx);
-		else
-		{
-			// P⁻¹ W = P⁻¹ L_{:,1:k} Dᵀ L_S⁻ᵀ = [L11⁻ᵀ (L_S⁻¹ D)ᵀ; 0].
-			Eigen::MatrixXd B = llt.matrixL().solve(D).transpose();
-			L_.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace(B);
-			observer_->onUpdate(B, u, W);
-		}
+		// P⁻¹ W = P⁻¹ L_{:,1:k} Dᵀ L_S⁻ᵀ = [L11⁻ᵀ (L_S⁻¹ D)ᵀ; 0]. A recovery's
+		// widening P += β dx dxᵀ is reported as nothing: to a smoother it is
+		// process noise added at this tick (it leaves the cross covariance
+		// with past states as it is), and with P, Pxz and S widened together
+		// the update's P⁻¹ W is the same expression.
+		Eigen::MatrixXd B = llt.matrixL().solve(D).transpose();
+		L_.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace(B);
+		observer_->onUpdate(B, u, W);
 	}
 	applySigmaLimits();
 	return res;

@@ -167,7 +167,9 @@ class Navigator
 
 	/** Records the run for the RTS smoother (smoother_stream.h): one
 	 *  stretch per `smoother.keep_every_s` of filter time (default 1 s) to
-	 *  the stretch file at `path`. Call before the first observation; the
+	 *  the stretch file at `path`. Segments end at position
+	 *  re-initialisations, clock-jump restarts and (unless
+	 *  `smoother.across_recoveries: true`) before every recovery update. Call before the first observation; the
 	 *  file is complete after finish(). Throws std::runtime_error if the
 	 *  file cannot be created. */
 	void enableSmoothing(const std::string& path);
@@ -254,6 +256,10 @@ class Navigator
 	std::size_t replayed_predictions_ = 0;
 	std::unique_ptr<SmoothingRecorder> smoother_;  // enableSmoothing
 	double smoother_keep_every_s_ = 1.0;			// smoother.keep_every_s
+	// smoother.across_recoveries: false ends a smoothing segment before every
+	// recovery update (an aid applied against the gate: the filter's
+	// covariance was just contradicted, so its gains are not trusted across it).
+	bool smooth_across_recoveries_ = false;
 	std::string smoother_error_;
 	/** Writes the smoother's records no re-filtering can rewind any more. */
 	void commitSmoother();

@@ -18,7 +18,9 @@
  *  is smoothed ("interrupted runs smooth what was completed").
  *
  *  Segments: smoothing never carries information across a state reset. A
- *  position re-initialisation or a clock-jump restart ends the segment with
+ *  position re-initialisation, a clock-jump restart or a recovery update (an
+ *  aid applied though it failed the gate: the filter's covariance was just
+ *  contradicted; Navigator, smoother.across_recoveries) ends the segment with
  *  a record flagged `ends_segment` (the estimate just before the reset);
  *  the backward pass starts again there from the filtered estimate, and
  *  says so in its output. A stretch in which the filter repaired its

@@ -145,8 +145,10 @@ class StepObserver
 	 *  P⁻¹ W = [B; 0] (B: k × m, P the covariance before the update). */
 	virtual void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
 						  const Eigen::Ref<const Eigen::MatrixXd>& W) = 0;
-	/** Any other change of P (sigma limits, a recovery's inflation with its
-	 *  update) and of the mean by dx (tangent at the mean before). */
+	/** Any other change of P (sigma limits) and of the mean by dx (tangent
+	 *  at the mean before). A recovery's widening of P along its correction
+	 *  (Recovery::State) is not reported: to a smoother it is process noise
+	 *  added at that tick, which leaves Cov(past states, x) as it is. */
 	virtual void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) = 0;
 };
 
