@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md and docs/figures/ from simulated missions:
-#   docs/make_results.sh [BUILD_DIR]        (default: build; about 25 minutes on 2 cores)
+#   docs/make_results.sh [BUILD_DIR]        (default: build; about 30 minutes on 2 cores)
 # Every table is the output of the command named above it; nothing is typed in.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
