@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -137,9 +138,16 @@ Outcome runDenial(const config::Node& nav_cfg, PluginHost& host, const fs::path&
 	// The filter's error at each prediction from mid-denial until the
 	// smoother's next kept tick is certainly past (a kept tick is an IMU tick).
 	std::map<double, double> filtered_after_mid;
-	nav.on_predict = [&](const Navigator& n) {
+	// The stretch file's estimate at a kept tick is the one after the tick's
+	// updates: the filter's error is refreshed after each of them too.
+	auto noteFiltered = [&](const Navigator& n) {
 		if (!stretch_file.empty() && n.time() >= t_mid && n.time() <= t_mid + 2 * nav.smootherKeepEvery_s() + 1)
 			filtered_after_mid[n.time()] = (n.bodyPosition_n() - io::at(truth, n.time()).p_n).head<2>().norm();
+	};
+	if (!stretch_file.empty())
+		nav.on_update = [&](const std::string&, double, const Measurement&, const UpdateResult&) { noteFiltered(nav); };
+	nav.on_predict = [&](const Navigator& n) {
+		noteFiltered(n);
 		if (!std::isnan(o.error_m) || n.time() < t_eval) return;
 		const auto tr = io::at(truth, n.time());
 		o.error_m = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
@@ -152,11 +160,15 @@ Outcome runDenial(const config::Node& nav_cfg, PluginHost& host, const fs::path&
 	if (!nav.smootherError().empty()) throw std::runtime_error(nav.smootherError());
 	// The backward pass, newest first: the last kept tick at or after mid-denial is the first one.
 	const Eigen::Vector3d lever_b = nav.imuPosition_b();
+	double best_t = std::numeric_limits<double>::infinity();
 	smoothStretchFile(stretch_file.string(), [&](double t, const NavState& x, const Covariance& P, SmoothedKind) {
-		if (t < t_mid) return;
+		// Newest first: the earliest kept tick at or after mid-denial is the
+		// last one seen; at a reset two share a time, the one after it first.
+		if (t < t_mid || !(t < best_t)) return;
 		const auto f = filtered_after_mid.find(t);
 		if (f == filtered_after_mid.end()) return;
 		const Eigen::Vector3d p_body = x.p_n - x.R_nb * lever_b;
+		best_t = t;
 		o.mid_smoothed_m = (p_body - io::at(truth, t).p_n).head<2>().norm();
 		o.mid_filtered_m = f->second;
 		o.mid_smoothed_two_sigma_m = 2 * std::sqrt(P(idx::pos, idx::pos) + P(idx::pos + 1, idx::pos + 1));

@@ -106,6 +106,9 @@ int main(int argc, char** argv)
 		cfg.checkAllKeysUsed();	 // the navigator checked its sections; this adds plugin_paths and outputs
 		outputs = std::make_unique<auvnav::run::RunOutputs>(out.getValue(), rate, nav->stateNames(),
 															   nav->storedStateNames(), write_updates);
+		// An older run's smoothing in this folder would be read as this one's.
+		for (const char* stale : {"smoothed_trajectory.tum", "smoothed_states.csv", "smoother.json", "smoother"})
+			std::filesystem::remove_all(std::filesystem::path(out.getValue()) / stale);
 		if (smooth.getValue())
 		{
 			const std::string file = auvnav::run::stretchFileOf(out.getValue());

@@ -2,8 +2,11 @@
 /** @file run_outputs.h
  *  auvnav-run's output files, written incrementally so that a run killed
  *  half way (kill -9 included) leaves valid files up to that point: the text
- *  files hold whole lines only (io::LineFile; the caller flushes them at an
- *  interval, flush()), summary.json is replaced atomically (writeSummary).
+ *  files are written in whole lines (io::LineFile; the caller flushes them at
+ *  an interval, flush()), summary.json is replaced atomically (writeSummary).
+ *  A SIGKILL can still stop the kernel's write() of a buffer at a page
+ *  boundary: a last line without its newline is such a cut one (drop it);
+ *  every line before it is whole.
  *   - trajectory.tum: `t x y z qx qy qz qw`, body-origin position (NED tangent
  *     frame, metres) and body-to-NED attitude: the simulator's ground-truth
  *     convention;

@@ -57,8 +57,8 @@ class ReversedRows
 	/** Row i in time order (the last one written is the first). */
 	void get(std::size_t i, double& t, NavState& x, SmoothedKind& kind, const double*& sigma, const double*& cov)
 	{
-		const long at = static_cast<long>((rows_ - 1 - i) * row_.size() * sizeof(double));
-		if (std::fseek(f_, at, SEEK_SET) != 0 || std::fread(row_.data(), sizeof(double), row_.size(), f_) != row_.size())
+		const off_t at = static_cast<off_t>((rows_ - 1 - i) * row_.size() * sizeof(double));
+		if (fseeko(f_, at, SEEK_SET) != 0 || std::fread(row_.data(), sizeof(double), row_.size(), f_) != row_.size())
 			throw std::runtime_error(path_ + ": read failed");
 		const double* p = row_.data();
 		t = *p++;
@@ -100,6 +100,7 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 	// stands beside a finished run.
 	const fs::path tum_path = fs::path(run_dir) / "smoothed_trajectory.tum";
 	const fs::path csv_path = fs::path(run_dir) / "smoothed_states.csv";
+	std::size_t written = 0;
 	{
 		io::LineFile tum(tum_path.string() + ".tmp"), csv(csv_path.string() + ".tmp");
 		tum.line("# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav RTS smoother)");
@@ -111,7 +112,20 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 			double t;
 			SmoothedKind kind;
 			const double *sigma, *cov;
-			scratch.get(i, t, x, kind, sigma, cov);
+			if (i + 1 < scratch.rows())
+			{
+				// A segment's end and the next segment's start (before and
+				// after a reset) share a time: one row per time, the later.
+				double t_next;
+				SmoothedKind k_next;
+				const double *s_next, *c_next;
+				scratch.get(i + 1, t_next, x, k_next, s_next, c_next);
+				scratch.get(i, t, x, kind, sigma, cov);
+				if (t_next == t) continue;
+			}
+			else
+				scratch.get(i, t, x, kind, sigma, cov);
+			++written;
 			const Eigen::Vector3d p = x.p_n - x.R_nb * header.imu_position_b;
 			formatTumRow(row, t, x, p);
 			tum.line(row);
@@ -126,7 +140,7 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 	fs::rename(tum_path.string() + ".tmp", tum_path);
 	fs::rename(csv_path.string() + ".tmp", csv_path);
 
-	res.rows = scratch.rows();
+	res.rows = written;
 	res.smoothed = sum.smoothed;
 	res.segment_ends = sum.segment_ends;
 	res.kept = sum.kept;

@@ -577,6 +577,7 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	}
 	if (dt > max_gap_s_) ++imu_gaps_;
 	propagate(w, t);
+	if (!history_) commitSmoother();  // nothing can rewind: write as it comes
 	t_latest_s_ = t;
 	++predictions_;
 	++imu_stats_.accepted;
@@ -603,7 +604,15 @@ void Navigator::clockJump(double t, double dt)
 	if (smoother_ && initialized_)
 	{
 		smoother_->endSegment(*ukf_, t_s_);
-		smoother_->commit(std::numeric_limits<std::size_t>::max());	// the checkpoints go below
+		commitSmoother();  // after the history is reset below nothing rewinds: write all
+		if (smoother_) try
+			{
+				smoother_->commit(std::numeric_limits<std::size_t>::max());
+			}
+			catch (const std::exception& e)
+			{
+				stopSmoothing(e.what());
+			}
 	}
 	initialized_ = false;
 	leveling_samples_ = 0;
@@ -654,7 +663,7 @@ void Navigator::checkpointIfDue(std::size_t event)
 	c.alpha_b = alpha_b_;
 	c.gates.reserve(slots_.size());
 	for (const auto& slot : slots_) c.gates.push_back({slot->rejecting_since_s, slot->streak, slot->fix_run});
-	if (smoother_) c.smoother = smoother_->snapshot();
+	if (smoother_) c.smoother = smoother_->snapshot(*ukf_);
 	cps.push_back(std::move(c));
 }
 
@@ -678,8 +687,26 @@ void Navigator::commitSmoother()
 	if (!smoother_) return;
 	// Records from before the oldest checkpoint can no longer be rewound.
 	const bool can_rewind = history_ && !history_->checkpoints.empty() && history_->checkpoints.front().smoother;
-	smoother_->commit(can_rewind ? history_->checkpoints.front().smoother->emitted
-								 : std::numeric_limits<std::size_t>::max());
+	try
+	{
+		smoother_->commit(can_rewind ? history_->checkpoints.front().smoother->emitted
+									 : std::numeric_limits<std::size_t>::max());
+	}
+	catch (const std::exception& e)
+	{
+		stopSmoothing(e.what());
+	}
+}
+
+void Navigator::stopSmoothing(const std::string& why)
+{
+	// The filter's run goes on; the stretch file ends where writing failed
+	// (its partial last record is ignored by the reader).
+	smoother_error_ = why;
+	ukf_->setStepObserver(nullptr);
+	smoother_.reset();
+	if (history_)
+		for (auto& c : history_->checkpoints) c.smoother.reset();
 }
 
 void Navigator::enableSmoothing(const std::string& path)
@@ -699,7 +726,7 @@ void Navigator::restoreLastCheckpoint()
 	t_s_ = c.t_s;
 	omega_ib_b_ = c.omega_ib_b;
 	alpha_b_ = c.alpha_b;
-	if (smoother_ && c.smoother) smoother_->restore(*c.smoother);
+	if (smoother_ && c.smoother) smoother_->restore(*c.smoother, *ukf_);
 	for (std::size_t i = 0; i < slots_.size(); ++i)
 	{
 		slots_[i]->rejecting_since_s = c.gates[i].rejecting_since_s;
@@ -869,7 +896,7 @@ void Navigator::finish()
 		}
 		catch (const std::exception& e)	 // a full disk: the filter's run stands, the smoothing cannot
 		{
-			smoother_error_ = e.what();
+			stopSmoothing(e.what());
 		}
 }
 

@@ -93,7 +93,7 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	XX_.resize(2 * n, n);
 	XX_.topRows(n) = ukf.covariance();	// M = I
 	XX_.bottomRows(n) = ukf.covariance();
-	repairs_at_begin_ = ukf.choleskyRepairs();
+	repairs_seen_ = ukf.choleskyRepairs();
 	open_ = true;
 	predicted_ = transport_pending_ = false;
 }
@@ -220,18 +220,24 @@ bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_
 	x_predicted_ = ukf.state();
 	predicted_ = true;
 	++current_.ticks;
-	if (ukf.choleskyRepairs() != repairs_at_begin_) current_.broken = true;
+	checkRepairs(ukf);
 	return !current_.broken;
+}
+
+void RtsStretchRecorder::checkRepairs(const ManifoldUkf& ukf, bool reset)
+{
+	// A repaired P is not a Bayesian step: the stretch keeps its filtered estimate.
+	if (!reset && open_ && ukf.choleskyRepairs() != repairs_seen_) current_.broken = true;
+	repairs_seen_ = ukf.choleskyRepairs();
 }
 
 RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 {
 	takeTransport(ukf);
 	const int n = ukf.dim();
+	checkRepairs(ukf);
 	RtsStretch done = std::move(current_);
 	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();	// onUpdate kept the lower triangle
-	// A repaired P is not a Bayesian step: the stretch keeps its filtered estimate.
-	if (ukf.choleskyRepairs() != repairs_at_begin_) done.broken = true;
 	const Eigen::LLT<Covariance> llt(ukf.covariance());
 	if (llt.info() != Eigen::Success) done.broken = true;
 	if (!done.broken)

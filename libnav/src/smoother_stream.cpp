@@ -173,8 +173,8 @@ StretchReader::StretchReader(const std::string& path) : path_(path)
 	for (std::uint32_t i = 0; i < counts[1]; ++i) header_.stored_names.push_back(readString(f_, path_));
 	readAll(f_, &data_offset_, sizeof data_offset_, path_);
 	record_bytes_ = stretchRecordBytes(header_.n);
-	if (std::fseek(f_, 0, SEEK_END) != 0) throw ioError(path, "cannot seek");
-	const long end = std::ftell(f_);
+	if (fseeko(f_, 0, SEEK_END) != 0) throw ioError(path, "cannot seek");
+	const off_t end = ftello(f_);
 	if (end < 0 || static_cast<std::uint64_t>(end) < data_offset_) throw std::runtime_error(path + ": truncated header");
 	const std::uint64_t body = static_cast<std::uint64_t>(end) - data_offset_;
 	records_ = static_cast<std::size_t>(body / record_bytes_);
@@ -191,7 +191,7 @@ StretchRecord StretchReader::read(std::size_t i)
 {
 	if (i >= records_) throw std::out_of_range(path_ + ": record " + std::to_string(i) + " of " + std::to_string(records_));
 	errno = 0;
-	if (std::fseek(f_, static_cast<long>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
+	if (fseeko(f_, static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
 	readAll(f_, buf_.data(), buf_.size() * sizeof(double), path_);
 	const int n = header_.n;
 	const double* p = buf_.data();
@@ -298,10 +298,17 @@ void SmoothingRecorder::finish(const ManifoldUkf& ukf, double t_s)
 	commit(std::numeric_limits<std::size_t>::max());
 }
 
-void SmoothingRecorder::restore(const Snapshot& s)
+const SmoothingRecorder::Snapshot& SmoothingRecorder::snapshot(const ManifoldUkf& ukf)
+{
+	s_.recorder.checkRepairs(ukf);
+	return s_;
+}
+
+void SmoothingRecorder::restore(const Snapshot& s, const ManifoldUkf& ukf)
 {
 	const std::size_t seen_repairs = s_.repairs_seen, seen_hits = s_.limit_hits_seen;
 	s_ = s;
+	s_.recorder.checkRepairs(ukf, true);
 	// The filter's counters are not rewound: what the discarded pass counted is not this stretch's.
 	s_.repairs_seen = seen_repairs;
 	s_.limit_hits_seen = seen_hits;

@@ -207,13 +207,13 @@ void ManifoldUkf::setSigmaLimits(const TangentVector& min_sigma, const TangentVe
 	max_sigma_ = max_sigma;
 }
 
-void ManifoldUkf::applySigmaLimits()
+void ManifoldUkf::applySigmaLimits(bool report)
 {
 	if (min_sigma_.size() != n_) return;
-	if (observer_) P_before_ = P_;
+	if (observer_ && report) P_before_ = P_;
 	const int hits = limitSigmas(P_, min_sigma_, max_sigma_);
 	sigma_limit_hits_ += static_cast<std::size_t>(hits);
-	if (observer_ && hits) observer_->onOtherChange(P_before_, P_, TangentVector::Zero(n_));
+	if (observer_ && report && hits) observer_->onOtherChange(P_before_, P_, TangentVector::Zero(n_));
 }
 
 void ManifoldUkf::repairCovariance()
@@ -367,7 +367,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	symmetrize(P_);
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
-	applySigmaLimits();
+	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer
 	mean.R_nb = so3::normalized(mean.R_nb);
 	x_ = mean;
 }

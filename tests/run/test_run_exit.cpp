@@ -260,15 +260,32 @@ bool isNumber(const std::string& s)
 	return !s.empty() && end == s.c_str() + s.size();
 }
 
-/** Every line of a killed run's CSV file is whole: the file ends in a newline,
- *  every row has the header's field count and a number in its first column
- *  (and in `numeric_columns`). Returns the number of rows. */
+/** A killed run's file up to its last newline. SIGKILL can stop the kernel's
+ *  write() of a buffer at a page boundary (seen once in CI, on a loaded
+ *  machine: the kill at 2 s cut states.csv 1 KB into a row), so the last
+ *  line may be partial: it is dropped (run_outputs.h) and said so; every
+ *  line before it must be whole. */
+std::string wholeLinesOf(const fs::path& file)
+{
+	std::string text = slurp(file);
+	if (!text.empty() && text.back() != '\n')
+	{
+		const std::size_t cut = text.rfind('\n') + 1;	// npos + 1 = 0: all of it
+		std::printf("%s: a partial last line of %zu bytes (the kill cut a write) dropped\n", file.c_str(),
+					text.size() - cut);
+		text.erase(cut);
+	}
+	return text;
+}
+
+/** Every line of a killed run's CSV file is whole (but a partial last one,
+ *  wholeLinesOf): every row has the header's field count and a number in its
+ *  first column (and in `numeric_columns`). Returns the number of rows. */
 std::size_t expectWholeCsv(const fs::path& file, const std::vector<std::size_t>& numeric_columns = {})
 {
-	const std::string text = slurp(file);
+	const std::string text = wholeLinesOf(file);
 	EXPECT_FALSE(text.empty()) << file;
 	if (text.empty()) return 0;
-	EXPECT_EQ(text.back(), '\n') << file << " ends in a partial line: '" << text.substr(text.rfind('\n') + 1) << "'";
 	std::istringstream in(text);
 	std::string header;
 	std::getline(in, header);
@@ -288,10 +305,9 @@ std::size_t expectWholeCsv(const fs::path& file, const std::vector<std::size_t>&
 /** The same for trajectory.tum: comment lines, then 8 numbers per line. */
 std::size_t expectWholeTum(const fs::path& file)
 {
-	const std::string text = slurp(file);
+	const std::string text = wholeLinesOf(file);
 	EXPECT_FALSE(text.empty());
 	if (text.empty()) return 0;
-	EXPECT_EQ(text.back(), '\n') << file << " ends in a partial line";
 	std::istringstream in(text);
 	std::size_t rows = 0;
 	for (std::string l; std::getline(in, l);)
@@ -721,7 +737,8 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 	EXPECT_GT(recoveries, 0u);
 	EXPECT_EQ(j["rows"].get<std::size_t>(), rows);
 	EXPECT_EQ(j["segment_ends"].get<std::size_t>(), recoveries + 1);	 // and the end of the run
-	EXPECT_EQ(j["smoothed"].get<std::size_t>(), rows - recoveries - 1);
+	// A segment's end shares its time with the next one's start: one row each.
+	EXPECT_EQ(j["smoothed"].get<std::size_t>(), rows - 1);
 	EXPECT_EQ(j["filtered_kept"].get<std::size_t>(), 0u);
 
 	const Outcome ev = evaluate(dir, out, kRepo + "/share/sample/ground_truth.csv");

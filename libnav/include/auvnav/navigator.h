@@ -263,6 +263,8 @@ class Navigator
 	std::string smoother_error_;
 	/** Writes the smoother's records no re-filtering can rewind any more. */
 	void commitSmoother();
+	/** A stretch-file write failed: the run goes on without smoothing. */
+	void stopSmoothing(const std::string& why);
 	// clock: jumps of the IMU's time beyond these are not predicted through.
 	double max_forward_jump_s_ = 10, max_backward_jump_s_ = 1;
 	bool stop_on_jump_ = true;

@@ -25,8 +25,7 @@
  *
  *  Memory: a step holds three n × n matrices (n = 43: 44 KB) per tick, so
  *  this form is for short runs and tests; RtsStretch (below) keeps one
- *  record per kept tick. Streaming those to disk is not built yet
- *  (docs/smoother.md).
+ *  record per kept tick, streamed to disk by smoother_stream.h.
  */
 #include <auvnav/state.h>
 #include <auvnav/ukf.h>
@@ -110,11 +109,12 @@ struct RtsStretch
  *  scales the rest; an update is X −= (M W) Wᵀ with M W = X_{:,1:k} B,
  *  Σ M dx += (M_mean W) u and Σ M ΔP Mᵀ += (M W)(M W)ᵀ. M = X P⁻¹ is solved
  *  once per kept tick. Per tick that is O(n k²) for the prediction and
- *  O(n² m) per update, plus one Cholesky of P for the correction transport,
- *  instead of the O(n³) gain products of the per-tick recursion; the
- *  result is the same (tested against it, SmootherStretches.*). A change
- *  of P reported otherwise (sigma limits, a recovery's inflation) costs an
- *  n³ solve. A stretch during which the filter repaired its covariance,
+ *  O(n² m) per update, plus the rest of P's Cholesky factor for the
+ *  correction transport, instead of the O(n³) gain products of the
+ *  per-tick recursion; the result is the same (tested against it,
+ *  SmootherStretches.*). Sigma limits hit in an update (onOtherChange)
+ *  cost an n³ solve; hit in a prediction, and a recovery's widening, they
+ *  are process noise to it (not reported). A stretch during which the filter repaired its covariance,
  *  or whose P is not positive definite when it closes, is `broken`.
  *
  *  The recorder registers itself as the filter's StepObserver in
@@ -131,6 +131,10 @@ class RtsStretchRecorder : public StepObserver
 	/** Ends the stretch at the filter's current estimate (tick k′, after its
 	 *  updates), returns it and opens the next one there. */
 	RtsStretch close(const ManifoldUkf& ukf, double t_s);
+	/** Marks the stretch broken if the filter repaired its covariance since
+	 *  the last look, and looks now; after a rewind (re-filtering), call it
+	 *  with `reset` true so that the discarded pass's repairs do not count. */
+	void checkRepairs(const ManifoldUkf& ukf, bool reset = false);
 
 	void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D, const ProcessModel& model,
 				   const StepDecay& step) override;
@@ -152,7 +156,7 @@ class RtsStretchRecorder : public StepObserver
 	std::array<TangentVector, 6> P_row_;
 	Eigen::MatrixXd MW_;  // an update's M W for X and X_mean (2n × m)
 	Covariance scratch_;
-	std::size_t repairs_at_begin_ = 0;
+	std::size_t repairs_seen_ = 0;
 	bool open_ = false, predicted_ = false, transport_pending_ = false;
 };
 

@@ -28,7 +28,8 @@
  *  P⁻ was not positive definite is `broken`: the smoothed estimate at its
  *  start is the filtered one (reported), and the pass goes on from it.
  *  Sigma-limit hits (filter.sigma_limits) are counted per stretch and
- *  smoothed through (they act as process noise).
+ *  smoothed through: in a prediction as process noise, in an update as a
+ *  change of the filtered covariance (RtsStretchRecorder).
  */
 #include <auvnav/smoother.h>
 
@@ -134,9 +135,11 @@ class SmoothingRecorder
 		std::size_t repairs_seen = 0, limit_hits_seen = 0;
 		std::uint32_t repairs = 0, limit_hits = 0;
 	};
-	const Snapshot& snapshot() const { return s_; }
-	/** Back to a snapshot: records emitted after it are dropped. */
-	void restore(const Snapshot& s);
+	/** The state to rewind to (looks for covariance repairs first). */
+	const Snapshot& snapshot(const ManifoldUkf& ukf);
+	/** Back to a snapshot: records emitted after it are dropped; repairs the
+	 *  discarded pass made are not this stretch's. */
+	void restore(const Snapshot& s, const ManifoldUkf& ukf);
 	/** Writes the held records emitted before `emitted` (no checkpoint can
 	 *  rewind past them any more); SIZE_MAX: all. */
 	void commit(std::size_t emitted);

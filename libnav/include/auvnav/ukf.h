@@ -222,7 +222,9 @@ class ManifoldUkf
 	std::size_t repairs_ = 0;
 	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
 	std::size_t sigma_limit_hits_ = 0;
-	void applySigmaLimits();
+	/** `report`: tell the observer (an update's limits; a prediction's are
+	 *  part of its P⁻, like process noise). */
+	void applySigmaLimits(bool report = true);
 	TangentVector variance_floor_;	// 1e-12 × the initial variances (repairCovariance)
 	StepObserver* observer_ = nullptr;
 	Covariance P_before_;  // scratch: P before a change reported as onOtherChange
