@@ -235,7 +235,9 @@ std::string smoothedComparison(const std::vector<std::string>& runs, const std::
 							   const std::vector<Evaluation>& filtered, double every_s, const fs::path& out,
 							   std::vector<std::string>& figures)
 {
-	const auto [lo, hi] = chi2MeanBounds(3, 1);
+	// Not a structured binding: a lambda below uses them (clang refuses to capture those in C++17).
+	const std::pair<double, double> bounds = chi2MeanBounds(3, 1);
+	const double lo = bounds.first, hi = bounds.second;
 	struct Dive
 	{
 		double rms = 0, in_pos = 0, in_att = 0;
