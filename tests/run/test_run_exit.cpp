@@ -755,6 +755,9 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 	EXPECT_EQ(before, after);
 
 	// Across the recoveries: one segment, every row but the last smoothed.
+#ifdef AUVNAV_TEST_ASAN
+	GTEST_SKIP() << "the second run of the sample (across recoveries) only in the Release pass";
+#endif
 	const fs::path across = dir / "across";
 	fs::create_directories(across);
 	const Outcome a = runNavigator(runArgs(across, kSample, {"--smooth", "--set", "smoother.across_recoveries=true"}), across);
