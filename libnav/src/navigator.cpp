@@ -604,8 +604,8 @@ void Navigator::clockJump(double t, double dt)
 	if (smoother_ && initialized_)
 	{
 		smoother_->endSegment(*ukf_, t_s_);
-		commitSmoother();  // after the history is reset below nothing rewinds: write all
-		if (smoother_) try
+		// After the history is reset below nothing rewinds: write all.
+		try
 			{
 				smoother_->commit(std::numeric_limits<std::size_t>::max());
 			}
