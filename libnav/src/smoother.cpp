@@ -93,53 +93,64 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	XX_.resize(2 * n, n);
 	XX_.topRows(n) = ukf.covariance();	// M = I
 	XX_.bottomRows(n) = ukf.covariance();
+	MW_pending_.resize(2 * n, kMaxPending);
+	W_pending_.resize(n, kMaxPending);
+	pending_ = 0;
 	repairs_seen_ = ukf.choleskyRepairs();
 	open_ = true;
 	predicted_ = transport_pending_ = false;
+	dx_since_transport_ = TangentVector::Zero(n);
+	ticks_since_transport_ = 0;
 }
 
 void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
 								   const ProcessModel& model, const StepDecay& step)
 {
 	if (!open_ || current_.broken) return;
+	flushUpdates();
 	const int k = static_cast<int>(D.rows()), n = static_cast<int>(L.rows());
-	if (!full || k != kNonlinearStates)
+	if (k != kNonlinearStates || (transport_pending_ && !full))
 	{
 		current_.broken = true;	// P not positive definite: no gain
 		return;
 	}
 	if (transport_pending_)
 	{
-		// P⁻¹ E = L⁻ᵀ L⁻¹ E by substitution (six right-hand sides: plain
-		// loops beat the blocked triangular solver at this size); P's rows
-		// at the six columns from L (row c of L has c + 1 entries).
-		SixColumns S = E_;
+		// P⁻¹ E = L⁻ᵀ L⁻¹ E by substitution, row by row on a row-major copy
+		// (each row six contiguous numbers: no blocked solver's packing at
+		// this size).
+		using SixRows = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor, idx::max_dim, 6>;
+		SixRows S = E_;
 		for (int i = 0; i < n; ++i)
 		{
-			for (int l = 0; l < i; ++l) S.row(i) -= L(i, l) * S.row(l);
+			if (i > 0) S.row(i).noalias() -= L.row(i).head(i) * S.topRows(i);
 			S.row(i) /= L(i, i);
 		}
 		for (int i = n; i-- > 0;)
 		{
-			for (int l = i + 1; l < n; ++l) S.row(i) -= L(l, i) * S.row(l);
+			const int below = n - 1 - i;
+			if (below > 0) S.row(i).noalias() -= L.col(i).tail(below).transpose() * S.bottomRows(below);
 			S.row(i) /= L(i, i);
 		}
+		// P's rows at the six columns, from L (row c of L has c + 1 entries).
+		Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, idx::max_dim> P_rows(6, n);
 		for (int j = 0; j < 6; ++j)
 		{
 			const int c = kTransportColumns[j];
-			P_row_[j].noalias() = L.leftCols(c + 1) * L.row(c).head(c + 1).transpose();
+			P_rows.row(j).noalias() = L.row(c).head(c + 1) * L.leftCols(c + 1).transpose();
 		}
-		// X_mean += (X_mean S) P_{cols,:}: six gemv and six outer products.
+		// X_mean += (X_mean P⁻¹ E) P_{cols,:}: two products of rank six.
 		ME_.resize(n, 6);
-		for (int j = 0; j < 6; ++j) ME_.col(j).noalias() = XX_.bottomRows(n) * S.col(j);
-		for (int j = 0; j < 6; ++j) XX_.bottomRows(n).noalias() += ME_.col(j) * P_row_[j].transpose();
+		ME_.noalias() = XX_.bottomRows(n) * S;
+		XX_.bottomRows(n).noalias() += ME_ * P_rows;
 		transport_pending_ = false;
 	}
 	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
 	// StepObserver): the first k columns times L11⁻ᵀ Dᵀ, the others scaled.
 	Eigen::Matrix<double, kNonlinearStates, kNonlinearStates> F = D;  // F L11 = D
 	L.topLeftCorner(k, k).triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(F);
-	const Stacked Y = XX_.leftCols(k) * F.transpose();
+	Eigen::Matrix<double, Eigen::Dynamic, kNonlinearStates, 0, 2 * idx::max_dim, kNonlinearStates> Y(2 * n, k);
+	Y.noalias() = XX_.leftCols(k) * F.transpose();
 	XX_.leftCols(k) = Y;
 	TangentVector a = TangentVector::Ones(n);
 	model.applyLinearRows(a, step);	 // rows k… only scale: their factors
@@ -150,22 +161,55 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 								  const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	if (!open_ || current_.broken) return;
+	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows()), m = static_cast<int>(B.cols());
+	if (m > kMaxPending)
+	{
+		applyWideUpdate(B, u, W);
+		return;
+	}
+	if (pending_ + m > kMaxPending) flushUpdates();
+	// M W = X_now P⁻¹ W = X_now_{:,1:k} B, for X and X_mean at once, with
+	// X_now = X − MW_p W_pᵀ (this tick's earlier updates, not yet applied).
+	// m is small (3 for most sensors): gemv, not the blocked kernel.
+	auto MW = MW_pending_.middleCols(pending_, m);
+	for (int j = 0; j < m; ++j) MW.col(j).noalias() = XX_.leftCols(k) * B.col(j);
+	if (pending_ > 0)
+	{
+		const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPending, kMaxPending> C =
+			W_pending_.topLeftCorner(k, pending_).transpose() * B;
+		MW.noalias() -= MW_pending_.leftCols(pending_) * C;
+	}
+	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
+	W_pending_.middleCols(pending_, m) = W;
+	pending_ += m;
+}
+
+void RtsStretchRecorder::applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
+										 const Eigen::Ref<const Eigen::VectorXd>& u,
+										 const Eigen::Ref<const Eigen::MatrixXd>& W)
+{
+	flushUpdates();
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
-	// M W = X P⁻¹ W = X_{:,1:k} B, for X and X_mean at once; m is small
-	// (3 for most sensors): gemv and outer products, not the blocked kernel.
-	const int m = static_cast<int>(B.cols());
-	MW_.resize(2 * n, m);
-	for (int j = 0; j < m; ++j) MW_.col(j).noalias() = XX_.leftCols(k) * B.col(j);
-	current_.sum_dx.noalias() += MW_.bottomRows(n) * u;
-	// One pass over each matrix (they are swept per update): the lower
-	// triangle of Σ M ΔP Mᵀ (mirrored at close), and X, X_mean.
-	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_.topRows(n));
-	XX_.noalias() -= MW_.lazyProduct(W.transpose());
+	const Eigen::MatrixXd MW = XX_.leftCols(k) * B;
+	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
+	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW.topRows(n));
+	XX_.noalias() -= MW * W.transpose();
+}
+
+void RtsStretchRecorder::flushUpdates()
+{
+	if (pending_ == 0) return;
+	const int n = static_cast<int>(XX_.cols());
+	// Σ M ΔP Mᵀ's lower triangle (mirrored at close), then X and X_mean.
+	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_pending_.topLeftCorner(n, pending_));
+	XX_.noalias() -= MW_pending_.leftCols(pending_) * W_pending_.leftCols(pending_).transpose();
+	pending_ = 0;
 }
 
 void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
 {
 	if (!open_ || current_.broken) return;
+	flushUpdates();
 	// M itself is unchanged (X P⁻¹ before); X follows P, and the change
 	// enters the sums as an update's would.
 	const int n = static_cast<int>(P_before.rows());
@@ -184,14 +228,27 @@ void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covaria
 	XX_.bottomRows(n).noalias() = Mm * P_after;
 }
 
-void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf)
+void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf, bool now)
 {
-	if (!predicted_) return;
-	predicted_ = false;
-	// T_t = ∂/∂b [(x_t ⊞ b) ⊟ x⁻_t] at b = 0 on its six columns, by central
-	// differences at a step far below any σ and far above rounding; E = T − I.
+	if (predicted_)
+	{
+		predicted_ = false;
+		// The tick's update correction, summed over the ticks since the last
+		// transport (each in its own tick's tangent: equal to first order).
+		dx_since_transport_ += ukf.state().boxminus(x_predicted_);
+		++ticks_since_transport_;
+	}
+	if (ticks_since_transport_ == 0 || (!now && ticks_since_transport_ < kTransportEveryTicks)) return;
+	// T = ∂/∂b [(x ⊞ b) ⊟ x⁻] at b = 0 on its six columns, with x⁻ = x ⊞ (−Σ dx):
+	// E = T − I is first order in the corrections, so the ticks' transports
+	// add up to first order (smoother.h); central differences at a step far
+	// below any σ and far above rounding.
 	constexpr double kEps = 1e-6;
 	const NavState& x = ukf.state();
+	// x⁻ with x⁻ ⊞ Σ dx = x (the inverse of the tick's own ⊟ at N = 1), by
+	// fixed-point steps from x ⊞ (−Σ dx): ⊞ is not its own inverse here.
+	NavState x_before = x.boxplus(-dx_since_transport_);
+	for (int it = 0; it < 3; ++it) x_before = x_before.boxplus(-x_before.boxplus(dx_since_transport_).boxminus(x));
 	const int n = x.dim();
 	E_.resize(n, 6);
 	TangentVector e = TangentVector::Zero(n);
@@ -199,10 +256,12 @@ void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf)
 	{
 		const int i = kTransportColumns[j];
 		e[i] = kEps;
-		E_.col(j) = (x.boxplus(e).boxminus(x_predicted_) - x.boxplus(-e).boxminus(x_predicted_)) / (2 * kEps);
+		E_.col(j) = (x.boxplus(e).boxminus(x_before) - x.boxplus(-e).boxminus(x_before)) / (2 * kEps);
 		E_(i, j) -= 1;
 		e[i] = 0;
 	}
+	dx_since_transport_.setZero();
+	ticks_since_transport_ = 0;
 	transport_pending_ = true;
 }
 
@@ -233,7 +292,8 @@ void RtsStretchRecorder::checkRepairs(const ManifoldUkf& ukf, bool reset)
 
 RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 {
-	takeTransport(ukf);
+	takeTransport(ukf, true);
+	flushUpdates();
 	const int n = ukf.dim();
 	checkRepairs(ukf);
 	RtsStretch done = std::move(current_);

@@ -244,7 +244,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	leadingCholeskyColumns(k);
 	// The observer (a smoother) also needs P's inverse: the remaining columns,
 	// without a repair (the filter must not change because it is observed).
-	const bool full_factor = observer_ && choleskyColumns(P_, k, n, L_);
+	const bool full_factor = observer_ && observer_->wantsFullFactor() && choleskyColumns(P_, k, n, L_);
 	const double g = w_.gamma;
 	// Only sigma points along the first k Cholesky columns move the inertial
 	// block; the other 2(n−k) share the centre's propagation of that block.
@@ -568,7 +568,10 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// with past states as it is), and with P, Pxz and S widened together
 		// the update's P⁻¹ W is the same expression.
 		Eigen::MatrixXd B = llt.matrixL().solve(D).transpose();
-		L_.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace(B);
+		// Column by column: m is small, and vector solves skip the blocked
+		// solver's packing.
+		for (int j = 0; j < m; ++j)
+			L_.topLeftCorner(k, k).triangularView<Eigen::Lower>().transpose().solveInPlace(B.col(j));
 		observer_->onUpdate(B, u, W);
 	}
 	applySigmaLimits();

@@ -150,6 +150,9 @@ class StepObserver
 	 *  (Recovery::State) is not reported: to a smoother it is process noise
 	 *  added at that tick, which leaves Cov(past states, x) as it is. */
 	virtual void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) = 0;
+	/** Whether the next predict() should pass all n columns of L (`full`),
+	 *  at the cost of the factor's remaining columns. */
+	virtual bool wantsFullFactor() const { return true; }
 };
 
 class ManifoldUkf
