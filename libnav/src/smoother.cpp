@@ -96,6 +96,8 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	MW_pending_.resize(2 * n, kMaxPending);
 	W_pending_.resize(n, kMaxPending);
 	pending_ = 0;
+	MW_dP_.resize(n, kMaxDpPending);
+	dP_pending_ = 0;
 	repairs_seen_ = ukf.choleskyRepairs();
 	open_ = true;
 	predicted_ = transport_pending_ = false;
@@ -200,10 +202,21 @@ void RtsStretchRecorder::flushUpdates()
 {
 	if (pending_ == 0) return;
 	const int n = static_cast<int>(XX_.cols());
-	// Σ M ΔP Mᵀ's lower triangle (mirrored at close), then X and X_mean.
-	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_pending_.topLeftCorner(n, pending_));
+	// M W goes on to Σ M ΔP Mᵀ's columns (a wider rank update later), and
+	// X and X_mean move now.
+	if (dP_pending_ + pending_ > kMaxDpPending) flushDp();
+	MW_dP_.middleCols(dP_pending_, pending_) = MW_pending_.topLeftCorner(n, pending_);
+	dP_pending_ += pending_;
 	XX_.noalias() -= MW_pending_.leftCols(pending_) * W_pending_.leftCols(pending_).transpose();
 	pending_ = 0;
+}
+
+void RtsStretchRecorder::flushDp()
+{
+	if (dP_pending_ == 0) return;
+	// The lower triangle only (mirrored at close).
+	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_dP_.leftCols(dP_pending_));
+	dP_pending_ = 0;
 }
 
 void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
@@ -294,6 +307,7 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 {
 	takeTransport(ukf, true);
 	flushUpdates();
+	flushDp();
 	const int n = ukf.dim();
 	checkRepairs(ukf);
 	RtsStretch done = std::move(current_);

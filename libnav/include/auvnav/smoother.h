@@ -146,6 +146,8 @@ class RtsStretchRecorder : public StepObserver
    private:
 	//! Update columns deferred to one pass over X (flushUpdates).
 	static constexpr int kMaxPending = 16;
+	//! Columns of Σ M ΔP Mᵀ's rank update gathered before it is made.
+	static constexpr int kMaxDpPending = 32;
 	//! Ticks whose correction transports are applied together (and the
 	//! only ticks that need P's whole factor): on the sample, 5 against 1
 	//! moves the smoothed position by 6e-4 σ and the velocity by 0.03 σ.
@@ -161,6 +163,8 @@ class RtsStretchRecorder : public StepObserver
 	/** Applies the deferred updates to X, X_mean and Σ M ΔP Mᵀ: one
 	 *  rank-r product instead of one pass over X per update. */
 	void flushUpdates();
+	/** Adds the gathered M W columns to Σ M ΔP Mᵀ (before close reads it). */
+	void flushDp();
 	/** An update too wide to defer: applied to X at once (heap scratch; no
 	 *  built-in sensor is this wide). */
 	void applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
@@ -173,6 +177,8 @@ class RtsStretchRecorder : public StepObserver
 	StackedPending MW_pending_;
 	Pending W_pending_;
 	int pending_ = 0;
+	Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, kMaxDpPending> MW_dP_;	// M W columns not yet in Σ M ΔP Mᵀ
+	int dP_pending_ = 0;
 	SixColumns E_, ME_;
 	Covariance scratch_;
 	std::size_t repairs_seen_ = 0;
