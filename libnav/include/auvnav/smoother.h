@@ -107,12 +107,17 @@ struct RtsStretch
  *  and X_mean = M_mean P, from the factors the filter already has
  *  (StepObserver): a prediction moves X's first k columns by L11⁻ᵀ Dᵀ and
  *  scales the rest; an update is X −= (M W) Wᵀ with M W = X_{:,1:k} B,
- *  Σ M dx += (M_mean W) u and Σ M ΔP Mᵀ += (M W)(M W)ᵀ. M = X P⁻¹ is solved
- *  once per kept tick. Per tick that is O(n k²) for the prediction and
- *  O(n² m) per update, plus the rest of P's Cholesky factor for the
- *  correction transport, instead of the O(n³) gain products of the
- *  per-tick recursion; the result is the same (tested against it,
- *  SmootherStretches.*). Sigma limits hit in an update (onOtherChange)
+ *  Σ M dx += (M_mean W) u and Σ M ΔP Mᵀ += (M W)(M W)ᵀ. The X −= part of a
+ *  tick's updates is made once, as one rank-r product before the next
+ *  prediction (a later update of the tick corrects its M W for the earlier
+ *  ones), and the Σ M ΔP Mᵀ part every 32 columns. The correction
+ *  transports of kTransportEveryTicks ticks are applied together, from
+ *  their summed corrections (E is first order in them): only those ticks
+ *  need the rest of P's Cholesky factor. M = X P⁻¹ is solved once per kept
+ *  tick. Per tick that is O(n k²) for the prediction and O(n² m) per
+ *  update instead of the O(n³) gain products of the per-tick recursion;
+ *  the covariance is the same and the mean agrees to second order (tested
+ *  against it, SmootherStretches.*). Sigma limits hit in an update (onOtherChange)
  *  cost an n³ solve; hit in a prediction, and a recovery's widening, they
  *  are process noise to it (not reported). A stretch during which the filter repaired its covariance,
  *  or whose P is not positive definite when it closes, is `broken`.
