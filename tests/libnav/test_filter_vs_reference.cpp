@@ -199,6 +199,7 @@ struct Case
 	unsigned seed;
 	double dt = 0.01;
 	int steps = 200, update_every = 5;
+	int updates_per_step = 1;  //!< at an update step, this many updates (models in turn)
 	double gyro_bias_sigma = 0.01, rate_scale = 1;
 	bool plugin_states = false;	 //!< append test::appendTestPluginStates
 };
@@ -319,18 +320,21 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 		md.pred_mean = std::max(md.pred_mean, test::meanDiff(fast.state(), ref.state(), ref.covariance()));
 		md.pred_cov = std::max(md.pred_cov, test::covDiff(fast.covariance(), ref.covariance()));
 		if (step % c.update_every != 0) continue;
-		const std::size_t k = next_model++ % models.size();
-		const TestModel& model = *models[k];
-		ctx.t_s = t;
-		ctx.omega_ib_b = w;
-		const Measurement m = makeMeasurement(model, truth, ctx, rng);
-		if (stretches) stretched.update(model, m, ctx);
-		const UpdateResult r = fast.update(model, m, ctx);
-		EXPECT_EQ(r.status, UpdateStatus::Accepted) << model.name() << ": " << r.why;
-		EXPECT_TRUE(ref.update(model, m, ctx)) << model.name();
-		++md.updates;
-		md.upd_mean[k] = std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
-		md.upd_cov[k] = std::max(md.upd_cov[k], test::covDiff(fast.covariance(), ref.covariance()));
+		for (int u = 0; u < c.updates_per_step; ++u)
+		{
+			const std::size_t k = next_model++ % models.size();
+			const TestModel& model = *models[k];
+			ctx.t_s = t;
+			ctx.omega_ib_b = w;
+			const Measurement m = makeMeasurement(model, truth, ctx, rng);
+			if (stretches) stretched.update(model, m, ctx);
+			const UpdateResult r = fast.update(model, m, ctx);
+			EXPECT_EQ(r.status, UpdateStatus::Accepted) << model.name() << ": " << r.why;
+			EXPECT_TRUE(ref.update(model, m, ctx)) << model.name();
+			++md.updates;
+			md.upd_mean[k] = std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
+			md.upd_cov[k] = std::max(md.upd_cov[k], test::covDiff(fast.covariance(), ref.covariance()));
+		}
 	}
 	EXPECT_EQ(fast.choleskyRepairs(), 0u);
 	if (rec)
@@ -644,16 +648,20 @@ struct StretchComparison
 	double mean = 0, pos_mean = 0, cov = 0;	 // stretch-smoothed vs per-tick, at the kept ticks
 	double nees_filtered = 0, nees_per_tick = 0, nees_stretches = 0;  // attitude + velocity, 6 DOF, mean
 	std::size_t kept = 0;
+	int worst_state = -1;  //!< the tangent coordinate of `mean`
 };
 
 /** The same run smoothed per tick (smoothRts) and from stretches of 10 ticks
  *  (RtsStretchRecorder): the estimates at the kept ticks, and each against
  *  the truth. */
-StretchComparison compareStretches(unsigned seed)
+StretchComparison compareStretches(unsigned seed, int update_every = 5, int updates_per_step = 1)
 {
 	Recorded rec;
 	rec.keep_every = 10;
-	runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, seed}, allModels(), {}, {}, &rec);
+	Case c{Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, seed};
+	c.update_every = update_every;
+	c.updates_per_step = updates_per_step;
+	runSideBySide(c, allModels(), {}, {}, &rec);
 	const auto per_tick = smoothRts(rec.fast, rec.fast_end, rec.fast_end_P, rec.t_end);
 	EXPECT_EQ(rec.stretches.size(), 20u);
 	StretchComparison out;
@@ -683,7 +691,10 @@ StretchComparison compareStretches(unsigned seed)
 		const SmoothedEstimate& ref = per_tick[i * 10];
 		EXPECT_NEAR(st.t_s, ref.t_s, 1e-12);
 		const Eigen::VectorXd d = x.boxminus(ref.x).array() / ref.P.diagonal().array().sqrt();
-		out.mean = std::max(out.mean, d.cwiseAbs().maxCoeff());
+		Eigen::Index worst_i = 0;
+		const double worst = d.cwiseAbs().maxCoeff(&worst_i);
+		if (worst > out.mean) out.worst_state = static_cast<int>(worst_i);
+		out.mean = std::max(out.mean, worst);
 		out.pos_mean = std::max(out.pos_mean, d.segment<3>(idx::pos).cwiseAbs().maxCoeff());
 		out.cov = std::max(out.cov, test::covDiff(P, ref.P));
 		const NavState& truth = rec.truth[i * 10];
@@ -713,6 +724,31 @@ TEST(SmootherStretches, TelescopedStretchesGiveThePerTickCovariance)
 	EXPECT_LT(c.cov, kTol);
 	EXPECT_LT(c.mean, 0.5);
 	EXPECT_LT(c.pos_mean, 5e-3);
+}
+
+TEST(SmootherStretches, ManyUpdatesATickGiveThePerTickCovariance)
+{
+	// Every tick updated, seven updates a tick (17 columns: past the
+	// recorder's 16 deferred ones, so a tick's updates reach X in two
+	// passes), and the transports of five ticks applied together
+	// (smoother.h): the covariance still telescopes exactly, and the
+	// position mean stays close (measured 1.8e-2 σ).
+	//
+	// The velocity mean does not (a known limit, not asserted): with a 4–6°
+	// attitude σ and a velocity known to ~1e-4 m/s after 700 updates a second,
+	// the second-order terms of the velocity's turn with the attitude
+	// (state.h's retraction) are many of its σ: 13.9 σ at worst here (11.0 σ
+	// with the transport every tick, as at 919c6ef), attitude + velocity NEES
+	// 15.2 from stretches against 2.3 per tick (seeds 3 and 5: 10.3 vs 9.2,
+	// 4.6 vs 2.3). docs/smoother.md.
+	const StretchComparison c = compareStretches(11, 1, 7);
+	const double n = static_cast<double>(c.kept);
+	std::printf(
+		"7 updates a tick, stretches vs per tick: cov %.2e (corr.), mean %.2e sd at coordinate %d (position %.2e "
+		"sd); attitude + velocity NEES filtered %.2f, per tick %.2f, stretches %.2f\n",
+		c.cov, c.mean, c.worst_state, c.pos_mean, c.nees_filtered / n, c.nees_per_tick / n, c.nees_stretches / n);
+	EXPECT_LT(c.cov, kTol);
+	EXPECT_LT(c.pos_mean, 5e-2);
 }
 
 TEST(SmootherStretches, StretchesAreConsistentOverTwentySeeds)
