@@ -728,9 +728,9 @@ TEST(SmootherStretches, TelescopedStretchesGiveThePerTickCovariance)
 
 TEST(SmootherStretches, ManyUpdatesATickGiveThePerTickCovariance)
 {
-	// Every tick updated, seven updates a tick (17 columns: past the
-	// recorder's 16 deferred ones, so a tick's updates reach X in two
-	// passes), and the transports of five ticks applied together
+	// Every tick updated, seven updates a tick (16–18 columns, past the
+	// recorder's 16 deferred ones on three ticks of five, whose updates then
+	// reach X in two passes), and the transports of five ticks applied together
 	// (smoother.h): the covariance still telescopes exactly, and the
 	// position mean stays close (measured 1.8e-2 σ).
 	//

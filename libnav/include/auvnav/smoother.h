@@ -161,9 +161,11 @@ class RtsStretchRecorder : public StepObserver
 	using SixColumns = Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6>;
 	using StackedPending = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * idx::max_dim, kMaxPending>;
 	using Pending = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, kMaxPending>;
-	/** The tick's correction transport T_t = I + E (six columns) for
-	 *  M_mean, taken after the tick's updates; applied by the next
-	 *  prediction (which factors P anyway) or by close(). */
+	/** Adds the tick's update correction (after its updates) to the sum
+	 *  since the last transport; every kTransportEveryTicks ticks, or with
+	 *  `now` (close()), takes the transport T = I + E (six columns) for
+	 *  M_mean from that sum, applied by the next prediction (which then
+	 *  asks for P's whole factor) or by close(). */
 	void takeTransport(const ManifoldUkf& ukf, bool now = false);
 	/** Applies the deferred updates to X, X_mean and Σ M ΔP Mᵀ: one
 	 *  rank-r product instead of one pass over X per update. */
