@@ -75,6 +75,17 @@ StepDecay ProcessModel::decay(double dt) const
 	return d;
 }
 
+TangentVector ProcessModel::diagonalTailFactors(const StepDecay& step) const
+{
+	TangentVector a(dim() - idx::adcp_bias);
+	a.head<idx::inertia - idx::adcp_bias>().setConstant(step.adcp_bias);
+	a.segment<idx::core_dim - idx::inertia>(idx::inertia - idx::adcp_bias).setConstant(step.parameters);
+	for (std::size_t i = 0; i < extra.size(); ++i)
+		a[idx::core_dim - idx::adcp_bias + static_cast<int>(i)] =
+			extra[i].kind == StateProcess::GaussMarkov ? step.extra[i] : 1.0;
+	return a;
+}
+
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
 									   const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const
 {

@@ -142,8 +142,10 @@ TangentVector NavState::boxminus(const NavState& y) const
 		throw std::invalid_argument("NavState::boxminus: states of " + std::to_string(dim()) + " and " +
 									std::to_string(y.dim()) + " coordinates");
 	TangentVector d(dim());	 // every entry is written below
-	const Eigen::Vector3d dtheta = so3::Log(R_nb * y.R_nb.transpose());
-	const Eigen::Matrix3d dR = so3::Exp(dtheta);
+	// dR = Exp(Log(·)) is the relative rotation itself: taken as the product
+	// (no Exp per call: this runs per sigma point and mean iteration).
+	const Eigen::Matrix3d dR = R_nb * y.R_nb.transpose();
+	const Eigen::Vector3d dtheta = so3::Log(dR);
 	d.segment<3>(idx::att) = dtheta;
 	d.segment<3>(idx::gyro_bias) = b_w - y.b_w;
 	d[idx::gravity] = g - y.g;

@@ -339,33 +339,41 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i) P_NN(i, j) = P_NN(j, i) = DtW.col(i).dot(Dt.col(j));
 	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
-	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim, k> Ac = L_.leftCols(k);
-	model_.applyLinearRows(Ac, step);
+	// A's rows past the inertial block are diagonal (a: decay factors), so
+	// the affine rows of A c_j are a ∘ L_{k:,j}; the block is formed as its
+	// transpose, (n−k) × k, whose columns are contiguous axpys.
+	const int nl = n - k;
+	const TangentVector a = model_.diagonalTailFactors(step);
 	Eigen::Matrix<double, k, k> D_pairs;
 	for (int j = 0; j < k; ++j) D_pairs.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
-	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim> P_NL(k, n - k);
-	P_NL.noalias() = D_pairs.lazyProduct(Ac.bottomRows(n - k).transpose());	// small: no blocked kernel
+	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim - k, k> P_LN(nl, k);
+	P_LN.noalias() = L_.bottomLeftCorner(nl, k) * D_pairs.transpose();
+	P_LN = a.asDiagonal() * P_LN;
 	if (P_cross)
 	{
 		// Cov(x_k, x_k+1): sigma point i deviates from x̄_k by ±γ L_j, so the
 		// new inertial block's columns are Σ_j L_j (W γ (d₊ⱼ − d₋ⱼ))ᵀ (pairs
 		// along columns j ≥ k leave that block at the centre's: d₊ = d₋);
-		// the affine block's are P Aᵀ, set below.
+		// the affine block's are Cov(x, A x + b) = (A P)ᵀ.
 		P_cross->resize(n, n);
 		P_cross->leftCols(k).noalias() = L_.leftCols(k) * D_pairs.transpose();
+		P_cross->rightCols(nl) = (a.asDiagonal() * P_.bottomRows(nl)).transpose();
 	}
-	// Affine part: A P Aᵀ exactly (rows, then columns).
+	// Affine block: A P Aᵀ = P_ij a_i a_j, taken from P's two triangles'
+	// mean so that P leaves exactly symmetric (every other block is written
+	// symmetric and the noise is, so no pass over the whole matrix).
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
-	model_.applyLinearRows(P_, step);
-	if (P_cross) P_cross->rightCols(n - k) = P_.bottomRows(n - k).transpose();  // (A P)ᵀ: Cov(x, A x + b)
-	Covariance Pt = P_.transpose();
-	model_.applyLinearRows(Pt, step);
-	P_ = Pt;
+	for (int j = 0; j < nl; ++j)
+		for (int i = j; i < nl; ++i)
+		{
+			const double p = (a[i] * a[j]) * (0.5 * (P_(k + i, k + j) + P_(k + j, k + i)));
+			P_(k + i, k + j) = p;
+			P_(k + j, k + i) = p;
+		}
 	P_.topLeftCorner<k, k>() = P_NN;
-	P_.topRightCorner(k, n - k) = P_NL;
-	P_.bottomLeftCorner(n - k, k) = P_NL.transpose();
+	P_.bottomLeftCorner(nl, k) = P_LN;
+	P_.topRightCorner(k, nl) = P_LN.transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
-	symmetrize(P_);
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer
 	mean.R_nb = so3::normalized(mean.R_nb);

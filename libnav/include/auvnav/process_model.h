@@ -122,6 +122,11 @@ struct ProcessModel
 	/** The same with the step's decay factors given. */
 	template <typename Derived>
 	void applyLinearRows(Eigen::MatrixBase<Derived>& M, const StepDecay& step) const;
+	/** A's rows from idx::adcp_bias on (ADCP bias, model parameters, plugin
+	 *  coordinates) are diagonal: each coordinate only decays. Their factors,
+	 *  in order (dim() − idx::adcp_bias of them), so that A P Aᵀ over that
+	 *  block is P_ij · a_i a_j (applyLinearRows on those rows does the same). */
+	TangentVector diagonalTailFactors(const StepDecay& step) const;
 
 	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
 
