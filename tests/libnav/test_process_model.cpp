@@ -324,3 +324,39 @@ TEST(ProcessModel, AttitudeRandomWalkIsIndependentOfTheStepSize)
 		EXPECT_NEAR(many.covariance()(i, i), expected, 1e-6 * expected);
 	}
 }
+
+TEST(ProcessModel, TailRowsOfTheLinearMapAreTheDiagonalFactors)
+{
+	// The prediction forms A P Aᵀ past the inertial block as P_ij a_i a_j
+	// (ukf.cpp); that is exact only if those rows of A are diagonal with the
+	// factors diagonalTailFactors() gives. Checked against applyLinearRows on
+	// the identity, with plugin blocks of both kinds appended.
+	ProcessModel pm = fastGaussMarkovModel();
+	StateBlockSpec gm;
+	gm.name = "scale";
+	gm.components = {"", ""};
+	gm.sigma = {0.01};
+	gm.process = StateProcess::GaussMarkov;
+	gm.process_sigma = 0.01;
+	gm.tau_s = 50;
+	pm.appendBlock(gm);
+	StateBlockSpec rw = gm;
+	rw.name = "bias";
+	rw.components = {""};
+	rw.process = StateProcess::RandomWalk;
+	pm.appendBlock(rw);
+	const int n = pm.dim();
+	const StepDecay step = pm.decay(0.7);
+	Covariance A = Covariance::Identity(n, n);
+	pm.applyLinearRows(A, step);
+	const TangentVector a = pm.diagonalTailFactors(step);
+	ASSERT_EQ(a.size(), n - idx::adcp_bias);
+	const int tail = n - idx::adcp_bias;
+	const Eigen::MatrixXd expected = a.asDiagonal();
+	EXPECT_EQ(Eigen::MatrixXd(A.bottomRows(tail).leftCols(idx::adcp_bias)), Eigen::MatrixXd::Zero(tail, idx::adcp_bias));
+	EXPECT_EQ(Eigen::MatrixXd(A.bottomRightCorner(tail, tail)), expected);
+	// The factors decay (τ finite) and the random walk keeps 1.
+	EXPECT_LT(a[0], 1.0);
+	EXPECT_LT(a[n - 2 - idx::adcp_bias], 1.0);
+	EXPECT_EQ(a[n - 1 - idx::adcp_bias], 1.0);
+}
