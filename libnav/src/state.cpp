@@ -50,6 +50,15 @@ int tangentPrefix(uint32_t mask, int dim)
 	return end;
 }
 
+uint32_t blockOfCoordinate(int i, int dim)
+{
+	if (i < 0 || i >= dim) return 0;
+	if (i >= idx::extra) return kPluginStates;
+	for (const auto& b : kBlocks)
+		if (i >= b.begin && i < b.begin + b.size) return b.bit;
+	return 0;
+}
+
 TangentVector NavState::euclidean() const
 {
 	TangentVector t(dim());	 // every entry is written below

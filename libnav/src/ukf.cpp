@@ -424,9 +424,18 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		res.why = "model declares no state dependence";
 		return res;
 	}
-	leadingCholeskyColumns(k);
+	// Blocks h is affine in (measurement_model.h): sigma points only along
+	// the first kn Cholesky columns (those that move a non-affine block);
+	// the pairs along columns kn..k−1 are ±γ A L_j about z₀, taken from P.
+	const uint32_t affine = model.affineIn() & model.uses() & ~static_cast<uint32_t>(kAttitude);
+	const int kn = affine ? tangentPrefix(model.uses() & ~affine, n) : k;
+	leadingCholeskyColumns(kn);
+	// A smoother needs the update's B over all k columns: the rest of them,
+	// without a repair (the filter must not change because it is observed).
+	const bool observed_factor = observer_ && (kn == k || choleskyColumns(P_, kn, k, L_));
+	if (observer_ && !observed_factor) P_before_ = P_;	// reported whole below
 	const double g = w_.gamma;
-	const int count = 2 * k + 1;
+	const int count = 2 * kn + 1;
 	if (z_sigma_.rows() != m || z_sigma_.cols() < count) z_sigma_.resize(m, 2 * n + 1);
 	// Sigma points that move the first k coordinates; the rest evaluate like the centre.
 	if (!model.predict(x_, meas, ctx, z_sigma_.col(0)))
@@ -436,7 +445,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	// Attitude-heavy columns are evaluated at a shorter step (ukf.h).
 	std::array<double, 3> scale{1.0, 1.0, 1.0};
-	for (int j = 0; j < k; ++j)
+	for (int j = 0; j < kn; ++j)
 	{
 		if (j < 3) scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const double step = j < 3 ? g * scale[j] : g;
@@ -458,11 +467,11 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// Mean in the measurement space, via residuals about the centre (wraps
 	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one. A
 	// scaled pair enters as deviations ±a/s + m from z₀ (no point of its own).
-	const double w_center_c = w_.wc0 + 2 * (n - k) * w_.wi;
+	const double w_center_c = w_.wc0 + 2 * (n - kn) * w_.wi;
 	Eigen::VectorXd r(m), z_mean = z_sigma_.col(0);
 	Eigen::VectorXd acc = Eigen::VectorXd::Zero(m);
 	Eigen::MatrixXd D_scaled;  // ŷ± of the scaled pairs, about z₀ (rarely used)
-	for (int j = 0; j < std::min(k, 3); ++j)
+	for (int j = 0; j < std::min(kn, 3); ++j)
 		if (scale[j] < 1.0)
 		{
 			if (D_scaled.cols() == 0) D_scaled.resize(m, 6);
@@ -473,7 +482,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			D_scaled.col(2 * j) = mid + a;
 			D_scaled.col(2 * j + 1) = mid - a;
 		}
-	auto isScaled = [&](int i) { return i >= 1 && i <= 6 && i <= 2 * k && scale[(i - 1) / 2] < 1.0; };
+	auto isScaled = [&](int i) { return i >= 1 && i <= 6 && i <= 2 * kn && scale[(i - 1) / 2] < 1.0; };
 	for (int i = 1; i < count; ++i)
 	{
 		if (isScaled(i))
@@ -504,9 +513,42 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	Eigen::MatrixXd S = meas.R;
 	S.noalias() += EW.lazyProduct(E.transpose());
 	Eigen::MatrixXd D(m, k);
-	for (int j = 0; j < k; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
+	for (int j = 0; j < kn; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
 	Eigen::MatrixXd Pxz(n, m);
-	Pxz.noalias() = L_.leftCols(k).lazyProduct(D.transpose());  // n × k × m, small: no blocked kernel's packing
+	Pxz.noalias() = L_.leftCols(kn).lazyProduct(D.leftCols(kn).transpose());	// n × kn × m, small: no blocked kernel's packing
+	if (kn < k)
+	{
+		// The affine pairs (j ≥ kn): e± = e₀ ± γ A L_{kn:k,j}, so they add
+		// 2W γ² A G Aᵀ to S and 2W γ² C Aᵀ to Pxz, with C = Σ_{j≥kn} L_j L_{kn:k,j}ᵀ
+		// = P_{:,kn:k} − L_{:,0:kn} L_{kn:k,0:kn}ᵀ and G its rows kn..k−1. A is
+		// h's slope along each read coordinate (a difference: exact for an
+		// affine h), at the sigma points' own step.
+		const int nk = k - kn;
+		Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, nk);
+		TangentVector step = TangentVector::Zero(n);
+		for (int i = kn; i < k; ++i)
+		{
+			if (!(blockOfCoordinate(i, n) & model.uses())) continue;
+			const double h = g * std::sqrt(std::max(P_(i, i), 0.0));
+			step[i] = h > 0 ? h : 1.0;
+			const bool ok = model.predict(x_.boxplus(step), meas, ctx, z_sigma_.col(count));
+			if (!ok || !z_sigma_.col(count).allFinite())
+			{
+				res.why = ok ? "model returned a non-finite h" : "model could not evaluate h";
+				return res;
+			}
+			model.residual(z_sigma_.col(count), z_sigma_.col(0), r);
+			A.col(i - kn) = r / step[i];
+			step[i] = 0;
+		}
+		Eigen::MatrixXd C = P_.middleCols(kn, nk);
+		if (kn > 0) C.noalias() -= L_.leftCols(kn) * L_.block(kn, 0, nk, kn).transpose();
+		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
+		const Eigen::MatrixXd CAt = c_lin * C * A.transpose();
+		Pxz += CAt;
+		S.noalias() += A * CAt.middleRows(kn, nk);
+		if (observed_factor) D.rightCols(nk).noalias() = c_lin * A * L_.block(kn, kn, nk, nk).triangularView<Eigen::Lower>();
+	}
 
 	Eigen::VectorXd nu(m);
 	model.residual(meas.z, z_mean, nu);
@@ -568,7 +610,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
 	downdateSymmetric(P_, W);
-	if (observer_)
+	if (observer_ && !observed_factor)
+		observer_->onOtherChange(P_before_, P_, dx);  // P past column kn not PD: no factored form
+	else if (observer_)
 	{
 		// P⁻¹ W = P⁻¹ L_{:,1:k} Dᵀ L_S⁻ᵀ = [L11⁻ᵀ (L_S⁻¹ D)ᵀ; 0]. A recovery's
 		// widening P += β dx dxᵀ is reported as nothing: to a smoother it is

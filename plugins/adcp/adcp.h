@@ -73,6 +73,12 @@ class AdcpModel final : public SafeMeasurementModel
 	{
 		return kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
 	}
+	/** h is linear in the gyro bias, velocity, currents and bias once the
+	 *  attitude is held (doPredict): only the attitude's sigma points are evaluated. */
+	uint32_t affineIn() const noexcept override
+	{
+		return kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
+	}
 	double gateProbability() const noexcept override { return gate_probability_; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }

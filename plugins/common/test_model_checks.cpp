@@ -25,7 +25,8 @@ enum class Flaw
 	ResidualOffset,
 	NonDeterministic,
 	SkipWithMeasurements,
-	Invalid
+	Invalid,
+	NotAffine	//!< declares affineIn() = position + velocity, but h is quadratic in the position
 };
 
 /** z = north position + 0.1·north velocity (2 numbers), with injectable flaws. */
@@ -37,6 +38,8 @@ class TestModel final : public SafeMeasurementModel
 	{
 		return flaw_ == Flaw::UndeclaredVelocity ? kPosition : (kPosition | kVelocity | kAttitude);
 	}
+	//! h is linear in the position and velocity (true unless NotAffine).
+	uint32_t affineIn() const noexcept override { return kPosition | kVelocity; }
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
 				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
@@ -73,6 +76,7 @@ class TestModel final : public SafeMeasurementModel
 		z[0] = x.p_n.x() + 0.1 * x.v_n.x();
 		z[1] = (x.R_nb * Eigen::Vector3d(1, 0, 0)).y();
 		if (flaw_ == Flaw::UndeclaredGyroBias) z[1] += x.b_w.z();
+		if (flaw_ == Flaw::NotAffine) z[0] += 1e-3 * x.p_n.x() * x.p_n.x();
 		if (flaw_ == Flaw::NanH) z[1] = NAN;
 		if (flaw_ == Flaw::NonDeterministic) z[0] += 1e-6 * ++calls_;
 		return true;
@@ -109,6 +113,14 @@ TEST(ModelChecks, CatchesWrongUsesMask)
 	EXPECT_NE(message(r).find("velocity"), std::string::npos) << message(r);
 	// Also inside the tangent prefix, where the filter itself would not notice.
 	EXPECT_FALSE(check(Flaw::UndeclaredGyroBias));
+}
+
+TEST(ModelChecks, CatchesAWrongAffineDeclaration)
+{
+	const auto r = check(Flaw::NotAffine);
+	EXPECT_FALSE(r);
+	EXPECT_NE(message(r).find("not affine"), std::string::npos) << message(r);
+	EXPECT_NE(message(r).find("position"), std::string::npos) << message(r);
 }
 
 TEST(ModelChecks, CatchesBadNoise)

@@ -112,6 +112,9 @@ class DvlModel final : public SafeMeasurementModel
 	{
 		return kAttitude | kGyroBias | kVelocity | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
 	}
+	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
+	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
+	uint32_t affineIn() const noexcept override { return kGyroBias | kVelocity; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override;

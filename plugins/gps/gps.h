@@ -37,6 +37,8 @@ class GpsModel final : public SafeMeasurementModel
 	GpsModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
+	//! The antenna is at p_n + R_nb r: affine in the position.
+	uint32_t affineIn() const noexcept override { return kPosition; }
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 

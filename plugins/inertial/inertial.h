@@ -30,6 +30,8 @@ class InertialModel final : public SafeMeasurementModel
 	InertialModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override;
+	/** h = R_nbᵀ (a_n − g e_z + 2 Ω × v_n) + b_a: affine in all but the attitude. */
+	uint32_t affineIn() const noexcept override { return kAcceleration | kGravity | kAccelBias | kVelocity; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 
 	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */

@@ -221,6 +221,16 @@ class MeasurementModel
 	 *  east [m] of a point in the navigation frame (a GNSS or acoustic fix):
 	 *  the host records them (position_fixes.csv) and the viewers draw them. */
 	virtual bool reportsPositionFix() const noexcept { return false; }
+	/** Blocks of uses() in which h is affine, h = A y + b, while the other
+	 *  blocks are held (ABI 5). The attitude never is (it is ignored here).
+	 *  The filter then evaluates h only on the sigma points along the
+	 *  Cholesky columns of the blocks before the last non-affine one; the
+	 *  other pairs are exactly ±γ A L_j about the centre's h, so their share
+	 *  of S and Pxz is taken from P and A (A by differences of h at the
+	 *  mean): the same numbers as evaluating them, at a fraction of the
+	 *  cost. Declaring a block h is not affine in gives wrong updates
+	 *  (auvnav/testing/model_checks.h checks it). 0: no such block. */
+	virtual uint32_t affineIn() const noexcept { return 0; }
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

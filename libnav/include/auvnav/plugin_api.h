@@ -30,8 +30,9 @@
 // 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance;
 // 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
 // state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix, config::Node's
-// access record (layout), Measurement's typed payload (layout)
-#define AUVNAV_PLUGIN_ABI_VERSION 4u
+// access record (layout), Measurement's typed payload (layout); 5: MeasurementModel::affineIn
+// (a virtual at the end of the table)
+#define AUVNAV_PLUGIN_ABI_VERSION 5u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 

@@ -81,6 +81,9 @@ enum StateBlock : uint32_t
 /** Number of leading tangent coordinates that cover every block in `mask`,
  *  for a state of `dim` coordinates (kPluginStates covers all of them). */
 int tangentPrefix(uint32_t mask, int dim = idx::core_dim);
+/** The block (a StateBlock bit) tangent coordinate `i` belongs to
+ *  (kPluginStates from idx::extra on; 0 outside the state). */
+uint32_t blockOfCoordinate(int i, int dim = idx::core_dim);
 
 //! Tangent vectors and covariances have the state's run-time dimension
 //! (43 + plugin states) with fixed storage, so they never touch the heap.

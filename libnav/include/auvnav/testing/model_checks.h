@@ -282,7 +282,9 @@ inline std::string vec(const Eigen::VectorXd& v)
  *  - h is unchanged when every block NOT declared in uses() is perturbed by a
  *    large random tangent vector (a wrong uses() mask makes the filter skip
  *    sigma points that matter, silently);
- *  - (x ⊞ δ) ⊟ x = δ for a random δ.
+ *  - (x ⊞ δ) ⊟ x = δ for a random δ;
+ *  - h is affine in the blocks of affineIn(), the others held: along a random
+ *    δ in those blocks, h(x ⊞ δ) ⊟ h(x) = −(h(x ⊞ −δ) ⊟ h(x)) = ½ (h(x ⊞ 2δ) ⊟ h(x)).
  *  `prepare` is called once (models may keep per-sensor state in it). */
 inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mrpt::obs::CObservation& obs,
 											   const FilterContext& ctx, const NavState& x,
@@ -313,6 +315,15 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 		if (mask & b.bit) delta.segment(b.begin, b.size).setZero();
 	if (mask & kPluginStates) delta.tail(x.dim() - idx::core_dim).setZero();
 	const NavState x_far = x.boxplus(delta);
+	// A step in the declared affine blocks only (the attitude never is one).
+	const uint32_t affine = model.affineIn() & mask & ~static_cast<uint32_t>(kAttitude);
+	if ((model.affineIn() & ~static_cast<uint32_t>(kAllBlocks)) != 0)
+		return AssertionFailure() << "affineIn() = 0x" << std::hex << model.affineIn() << " has unknown bits";
+	TangentVector step = RandomTangent(opt.seed * 104729u + 3u, 1.0, 3.0, x.dim());
+	for (const auto& b : stateBlocks())
+		if (!(affine & b.bit)) step.segment(b.begin, b.size).setZero();
+	if (!(affine & kPluginStates)) step.tail(x.dim() - idx::core_dim).setZero();
+	const NavState x_plus = x.boxplus(step), x_minus = x.boxplus(-step), x_twice = x.boxplus(2 * step);
 
 	for (std::size_t k = 0; k < out.size(); ++k)
 	{
@@ -357,6 +368,22 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 				return fail() << "h changed when undeclared blocks (" << blockNames(~mask & kAllBlocks)
 							  << ") were perturbed: " << detail::vec(h) << " -> " << detail::vec(h_far)
 							  << "; uses() = " << blockNames(mask);
+		}
+		if (affine)
+		{
+			Eigen::VectorXd hp(dim), hm(dim), h2x(dim), rp(dim), rm(dim), r2(dim);
+			if (!model.predict(x_plus, m, ctx, hp) || !model.predict(x_minus, m, ctx, hm) ||
+				!model.predict(x_twice, m, ctx, h2x))
+				return fail() << "predict failed along the affine blocks (" << blockNames(affine) << ")";
+			model.residual(hp, h, rp);
+			model.residual(hm, h, rm);
+			model.residual(h2x, h, r2);
+			const double size = 1 + rp.cwiseAbs().maxCoeff() + h.cwiseAbs().maxCoeff();
+			if (!((rp + rm).cwiseAbs().maxCoeff() <= opt.tol * size) ||
+				!((r2 - 2 * rp).cwiseAbs().maxCoeff() <= opt.tol * size))
+				return fail() << "h is not affine in the blocks affineIn() declares (" << blockNames(affine)
+							  << "): steps +d, -d, +2d move h by " << detail::vec(rp) << ", " << detail::vec(rm)
+							  << ", " << detail::vec(r2);
 		}
 	}
 	const auto rt = BoxplusRoundTrip(x, opt.seed);
