@@ -541,12 +541,19 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			A.col(i - kn) = r / step[i];
 			step[i] = 0;
 		}
-		Eigen::MatrixXd C = P_.middleCols(kn, nk);
-		if (kn > 0) C.noalias() -= L_.leftCols(kn) * L_.block(kn, 0, nk, kn).transpose();
+		// C Aᵀ = P_{:,kn:k} Aᵀ − L_{:,0:kn} (A L_{kn:k,0:kn})ᵀ: C itself is never
+		// formed. Lazy products: these are too small for a blocked kernel's packing.
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
-		const Eigen::MatrixXd CAt = c_lin * C * A.transpose();
+		Eigen::MatrixXd CAt(n, m);
+		CAt.noalias() = P_.middleCols(kn, nk).lazyProduct(A.transpose());
+		if (kn > 0)
+		{
+			const Eigen::MatrixXd AL = A.lazyProduct(L_.block(kn, 0, nk, kn));
+			CAt.noalias() -= L_.leftCols(kn).lazyProduct(AL.transpose());
+		}
+		CAt *= c_lin;
 		Pxz += CAt;
-		S.noalias() += A * CAt.middleRows(kn, nk);
+		S.noalias() += A.lazyProduct(CAt.middleRows(kn, nk));
 		if (observed_factor) D.rightCols(nk).noalias() = c_lin * A * L_.block(kn, kn, nk, nk).triangularView<Eigen::Lower>();
 	}
 
