@@ -45,12 +45,31 @@ void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
 	const Eigen::Index n = P.rows(), m = W.cols();
 	for (Eigen::Index j = 0; j < n; ++j)
 	{
-		double* Pj = &P(0, j);
-		for (Eigen::Index l = 0; l < m; ++l)
+		double* __restrict Pj = &P(0, j);
+		Eigen::Index l = 0;
+		// Four columns of W at a time: each entry takes Σ_l W_il W_jl over
+		// the four in the same order as its mirror, so symmetry is kept.
+		for (; l + 4 <= m; l += 4)
 		{
-			const double* Wl = &W(0, l);
-			const double w_jl = Wl[j];
-			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= Wl[i] * w_jl;
+			const double* __restrict W0 = &W(0, l);
+			const double* __restrict W1 = &W(0, l + 1);
+			const double* __restrict W2 = &W(0, l + 2);
+			const double* __restrict W3 = &W(0, l + 3);
+			const double a = W0[j], b = W1[j], c = W2[j], d = W3[j];
+			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= ((W0[i] * a + W1[i] * b) + W2[i] * c) + W3[i] * d;
+		}
+		for (; l + 2 <= m; l += 2)
+		{
+			const double* __restrict W0 = &W(0, l);
+			const double* __restrict W1 = &W(0, l + 1);
+			const double a = W0[j], b = W1[j];
+			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= W0[i] * a + W1[i] * b;
+		}
+		for (; l < m; ++l)
+		{
+			const double* __restrict W0 = &W(0, l);
+			const double a = W0[j];
+			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= W0[i] * a;
 		}
 	}
 }
@@ -514,17 +533,19 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	S.noalias() += EW.lazyProduct(E.transpose());
 	Eigen::MatrixXd D(m, k);
 	for (int j = 0; j < kn; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
+	// Pxz = L_{:,0:kn} Mᵀ (+ the affine pairs' P_{:,kn:k} part below), with M
+	// the sigma points' D less, for affine pairs, their share through L_{:,0:kn}.
+	Eigen::MatrixXd M = D.leftCols(kn);
 	Eigen::MatrixXd Pxz(n, m);
-	Pxz.noalias() = L_.leftCols(kn).lazyProduct(D.leftCols(kn).transpose());	// n × kn × m, small: no blocked kernel's packing
 	if (kn < k)
 	{
 		// The affine pairs (j ≥ kn): e± = e₀ ± γ A L_{kn:k,j}, so they add
 		// 2W γ² A G Aᵀ to S and 2W γ² C Aᵀ to Pxz, with C = Σ_{j≥kn} L_j L_{kn:k,j}ᵀ
-		// = P_{:,kn:k} − L_{:,0:kn} L_{kn:k,0:kn}ᵀ and G its rows kn..k−1. A is
-		// h's slope along each read coordinate (a difference: exact for an
-		// affine h), at the sigma points' own step.
+		// = P_{:,kn:k} − L_{:,0:kn} L_{kn:k,0:kn}ᵀ and G its rows kn..k−1
+		// (C is never formed). A is h's slope along each read coordinate (a
+		// difference: exact for an affine h), at the sigma points' own step.
 		const int nk = k - kn;
-		Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, nk);
+		Eigen::MatrixXd At = Eigen::MatrixXd::Zero(nk, m);	// Aᵀ: columns contiguous for the dot products
 		TangentVector step = TangentVector::Zero(n);
 		for (int i = kn; i < k; ++i)
 		{
@@ -538,24 +559,30 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 				return res;
 			}
 			model.residual(z_sigma_.col(count), z_sigma_.col(0), r);
-			A.col(i - kn) = r / step[i];
+			At.row(i - kn) = r.transpose() / step[i];
 			step[i] = 0;
 		}
-		// C Aᵀ = P_{:,kn:k} Aᵀ − L_{:,0:kn} (A L_{kn:k,0:kn})ᵀ: C itself is never
-		// formed. Lazy products: these are too small for a blocked kernel's packing.
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
-		Eigen::MatrixXd CAt(n, m);
-		CAt.noalias() = P_.middleCols(kn, nk).lazyProduct(A.transpose());
+		// P_{:,kn:k} Aᵀ by rows: P is symmetric, so row j is column j's
+		// segment, contiguous.
+		for (int j = 0; j < n; ++j)
+			for (int i = 0; i < m; ++i) Pxz(j, i) = c_lin * P_.col(j).segment(kn, nk).dot(At.col(i));
+		// G Aᵀ = P_{kn:k,kn:k} Aᵀ − L_{kn:k,0:kn} (A L_{kn:k,0:kn})ᵀ, for S.
+		Eigen::MatrixXd GAt = Pxz.middleRows(kn, nk);
 		if (kn > 0)
 		{
-			const Eigen::MatrixXd AL = A.lazyProduct(L_.block(kn, 0, nk, kn));
-			CAt.noalias() -= L_.leftCols(kn).lazyProduct(AL.transpose());
+			const Eigen::MatrixXd AL = At.transpose().lazyProduct(L_.block(kn, 0, nk, kn));  // m × kn
+			M.noalias() -= c_lin * AL;
+			GAt.noalias() -= c_lin * L_.block(kn, 0, nk, kn).lazyProduct(AL.transpose());
 		}
-		CAt *= c_lin;
-		Pxz += CAt;
-		S.noalias() += A.lazyProduct(CAt.middleRows(kn, nk));
-		if (observed_factor) D.rightCols(nk).noalias() = c_lin * A * L_.block(kn, kn, nk, nk).triangularView<Eigen::Lower>();
+		S.noalias() += At.transpose().lazyProduct(GAt);
+		if (observed_factor)
+			D.rightCols(nk).noalias() = c_lin * At.transpose() * L_.block(kn, kn, nk, nk).triangularView<Eigen::Lower>();
 	}
+	else
+		Pxz.setZero();
+	// n × kn × m, small: a matrix-vector product per measurement coordinate.
+	for (int i = 0; i < m; ++i) Pxz.col(i).noalias() += L_.leftCols(kn) * M.row(i).transpose();
 
 	Eigen::VectorXd nu(m);
 	model.residual(meas.z, z_mean, nu);
