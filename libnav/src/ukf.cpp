@@ -582,7 +582,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	else
 		Pxz.setZero();
 	// n × kn × m, small: a matrix-vector product per measurement coordinate.
-	for (int i = 0; i < m; ++i) Pxz.col(i).noalias() += L_.leftCols(kn) * M.row(i).transpose();
+	// (kn = 0: h affine in all it reads, no sigma point; M has no storage.)
+	if (kn > 0)
+		for (int i = 0; i < m; ++i) Pxz.col(i).noalias() += L_.leftCols(kn) * M.row(i).transpose();
 
 	Eigen::VectorXd nu(m);
 	model.residual(meas.z, z_mean, nu);
