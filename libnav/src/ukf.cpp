@@ -99,6 +99,38 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L)
 	}
 	return true;
 }
+
+/** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, by
+ *  a difference at the sigma points' step γσᵢ (exact for h affine there),
+ *  zero for coordinates of blocks h does not read. z0 = h(x); z_scratch is
+ *  overwritten. False, with `why`, if h fails or is not finite. */
+bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
+				  const NavState& x, const Covariance& P, double gamma, int kn, int k,
+				  const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
+				  Eigen::MatrixXd& At, const char*& why)
+{
+	const int n = static_cast<int>(P.rows());
+	At.setZero(k - kn, z0.size());
+	Eigen::VectorXd dz(z0.size());
+	TangentVector step = TangentVector::Zero(n);
+	for (int i = kn; i < k; ++i)
+	{
+		if (!(blockOfCoordinate(i, n) & model.uses())) continue;
+		const double h = gamma * std::sqrt(std::max(P(i, i), 0.0));
+		step[i] = h > 0 ? h : 1.0;
+		const bool ok = model.predict(x.boxplus(step), meas, ctx, z_scratch);
+		if (!ok || !z_scratch.allFinite())
+		{
+			why = ok ? "model returned a non-finite h" : "model could not evaluate h";
+			return false;
+		}
+		model.residual(z_scratch, z0, dz);
+		At.row(i - kn) = dz.transpose() / step[i];
+		step[i] = 0;
+	}
+	return true;
+}
+
 }  // namespace
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
@@ -545,23 +577,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// (C is never formed). A is h's slope along each read coordinate (a
 		// difference: exact for an affine h), at the sigma points' own step.
 		const int nk = k - kn;
-		Eigen::MatrixXd At = Eigen::MatrixXd::Zero(nk, m);	// Aᵀ: columns contiguous for the dot products
-		TangentVector step = TangentVector::Zero(n);
-		for (int i = kn; i < k; ++i)
-		{
-			if (!(blockOfCoordinate(i, n) & model.uses())) continue;
-			const double h = g * std::sqrt(std::max(P_(i, i), 0.0));
-			step[i] = h > 0 ? h : 1.0;
-			const bool ok = model.predict(x_.boxplus(step), meas, ctx, z_sigma_.col(count));
-			if (!ok || !z_sigma_.col(count).allFinite())
-			{
-				res.why = ok ? "model returned a non-finite h" : "model could not evaluate h";
-				return res;
-			}
-			model.residual(z_sigma_.col(count), z_sigma_.col(0), r);
-			At.row(i - kn) = r.transpose() / step[i];
-			step[i] = 0;
-		}
+		Eigen::MatrixXd At;	 // Aᵀ: columns contiguous for the dot products
+		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma_.col(0), z_sigma_.col(count), At, res.why))
+			return res;
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
 		// P_{:,kn:k} Aᵀ by rows: P is symmetric, so row j is column j's
 		// segment, contiguous.
