@@ -22,6 +22,9 @@ namespace
 // predict nonlinearly under the retraction of state.h; the ADCP bias and the
 // model parameters are affine and independent of them.
 constexpr int kNonlinear = idx::adcp_bias;
+// Of those, attitude and gyro bias turn the attitude; along every other
+// direction the retraction is a plain difference (InertialStepMap).
+constexpr int kTurning = idx::acc;
 
 /** P ← ½(P + Pᵀ), in place over one triangle (the same sums as the
  *  expression, without its temporary: this runs after every step). */
@@ -73,23 +76,21 @@ void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
 		}
 	}
 }
-/** The first k columns of P's lower Cholesky factor, all n rows at once
- *  (L11 and L21 = P21 L11⁻ᵀ together), left-looking: column j is P's
- *  column less the axpys of the columns before it. Contiguous column
- *  operations without a blocked solver's set-up, which dominated at these
- *  sizes (k ≤ 25, n = 43). Rows above the diagonal are zeroed (sigma points
- *  read whole columns). False if P's leading k×k block is not positive
- *  definite (columns of L partly written). */
-/** Columns [from, to) of the lower Cholesky factor of P, the columns
- *  before `from` already in L; false if P is not positive definite there. */
-bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L)
+/** Columns [from, to) of the lower Cholesky factor of P over its first
+ *  `rows` rows (all with rows < 0), the columns before `from` already in L
+ *  over those rows; left-looking: column j is P's column less the axpys of
+ *  the columns before it (contiguous column operations without a blocked
+ *  solver's set-up, which dominated at these sizes). Rows above the
+ *  diagonal are zeroed (sigma points read whole columns). False if P is not
+ *  positive definite there (columns of L partly written). */
+bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int rows = -1)
 {
-	const Eigen::Index n = P.rows();
+	const Eigen::Index n = rows < 0 ? P.rows() : rows;
 	for (Eigen::Index j = from; j < to; ++j)
 	{
 		L.col(j).head(j).setZero();
-		auto Lj = L.col(j).tail(n - j);
-		Lj = P.col(j).tail(n - j);
+		auto Lj = L.col(j).segment(j, n - j);
+		Lj = P.col(j).segment(j, n - j);
 		if (j > 0) Lj.noalias() -= L.block(j, 0, n - j, j) * L.row(j).head(j).transpose();
 		const double d = Lj[0];
 		if (!(d > 0) || !std::isfinite(d)) return false;
@@ -99,6 +100,70 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L)
 	}
 	return true;
 }
+
+/** One prediction step of the first kNonlinear coordinates along departures
+ *  δ that leave attitude and gyro bias at the centre's x (every Cholesky
+ *  column past the gyro bias's). The turns are then the centre's, so the
+ *  retraction (state.h) is a plain difference in every coordinate and
+ *  propagate(x ⊞ δ) ⊟ propagate(x) = J δ + q(δ) exactly: J is the linear map
+ *  (ProcessModel::applyLinearRows) with the current transport's
+ *  linearisation, q the transport's second-order part, Δz(δ) ΔD(δ) / D — the
+ *  same 2-vector added to both currents. */
+class InertialStepMap
+{
+   public:
+	/** x: the centre before the step, R_nb_next its attitude after. */
+	InertialStepMap(const ProcessModel& model, const NavState& x, const Eigen::Matrix3d& R_nb_next,
+					const StepDecay& step)
+		: model_(model), step_(step), R_turn_(R_nb_next * x.R_nb.transpose())
+	{
+		const double D = model.current_far_distance_m, dt = step.dt_s;
+		inv_D_ = D > 0 ? 1.0 / D : 0.0;
+		// The centre's depth change and far-minus-vehicle current after the
+		// decay, as ProcessModel::propagateTurned forms them.
+		dz0_m_ = dt * x.v_n.z() + 0.5 * dt * dt * x.a_n.z();
+		const Eigen::Vector2d mu = model.prior_mean.segment<2>(idx::current_far) -
+								   model.prior_mean.segment<2>(idx::current_vehicle);
+		shear0_ = step.current * (x.current_far_ne - x.current_vehicle_ne) + (1 - step.current) * mu;
+	}
+	/** M ← J M for kNonlinear rows (columns: departures; M's rows of
+	 *  attitude and gyro bias are not read and leave zero). With q, q.col(c)
+	 *  = q(M.col(c)). */
+	template <typename Derived, typename DerivedQ = Eigen::Matrix<double, 2, Eigen::Dynamic>>
+	void apply(Eigen::MatrixBase<Derived>& M, Eigen::MatrixBase<DerivedQ>* q = nullptr) const
+	{
+		const double dt = step_.dt_s;
+		M.template topRows<kTurning>().setZero();
+		// Δz before the position rows change: the velocity and acceleration's part.
+		const Eigen::Matrix<double, 1, Derived::ColsAtCompileTime, Eigen::RowMajor, 1, Derived::MaxColsAtCompileTime> dz =
+			dt * M.row(idx::vel + 2) + (0.5 * dt * dt) * M.row(idx::acc + 2);
+		model_.applyLinearRows(M, step_);
+		// The accelerometer bias is held in body axes and its tangent in
+		// navigation axes (state.h): a departure turns with the body.
+		M.template middleRows<3>(idx::acc_bias) = R_turn_ * M.template middleRows<3>(idx::acc_bias);
+		if (inv_D_ == 0)
+		{
+			if (q) q->setZero();
+			return;
+		}
+		for (Eigen::Index c = 0; c < M.cols(); ++c)
+		{
+			const Eigen::Vector2d shear =
+				M.col(c).template segment<2>(idx::current_far) - M.col(c).template segment<2>(idx::current_vehicle);
+			const Eigen::Vector2d linear = inv_D_ * (dz[c] * shear0_ + dz0_m_ * shear);
+			M.col(c).template segment<2>(idx::current_vehicle) += linear;
+			M.col(c).template segment<2>(idx::current_far) += linear;
+			if (q) q->col(c) = (inv_D_ * dz[c]) * shear;
+		}
+	}
+
+   private:
+	const ProcessModel& model_;
+	const StepDecay& step_;
+	Eigen::Matrix3d R_turn_;  // R_nb after the step times R_nb before, transposed
+	double inv_D_ = 0, dz0_m_ = 0;
+	Eigen::Vector2d shear0_;
+};
 
 /** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, by
  *  a difference at the sigma points' step γσᵢ (exact for h affine there),
@@ -273,13 +338,14 @@ void ManifoldUkf::repairCovariance()
 	++repairs_;
 }
 
-void ManifoldUkf::leadingCholeskyColumns(int k)
+void ManifoldUkf::leadingCholeskyColumns(int k, int whole_columns)
 {
 	const int n = n_;
 	if (L_.rows() != n) L_.setZero(n, n);
+	if (whole_columns < 0 || whole_columns > k) whole_columns = k;
 	for (int attempt = 0; attempt < 2; ++attempt)
 	{
-		if (choleskyColumns(P_, 0, k, L_)) return;
+		if (choleskyColumns(P_, 0, whole_columns, L_) && choleskyColumns(P_, whole_columns, k, L_, k)) return;
 		repairCovariance();
 	}
 	// Still not PD after repair (pathological): fall back to the diagonal.
@@ -290,18 +356,21 @@ void ManifoldUkf::leadingCholeskyColumns(int k)
 void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
 						  Covariance* P_cross)
 {
-	constexpr int k = kNonlinear;
-	const int n = n_;
-	leadingCholeskyColumns(k);
+	constexpr int k = kNonlinear, ks = kTurning;
+	const int n = n_, nl = n - k;
+	// The filter reads columns past the turning ones only over the first k
+	// rows; an observer and P_cross read whole columns.
+	leadingCholeskyColumns(k, observer_ || P_cross ? k : ks);
 	// The observer (a smoother) also needs P's inverse: the remaining columns,
 	// without a repair (the filter must not change because it is observed).
 	const bool full_factor = observer_ && observer_->wantsFullFactor() && choleskyColumns(P_, k, n, L_);
 	const double g = w_.gamma;
-	// Only sigma points along the first k Cholesky columns move the inertial
-	// block; the other 2(n−k) share the centre's propagation of that block.
-	std::array<NavState, 2 * k + 1>& X = sigma_scratch_;
+	// Sigma points are propagated only along the first ks Cholesky columns,
+	// the ones that turn the attitude; every other pair keeps the centre's
+	// attitude and enters in closed form (InertialStepMap).
+	std::array<NavState, 2 * ks + 1>& X = sigma_scratch_;
 	// Turns shared by sigma points: the navigation frame's (all of them) and
-	// the body's at the centre's gyro bias (those along columns past the bias).
+	// the body's at the centre's gyro bias.
 	const Eigen::Matrix3d R_earth_turn = so3::Exp(-omega_ie_n * dt);
 	const Eigen::Matrix3d R_body_turn = so3::Exp((omega_ib_b - x_.b_w) * dt);
 	const StepDecay step = model_.decay(dt);  // the Gauss–Markov φ once, not per point
@@ -310,24 +379,39 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 							   : model_.propagateTurned(x, omega_ib_b, R_earth_turn, step);
 	};
 	X[0] = propagate(x_);
-	std::array<double, k> scale;
-	for (int j = 0; j < k; ++j)
+	std::array<double, ks> scale;
+	for (int j = 0; j < ks; ++j)
 	{
 		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const TangentVector c = (g * scale[j]) * L_.col(j);
 		X[1 + 2 * j] = propagate(x_.boxplus(c));
 		X[2 + 2 * j] = propagate(x_.boxplus(-c));
 	}
-	std::array<double, 2 * k + 1> wm;
+	// The pairs along columns ks… (2(n − ks) points): X± ⊟ X₀ = ±γ J L_j +
+	// γ² q(L_j), so the centre's weight carries their d₀ and their sums enter
+	// below: the mean's 2W Σ q_j, the covariance's 2W Σ (q_j d₀ᵀ + d₀ q_jᵀ +
+	// q_j q_jᵀ) and J (Σ L_j L_jᵀ) Jᵀ = J (P − L_{:,<ks} L_{:,<ks}ᵀ) Jᵀ.
+	const InertialStepMap step_map(model_, x_, X[0].R_nb, step);
+	const int lumped_pairs = n - ks;
+	Eigen::Matrix<double, k, k - ks> JL_rest = L_.block<k, k - ks>(0, ks);
+	Eigen::Matrix<double, 2, k - ks> q_rest;
+	step_map.apply(JL_rest, &q_rest);
+	const Eigen::Vector2d q_each = (g * g) * q_rest.rowwise().sum();	 // Σ_j q(γ L_j), both currents
+	Eigen::Matrix<double, k, 1> q_sum = Eigen::Matrix<double, k, 1>::Zero();
+	q_sum.segment<2>(idx::current_vehicle) = q_each;
+	q_sum.segment<2>(idx::current_far) = q_each;
+	const Eigen::Matrix2d qq = (g * g * g * g) * (q_rest * q_rest.transpose());
+
+	std::array<double, 2 * ks + 1> wm;
 	wm.fill(w_.wi);
-	wm[0] = w_.wm0 + 2 * (n - k) * w_.wi;
+	wm[0] = w_.wm0 + 2 * lumped_pairs * w_.wi;
 	// A scaled pair (ukf.h) has no point on the manifold at the full step: it
 	// is kept as deviations from the centre's propagation, ŷ± = ±a/s + m
 	// (a, m: antisymmetric and symmetric parts at the shorter step), and
 	// enters the mean and covariance as ŷ± − (x̄ ⊟ X₀).
-	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> y;
+	std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1> y;
 	bool any_scaled = false;
-	for (int j = 0; j < k; ++j)
+	for (int j = 0; j < ks; ++j)
 		if (scale[j] < 1.0)
 		{
 			any_scaled = true;
@@ -337,69 +421,71 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 			y[1 + 2 * j] = m + a;
 			y[2 + 2 * j] = m - a;
 		}
-	// A sigma point whose attitude is the centre's (every one along a
-	// Cholesky column past the gyro bias's: same start, same turns) has
-	// X_i ⊟ x̄ = (X₀ ⊟ x̄) + (X_i ⊟ X₀) for any x̄ — the turn dR is shared, the
-	// rest is differences — so X_i ⊟ X₀ is taken once, not per iteration.
-	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> from_centre;
-	std::array<bool, 2 * k + 1> shares_attitude{};
-	for (int i = 1; i < 2 * k + 1; ++i)
-		if (!(scale[(i - 1) / 2] < 1.0) && X[i].R_nb == X[0].R_nb)
-		{
-			shares_attitude[i] = true;
-			from_centre[i] = X[i].boxminus(X[0]).head<k>();
-		}
-	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1>& d) {
+	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1>& d) {
 		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminus(X[0]).head<k>().eval()
 														  : Eigen::Matrix<double, k, 1>::Zero().eval();
 		d[0] = X[0].boxminus(mean).head<k>();
-		for (int j = 0; j < k; ++j)
-			for (int s = 1; s <= 2; ++s)
-			{
-				const int i = 2 * j + s;
-				if (scale[j] < 1.0)
-					d[i] = y[i] - mu;
-				else if (shares_attitude[i])
-					d[i] = d[0] + from_centre[i];
-				else
-					d[i] = X[i].boxminus(mean).head<k>();
-			}
+		for (int i = 1; i < 2 * ks + 1; ++i)
+			d[i] = scale[(i - 1) / 2] < 1.0 ? (y[i] - mu).eval() : X[i].boxminus(mean).head<k>().eval();
 	};
 	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
 	// already the exact mean: A x̄ + b).
 	NavState mean = X[0];
-	std::array<Eigen::Matrix<double, k, 1>, 2 * k + 1> d;
-	for (int iter = 0; iter < 10; ++iter)
+	std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1> d;
+	for (int iter = 0;; ++iter)
 	{
-		deviations(mean, d);
+		deviations(mean, d);  // at the mean that leaves the loop: the ones used below
+		if (iter == 10) break;
 		TangentVector mean_step = TangentVector::Zero(n);
-		for (int i = 0; i < 2 * k + 1; ++i) mean_step.head<k>() += wm[i] * d[i];
+		mean_step.head<k>() = (2 * w_.wi) * q_sum;
+		for (int i = 0; i < 2 * ks + 1; ++i) mean_step.head<k>() += wm[i] * d[i];
 		if (mean_step.squaredNorm() < 1e-26) break;
 		mean = mean.boxplus(mean_step);
 	}
-	deviations(mean, d);
-	// P_NN = Σ W_i d_i d_iᵀ, symmetric: its lower triangle as dot products
-	// over the sigma points (rows of Dt contiguous per coordinate), mirrored.
-	// Half the multiplications of the full product, and no packing of a
-	// blocked kernel, which cost more than the arithmetic at 23 × 47.
-	Eigen::Matrix<double, 2 * k + 1, k> Dt, DtW;
-	for (int i = 0; i < 2 * k + 1; ++i) Dt.row(i) = d[i].transpose();
-	DtW.row(0) = (w_.wc0 + 2 * (n - k) * w_.wi) * Dt.row(0);
-	DtW.bottomRows<2 * k>() = w_.wi * Dt.bottomRows<2 * k>();
+	// P_NN = Σ W_i d_i d_iᵀ over the propagated points (the centre with the
+	// lumped pairs' weight), then the lumped pairs' closed-form sums:
+	// J P Jᵀ − (J L_{:,<ks})(J L_{:,<ks})ᵀ and the q terms. The two outer
+	// products as one: rows of Dt (and their weighted DtW) are the points'
+	// deviations and the J L_j, with weight −1.
+	Eigen::Matrix<double, k, ks> JL_turn = L_.block<k, ks>(0, 0);
+	step_map.apply(JL_turn);
+	constexpr int rows = 2 * ks + 1 + ks;
+	Eigen::Matrix<double, rows, k> Dt, DtW;
+	for (int i = 0; i < 2 * ks + 1; ++i) Dt.row(i) = d[i].transpose();
+	Dt.bottomRows<ks>() = JL_turn.transpose();
+	DtW.row(0) = (w_.wc0 + 2 * lumped_pairs * w_.wi) * Dt.row(0);
+	DtW.middleRows<2 * ks>(1) = w_.wi * Dt.middleRows<2 * ks>(1);
+	DtW.bottomRows<ks>() = -Dt.bottomRows<ks>();
+	Eigen::Matrix<double, k, k> JPJ = P_.topLeftCorner<k, k>();
+	step_map.apply(JPJ);  // J P
+	JPJ.transposeInPlace();
+	step_map.apply(JPJ);  // J P Jᵀ (symmetric to rounding: its triangles' mean below)
+	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
 	Eigen::Matrix<double, k, k> P_NN;
 	for (int j = 0; j < k; ++j)
-		for (int i = j; i < k; ++i) P_NN(i, j) = P_NN(j, i) = DtW.col(i).dot(Dt.col(j));
-	// Cross covariance with the affine part: Σ_j W_i γ (d₊ⱼ − d₋ⱼ)(A c_j)ᵀ.
-	// A's rows past the inertial block are diagonal (a: decay factors), so
-	// the affine rows of A c_j are a ∘ L_{k:,j}; the block is formed as its
-	// transpose, (n−k) × k, whose columns are contiguous axpys.
-	const int nl = n - k;
+		for (int i = j; i < k; ++i)
+			P_NN(i, j) = P_NN(j, i) = 0.5 * (JPJ(i, j) + JPJ(j, i)) + DtW.col(i).dot(Dt.col(j)) +
+									  (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
+	for (int r : {idx::current_vehicle, idx::current_far})
+		for (int c : {idx::current_vehicle, idx::current_far}) P_NN.block<2, 2>(r, c) += (2 * w_.wi) * qq;
+	// Pair differences, Σ_j W γ (d₊ⱼ − d₋ⱼ)(·)ᵀ: D_turn for the propagated
+	// pairs; J L_j for the lumped ones (2 W γ² = 1).
+	Eigen::Matrix<double, k, ks> D_turn;
+	for (int j = 0; j < ks; ++j) D_turn.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
+	// Cross covariance with the affine part, A's rows there diagonal (a: decay
+	// factors): head × tail = Σ_j D_j (a ∘ L_{k:,j})ᵀ = J P_{:k,k:} +
+	// (D_turn − J L_{:k,<ks}) L_{k:,<ks}ᵀ, columns scaled by a.
 	const TangentVector a = model_.diagonalTailFactors(step);
-	Eigen::Matrix<double, k, k> D_pairs;
-	for (int j = 0; j < k; ++j) D_pairs.col(j) = (w_.wi * g) * (d[1 + 2 * j] - d[2 + 2 * j]);
-	Eigen::Matrix<double, Eigen::Dynamic, k, 0, idx::max_dim - k, k> P_LN(nl, k);
-	P_LN.noalias() = L_.bottomLeftCorner(nl, k) * D_pairs.transpose();
-	P_LN = a.asDiagonal() * P_LN;
+	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim - k> P_NL = P_.topRightCorner(k, nl);
+	step_map.apply(P_NL);
+	P_NL.noalias() += (D_turn - JL_turn).lazyProduct(L_.block(k, 0, nl, ks).transpose());
+	P_NL = P_NL * a.asDiagonal();
+	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
+	if (observer_ || P_cross)
+	{
+		D_pairs.leftCols<ks>() = D_turn;
+		D_pairs.rightCols<k - ks>() = JL_rest;
+	}
 	if (P_cross)
 	{
 		// Cov(x_k, x_k+1): sigma point i deviates from x̄_k by ±γ L_j, so the
@@ -422,8 +508,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 			P_(k + j, k + i) = p;
 		}
 	P_.topLeftCorner<k, k>() = P_NN;
-	P_.bottomLeftCorner(nl, k) = P_LN;
-	P_.topRightCorner(k, nl) = P_LN.transpose();
+	P_.topRightCorner(k, nl) = P_NL;
+	P_.bottomLeftCorner(nl, k) = P_NL.transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer

@@ -113,7 +113,9 @@ struct ProcessModel
 
 	/** The linear part (everything but attitude and gyro bias) as the map
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
-	 *  (tangent rows 6…; rows 0..5 untouched; rows past 43 only if M has them). */
+	 *  (tangent rows 6…; rows 0..5 untouched). M has the first idx::adcp_bias
+	 *  rows (the inertial block and the currents) or more: rows past those
+	 *  only as far as M has them. */
 	template <typename Derived>
 	void applyLinearRows(Eigen::MatrixBase<Derived>& M, double dt_s) const
 	{
@@ -148,6 +150,7 @@ void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, const StepDeca
 	M.template middleRows<3>(idx::vel) += dt_s * M.template middleRows<3>(idx::acc);
 	M.template middleRows<3>(idx::acc_bias) *= step.accel_bias;
 	M.template middleRows<4>(idx::current_vehicle) *= step.current;	 // both current states
+	if (M.rows() < idx::core_dim) return;  // the inertial block and currents only
 	M.template middleRows<2>(idx::adcp_bias) *= step.adcp_bias;
 	M.template middleRows<18>(idx::inertia) *= step.parameters;
 	const int extra_rows = std::min<int>(static_cast<int>(M.rows()) - idx::core_dim, static_cast<int>(extra.size()));

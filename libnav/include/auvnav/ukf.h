@@ -208,8 +208,10 @@ class ManifoldUkf
 	static double chiSquareQuantile(int dof, double p);
 
    private:
-	/** First k columns of the lower Cholesky factor of P (repairs P if needed). */
-	void leadingCholeskyColumns(int k);
+	/** First k columns of the lower Cholesky factor of P (repairs P if
+	 *  needed): the first `whole_columns` (all k if negative) over all rows,
+	 *  the others over the first k rows only. */
+	void leadingCholeskyColumns(int k, int whole_columns = -1);
 	void repairCovariance();
 
 	ProcessModel model_;
@@ -221,7 +223,7 @@ class ManifoldUkf
 	Covariance L_;	// scratch: leading Cholesky columns
 	// Scratch buffers for updates (sized once per measurement dimension).
 	Eigen::MatrixXd z_sigma_;
-	std::array<NavState, 2 * idx::adcp_bias + 1> sigma_scratch_;	 // prediction sigma points
+	std::array<NavState, 2 * idx::acc + 1> sigma_scratch_;	// prediction sigma points (along attitude and gyro bias)
 	std::size_t repairs_ = 0;
 	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
 	std::size_t sigma_limit_hits_ = 0;
