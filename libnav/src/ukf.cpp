@@ -146,14 +146,14 @@ class InertialStepMap
 			if (q) q->setZero();
 			return;
 		}
-		for (Eigen::Index c = 0; c < M.cols(); ++c)
+		// Row by row (one current axis at a time, all columns at once).
+		for (int r = 0; r < 2; ++r)
 		{
-			const Eigen::Vector2d shear =
-				M.col(c).template segment<2>(idx::current_far) - M.col(c).template segment<2>(idx::current_vehicle);
-			const Eigen::Vector2d linear = inv_D_ * (dz[c] * shear0_ + dz0_m_ * shear);
-			M.col(c).template segment<2>(idx::current_vehicle) += linear;
-			M.col(c).template segment<2>(idx::current_far) += linear;
-			if (q) q->col(c) = (inv_D_ * dz[c]) * shear;
+			const decltype(dz) shear = M.row(idx::current_far + r) - M.row(idx::current_vehicle + r);
+			const decltype(dz) linear = inv_D_ * (shear0_[r] * dz + dz0_m_ * shear);
+			M.row(idx::current_vehicle + r) += linear;
+			M.row(idx::current_far + r) += linear;
+			if (q) q->row(r) = inv_D_ * dz.cwiseProduct(shear);
 		}
 	}
 
@@ -478,8 +478,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	const TangentVector a = model_.diagonalTailFactors(step);
 	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim - k> P_NL = P_.topRightCorner(k, nl);
 	step_map.apply(P_NL);
-	P_NL.noalias() += (D_turn - JL_turn).lazyProduct(L_.block(k, 0, nl, ks).transpose());
-	P_NL = P_NL * a.asDiagonal();
+	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
+	for (int c = 0; c < nl; ++c)  // fixed-size axpys (a blocked product's set-up costs more here)
+		for (int j = 0; j < ks; ++j) P_NL.col(c) += L_(k + c, j) * D_less_JL.col(j);
+	for (int j = 0; j < nl; ++j) P_NL.col(j) *= a[j];
 	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
 	if (observer_ || P_cross)
 	{
