@@ -669,10 +669,15 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma_.col(0), z_sigma_.col(count), At, res.why))
 			return res;
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
-		// P_{:,kn:k} Aᵀ by rows: P is symmetric, so row j is column j's
-		// segment, contiguous.
-		for (int j = 0; j < n; ++j)
-			for (int i = 0; i < m; ++i) Pxz(j, i) = c_lin * P_.col(j).segment(kn, nk).dot(At.col(i));
+		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
+		// products per entry cost more in set-up than in arithmetic).
+		Pxz.setZero();
+		for (int i = 0; i < m; ++i)
+		{
+			for (int l = 0; l < nk; ++l)
+				if (At(l, i) != 0) Pxz.col(i) += At(l, i) * P_.col(kn + l);
+			Pxz.col(i) *= c_lin;
+		}
 		// G Aᵀ = P_{kn:k,kn:k} Aᵀ − L_{kn:k,0:kn} (A L_{kn:k,0:kn})ᵀ, for S.
 		Eigen::MatrixXd GAt = Pxz.middleRows(kn, nk);
 		if (kn > 0)
