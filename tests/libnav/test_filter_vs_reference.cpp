@@ -217,6 +217,7 @@ struct Case
 	int updates_per_step = 1;  //!< at an update step, this many updates (models in turn)
 	double gyro_bias_sigma = 0.01, rate_scale = 1;
 	bool plugin_states = false;	 //!< append test::appendTestPluginStates
+	bool current_transport = true;	//!< false: the currents do not follow the profile with depth
 };
 
 struct MaxDiffs
@@ -266,6 +267,7 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 					   UtParams ut_fast = {}, UtParams ut_ref = {}, Recorded* rec = nullptr)
 {
 	ProcessModel pm = test::makeProcessModel();
+	if (!c.current_transport) pm.current_far_distance_m = 0;
 	NavState x0 = test::makeState(c.yaw);
 	TangentVector sigma = test::makeSigmas(c.att_sigma);
 	sigma.segment<3>(idx::gyro_bias).setConstant(c.gyro_bias_sigma);
@@ -450,6 +452,17 @@ TEST(FilterVsReference, StronglyNonlinearLargeStepsAgreeWithDenseUkf)
 	// cross-covariance with the affine part carries real nonlinear terms.
 	const MaxDiffs md = runSideBySide(largeStepsCase(), allModels());
 	report("0.5 s steps, 4 rad/s, gyro bias sigma 0.2 rad/s", md);
+	expectAgreement(md);
+}
+
+TEST(FilterVsReference, WithoutCurrentTransportAgreesWithDenseUkf)
+{
+	// The prediction's closed-form pairs (ukf.cpp InertialStepMap) with no
+	// second-order part: the linear map alone, at large steps.
+	Case c = largeStepsCase();
+	c.current_transport = false;
+	const MaxDiffs md = runSideBySide(c, allModels());
+	report("no current transport, 0.5 s steps", md);
 	expectAgreement(md);
 }
 

@@ -15,7 +15,11 @@
  *     biases, acceleration, gravity, velocity, position, currents) propagate
  *     nonlinearly; the remaining 20 coordinates (ADCP bias, model parameters)
  *     are affine and independent, whose unscented transform is exactly
- *     A P Aᵀ: 47 sigma points are propagated instead of 87;
+ *     A P Aᵀ. Within the 23, a pair along a column past the gyro bias's
+ *     keeps the centre's turn, and there the step is J δ + q(δ) exactly (J
+ *     linear, q the current transport's second-order part), so those pairs'
+ *     sums enter in closed form: 13 sigma points are propagated instead of
+ *     87;
  *   - update: a model whose h reads only the first k coordinates (from its
  *     `uses()` mask) needs 2k+1 evaluations and the first k Cholesky columns.
  *  Both give the same numbers as the dense 87-point UKF (tests/libnav keeps
