@@ -40,9 +40,12 @@ void symmetrize(Covariance& P)
 		}
 }
 
-/** P −= W Wᵀ over the whole matrix, column by column (contiguous axpys).
- *  Entry (i, j) and (j, i) take the same products in the same order, so a
- *  symmetric P stays exactly symmetric with no mirroring pass. */
+/** P −= W Wᵀ over the whole matrix, column by column (contiguous axpys),
+ *  up to four columns of W per pass so that each entry of P is loaded and
+ *  stored once per pass. Entry (i, j) and (j, i) take the same products in
+ *  the same order, so a symmetric P stays exactly symmetric with no
+ *  mirroring pass. The three- and four-column passes are Eigen expressions
+ *  (its SSE2 packets): the compiler left those loops scalar. */
 void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
 {
 	const Eigen::Index n = P.rows(), m = W.cols();
@@ -50,16 +53,14 @@ void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
 	{
 		double* __restrict Pj = &P(0, j);
 		Eigen::Index l = 0;
-		// Four columns of W at a time: each entry takes Σ_l W_il W_jl over
-		// the four in the same order as its mirror, so symmetry is kept.
+		Eigen::Map<Eigen::VectorXd> Pcol(Pj, n);
 		for (; l + 4 <= m; l += 4)
+			Pcol.noalias() -= ((W.col(l) * W(j, l) + W.col(l + 1) * W(j, l + 1)) + W.col(l + 2) * W(j, l + 2)) +
+							  W.col(l + 3) * W(j, l + 3);
+		if (m - l == 3)
 		{
-			const double* __restrict W0 = &W(0, l);
-			const double* __restrict W1 = &W(0, l + 1);
-			const double* __restrict W2 = &W(0, l + 2);
-			const double* __restrict W3 = &W(0, l + 3);
-			const double a = W0[j], b = W1[j], c = W2[j], d = W3[j];
-			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= ((W0[i] * a + W1[i] * b) + W2[i] * c) + W3[i] * d;
+			Pcol.noalias() -= (W.col(l) * W(j, l) + W.col(l + 1) * W(j, l + 1)) + W.col(l + 2) * W(j, l + 2);
+			l += 3;
 		}
 		for (; l + 2 <= m; l += 2)
 		{

@@ -334,6 +334,8 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 		}
 		truth = pm.propagate(truth, w, ctx.omega_ie_n, dt);
 		++md.predictions;
+		// P leaves every step exactly symmetric (no symmetrize pass is run).
+		EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0) << "after predict";
 		md.pred_mean = std::max(md.pred_mean, test::meanDiff(fast.state(), ref.state(), ref.covariance()));
 		md.pred_cov = std::max(md.pred_cov, test::covDiff(fast.covariance(), ref.covariance()));
 		if (step % c.update_every != 0) continue;
@@ -348,6 +350,7 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 			const UpdateResult r = fast.update(model, m, ctx);
 			EXPECT_EQ(r.status, UpdateStatus::Accepted) << model.name() << ": " << r.why;
 			EXPECT_TRUE(ref.update(model, m, ctx)) << model.name();
+			EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0) << model.name();
 			++md.updates;
 			md.upd_mean[k] = std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
 			md.upd_cov[k] = std::max(md.upd_cov[k], test::covDiff(fast.covariance(), ref.covariance()));
