@@ -145,6 +145,29 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	return y;
 }
 
+NavState NavState::boxplusCoordinate(int i, double h) const
+{
+	if (i < idx::gyro_bias || i >= idx::inertia)
+	{
+		// A turn, or a parameter / plugin coordinate: the general form.
+		TangentVector delta = TangentVector::Zero(dim());
+		delta[i] = h;
+		return boxplus(delta);
+	}
+	NavState y = *this;
+	auto at = [&](int block) { return i - block; };
+	if (i < idx::acc) y.b_w[at(idx::gyro_bias)] += h;
+	else if (i < idx::gravity) y.a_n[at(idx::acc)] += h;
+	else if (i == idx::gravity) y.g += h;
+	else if (i < idx::vel) y.b_a += R_nb.row(at(idx::acc_bias)).transpose() * h;	// R_nbᵀ (h e_i), as boxplus
+	else if (i < idx::pos) y.v_n[at(idx::vel)] += h;
+	else if (i < idx::current_vehicle) y.p_n[at(idx::pos)] += h;
+	else if (i < idx::current_far) y.current_vehicle_ne[at(idx::current_vehicle)] += h;
+	else if (i < idx::adcp_bias) y.current_far_ne[at(idx::current_far)] += h;
+	else y.b_adcp[at(idx::adcp_bias)] += h;
+	return y;
+}
+
 TangentVector NavState::boxminus(const NavState& y) const
 {
 	if (y.dim() != dim())

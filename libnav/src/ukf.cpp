@@ -178,21 +178,19 @@ bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const 
 	const int n = static_cast<int>(P.rows());
 	At.setZero(k - kn, z0.size());
 	Eigen::VectorXd dz(z0.size());
-	TangentVector step = TangentVector::Zero(n);
 	for (int i = kn; i < k; ++i)
 	{
 		if (!(blockOfCoordinate(i, n) & model.uses())) continue;
-		const double h = gamma * std::sqrt(std::max(P(i, i), 0.0));
-		step[i] = h > 0 ? h : 1.0;
-		const bool ok = model.predict(x.boxplus(step), meas, ctx, z_scratch);
+		const double root = gamma * std::sqrt(std::max(P(i, i), 0.0));
+		const double h = root > 0 ? root : 1.0;
+		const bool ok = model.predict(x.boxplusCoordinate(i, h), meas, ctx, z_scratch);
 		if (!ok || !z_scratch.allFinite())
 		{
 			why = ok ? "model returned a non-finite h" : "model could not evaluate h";
 			return false;
 		}
 		model.residual(z_scratch, z0, dz);
-		At.row(i - kn) = dz.transpose() / step[i];
-		step[i] = 0;
+		At.row(i - kn) = dz.transpose() / h;
 	}
 	return true;
 }

@@ -123,6 +123,10 @@ struct NavState
 	 *  changing heading estimate looked like such a turn, so roll and bias
 	 *  separated spuriously while the heading converged. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
+	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
+	 *  that vector, without forming it or touching the other members
+	 *  (affine slopes by differences, ukf.cpp). */
+	NavState boxplusCoordinate(int i, double h) const;
 	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. Both states have the
 	 *  same dimension (std::invalid_argument otherwise, as for ⊞). */
 	TangentVector boxminus(const NavState& y) const;
