@@ -92,39 +92,49 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	if (x.dim() != dim())
 		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
 									std::to_string(dim()) + " coordinates");
+	// Member by member (this runs per sigma point), the same sums as
+	// applyLinearRows on the flat state followed by the prior-mean terms.
 	NavState y = x;
 	// Body rotation relative to inertial space, then undo the turn of the
 	// Earth-fixed navigation frame.
 	y.R_nb = R_earth_turn * x.R_nb * R_body_turn;
-	TangentVector e = x.euclidean();
-	const TangentVector e0 = e;
-	applyLinearRows(e, step);
-	// Gauss–Markov states relax to their prior mean: x' = φ(x − μ) + μ; the
-	// rows above applied φx, add (1 − φ)μ.
-	TangentVector mu_term = TangentVector::Zero(e.size());
-	const double phi_ba = step.accel_bias, phi_c = step.current, phi_b = step.adcp_bias, phi_p = step.parameters;
-	mu_term.segment<3>(idx::acc_bias) = (1 - phi_ba) * prior_mean.segment<3>(idx::acc_bias);
-	mu_term.segment<4>(idx::current_vehicle) = (1 - phi_c) * prior_mean.segment<4>(idx::current_vehicle);
-	mu_term.segment<2>(idx::adcp_bias) = (1 - phi_b) * prior_mean.segment<2>(idx::adcp_bias);
-	mu_term.segment<18>(idx::inertia) = (1 - phi_p) * prior_mean.segment<18>(idx::inertia);
-	for (int i = 0; i < static_cast<int>(e.size()) - idx::core_dim; ++i)
-		mu_term[idx::extra + i] = (1 - step.extra[i]) * prior_mean[idx::extra + i];
-	e += mu_term;
+	const double dt = step.dt_s;
+	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
+	y.p_n = x.p_n + (dt * x.v_n + (0.5 * dt * dt) * x.a_n);
+	y.v_n = x.v_n + dt * x.a_n;
+	// Gauss–Markov states relax to their prior mean: x' = φx + (1 − φ)μ.
+	const auto relax = [](const auto& v, double phi, const auto& mu) { return (v * phi + (1 - phi) * mu).eval(); };
+	y.b_a = relax(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
+	y.current_vehicle_ne = relax(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
+	y.current_far_ne = relax(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
+	y.b_adcp = relax(x.b_adcp, step.adcp_bias, prior_mean.segment<2>(idx::adcp_bias));
+	const auto relax23 = [&](const Eigen::Matrix<double, 2, 3>& m, int at) {
+		Eigen::Matrix<double, 2, 3> out;
+		for (int r = 0; r < 2; ++r)
+			for (int c = 0; c < 3; ++c)
+				out(r, c) = m(r, c) * step.parameters + (1 - step.parameters) * prior_mean[at + 3 * r + c];
+		return out;
+	};
+	y.M_sub = relax23(x.M_sub, idx::inertia);
+	y.Dl_sub = relax23(x.Dl_sub, idx::damping_lin);
+	y.Dq_sub = relax23(x.Dq_sub, idx::damping_quad);
+	for (int i = 0; i < static_cast<int>(x.extra.size()); ++i)
+	{
+		const double decayed = extra[i].kind == StateProcess::GaussMarkov ? x.extra[i] * step.extra[i] : x.extra[i];
+		y.extra[i] = decayed + (1 - step.extra[i]) * prior_mean[idx::extra + i];
+	}
 	if (current_far_distance_m > 0)
 	{
 		// The vehicle (and the far point D below it) moved Δz along the linear
 		// profile the ADCP observes: both currents shift by Δz times its
 		// gradient, which stays; exact for any step.
-		const double dz_m = e[idx::pos + 2] - e0[idx::pos + 2];
-		const Eigen::Vector2d shift = (dz_m / current_far_distance_m) *
-									  (e.segment<2>(idx::current_far) - e.segment<2>(idx::current_vehicle));
-		e.segment<2>(idx::current_vehicle) += shift;
-		e.segment<2>(idx::current_far) += shift;
+		const double dz_m = y.p_n.z() - x.p_n.z();
+		const Eigen::Vector2d shift = (dz_m / current_far_distance_m) * (y.current_far_ne - y.current_vehicle_ne);
+		y.current_vehicle_ne += shift;
+		y.current_far_ne += shift;
 	}
 	const double phi_g = step.gyro_bias;
-	e.segment<3>(idx::gyro_bias) =
-		phi_g * e0.segment<3>(idx::gyro_bias) + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
-	y.setEuclidean(e);
+	y.b_w = phi_g * x.b_w + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
 	return y;
 }
 
