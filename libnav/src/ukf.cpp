@@ -6,6 +6,9 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <array>
 #include <cmath>
 #include <limits>
@@ -40,40 +43,74 @@ void symmetrize(Covariance& P)
 		}
 }
 
-/** P −= W Wᵀ over the whole matrix, column by column (contiguous axpys),
- *  up to four columns of W per pass so that each entry of P is loaded and
- *  stored once per pass. Entry (i, j) and (j, i) take the same products in
- *  the same order, so a symmetric P stays exactly symmetric with no
- *  mirroring pass. The three- and four-column passes are Eigen expressions
- *  (its SSE2 packets): the compiler left those loops scalar. */
+/** Rows j… of column j of P less W_{:,l:l+C} W_{j,l:l+C}ᵀ, each new entry
+ *  also stored at its mirror (j, i): one triangle's arithmetic, P exactly
+ *  symmetric, and no separate mirroring pass (its strided loads cost what
+ *  the triangle saved). The sums associate as ((w₀a + w₁b) + w₂c) + w₃d,
+ *  the order of the whole-matrix passes before, so results are unchanged
+ *  bit for bit. SSE2 packets where the compiler has them (it left the
+ *  multi-stream loop scalar); the scalar loop is the same arithmetic. */
+template <int C>
+void downdateColumnTail(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict W,
+						const double* __restrict w_j)
+{
+	const double* W0 = W;
+	const double* W1 = C > 1 ? W + n : W;
+	const double* W2 = C > 2 ? W + 2 * n : W;
+	const double* W3 = C > 3 ? W + 3 * n : W;
+	double* __restrict Pj = P + j * n;
+	Eigen::Index i = j;
+#if defined(__SSE2__)
+	const __m128d a = _mm_set1_pd(w_j[0]);
+	const __m128d b = _mm_set1_pd(C > 1 ? w_j[1] : 0.0);
+	const __m128d c = _mm_set1_pd(C > 2 ? w_j[2] : 0.0);
+	const __m128d d = _mm_set1_pd(C > 3 ? w_j[3] : 0.0);
+	for (; i + 2 <= n; i += 2)
+	{
+		__m128d s = _mm_mul_pd(_mm_loadu_pd(W0 + i), a);
+		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W1 + i), b));
+		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W2 + i), c));
+		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W3 + i), d));
+		const __m128d p = _mm_sub_pd(_mm_loadu_pd(Pj + i), s);
+		_mm_storeu_pd(Pj + i, p);
+		_mm_storel_pd(P + i * n + j, p);
+		_mm_storeh_pd(P + (i + 1) * n + j, p);
+	}
+#endif
+	for (; i < n; ++i)
+	{
+		double s = W0[i] * w_j[0];
+		if constexpr (C > 1) s = s + W1[i] * w_j[1];
+		if constexpr (C > 2) s = s + W2[i] * w_j[2];
+		if constexpr (C > 3) s = s + W3[i] * w_j[3];
+		const double p = Pj[i] - s;
+		Pj[i] = p;
+		P[i * n + j] = p;
+	}
+}
+
+/** P −= W Wᵀ for a symmetric P (exactly symmetric after), column by column,
+ *  up to four columns of W per pass so that each entry is loaded and stored
+ *  once per pass. */
 void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
 {
 	const Eigen::Index n = P.rows(), m = W.cols();
+	double* p = P.data();
 	for (Eigen::Index j = 0; j < n; ++j)
 	{
-		double* __restrict Pj = &P(0, j);
 		Eigen::Index l = 0;
-		Eigen::Map<Eigen::VectorXd> Pcol(Pj, n);
-		for (; l + 4 <= m; l += 4)
-			Pcol.noalias() -= ((W.col(l) * W(j, l) + W.col(l + 1) * W(j, l + 1)) + W.col(l + 2) * W(j, l + 2)) +
-							  W.col(l + 3) * W(j, l + 3);
-		if (m - l == 3)
+		for (; l < m; l += 4)
 		{
-			Pcol.noalias() -= (W.col(l) * W(j, l) + W.col(l + 1) * W(j, l + 1)) + W.col(l + 2) * W(j, l + 2);
-			l += 3;
-		}
-		for (; l + 2 <= m; l += 2)
-		{
-			const double* __restrict W0 = &W(0, l);
-			const double* __restrict W1 = &W(0, l + 1);
-			const double a = W0[j], b = W1[j];
-			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= W0[i] * a + W1[i] * b;
-		}
-		for (; l < m; ++l)
-		{
-			const double* __restrict W0 = &W(0, l);
-			const double a = W0[j];
-			for (Eigen::Index i = 0; i < n; ++i) Pj[i] -= W0[i] * a;
+			const double w_j[4] = {W(j, l), l + 1 < m ? W(j, l + 1) : 0.0, l + 2 < m ? W(j, l + 2) : 0.0,
+								   l + 3 < m ? W(j, l + 3) : 0.0};
+			const double* Wl = &W(0, l);
+			switch (std::min<Eigen::Index>(4, m - l))
+			{
+				case 4: downdateColumnTail<4>(p, n, j, Wl, w_j); break;
+				case 3: downdateColumnTail<3>(p, n, j, Wl, w_j); break;
+				case 2: downdateColumnTail<2>(p, n, j, Wl, w_j); break;
+				default: downdateColumnTail<1>(p, n, j, Wl, w_j); break;
+			}
 		}
 	}
 }
