@@ -43,76 +43,89 @@ void symmetrize(Covariance& P)
 		}
 }
 
-/** Rows j… of column j of P less W_{:,l:l+C} W_{j,l:l+C}ᵀ, each new entry
- *  also stored at its mirror (j, i): one triangle's arithmetic, P exactly
- *  symmetric, and no separate mirroring pass (its strided loads cost what
- *  the triangle saved). The sums associate as ((w₀a + w₁b) + w₂c) + w₃d,
- *  the order of the whole-matrix passes before, so results are unchanged
- *  bit for bit. SSE2 packets where the compiler has them (it left the
- *  multi-stream loop scalar); the scalar loop is the same arithmetic. */
-template <int C>
-void downdateColumnTail(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict W,
-						const double* __restrict w_j)
+/** y[i] −= Σ_c coef[c] X[c·x_stride + i] for i in [from, to), C ≤ 4
+ *  columns of X at once so that y is loaded and stored once; the sums
+ *  associate as ((x₀a + x₁b) + x₂c) + x₃d. With kMirror each new y[i] is
+ *  also stored at mirror[i·mirror_stride] (a symmetric matrix's other
+ *  triangle). SSE2 packets where the compiler has them (it left these
+ *  multi-stream loops scalar, and Eigen's matrix-vector kernel costs more
+ *  in set-up than in arithmetic at these sizes); the scalar loop is the same
+ *  arithmetic. */
+template <int C, bool kMirror = false>
+void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, const double* __restrict X,
+					 Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
+					 Eigen::Index mirror_stride = 0)
 {
-	const double* W0 = W;
-	const double* W1 = C > 1 ? W + n : W;
-	const double* W2 = C > 2 ? W + 2 * n : W;
-	const double* W3 = C > 3 ? W + 3 * n : W;
-	double* __restrict Pj = P + j * n;
-	Eigen::Index i = j;
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	Eigen::Index i = from;
 #if defined(__SSE2__)
-	const __m128d a = _mm_set1_pd(w_j[0]);
-	const __m128d b = _mm_set1_pd(C > 1 ? w_j[1] : 0.0);
-	const __m128d c = _mm_set1_pd(C > 2 ? w_j[2] : 0.0);
-	const __m128d d = _mm_set1_pd(C > 3 ? w_j[3] : 0.0);
-	for (; i + 2 <= n; i += 2)
+	const __m128d a = _mm_set1_pd(coef[0]);
+	const __m128d b = _mm_set1_pd(C > 1 ? coef[1] : 0.0);
+	const __m128d c = _mm_set1_pd(C > 2 ? coef[2] : 0.0);
+	const __m128d d = _mm_set1_pd(C > 3 ? coef[3] : 0.0);
+	for (; i + 2 <= to; i += 2)
 	{
-		__m128d s = _mm_mul_pd(_mm_loadu_pd(W0 + i), a);
-		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W1 + i), b));
-		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W2 + i), c));
-		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(W3 + i), d));
-		const __m128d p = _mm_sub_pd(_mm_loadu_pd(Pj + i), s);
-		_mm_storeu_pd(Pj + i, p);
-		_mm_storel_pd(P + i * n + j, p);
-		_mm_storeh_pd(P + (i + 1) * n + j, p);
+		__m128d s = _mm_mul_pd(_mm_loadu_pd(X0 + i), a);
+		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X1 + i), b));
+		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X2 + i), c));
+		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X3 + i), d));
+		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s);
+		_mm_storeu_pd(y + i, v);
+		if constexpr (kMirror)
+		{
+			_mm_storel_pd(mirror + i * mirror_stride, v);
+			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, v);
+		}
 	}
 #endif
-	for (; i < n; ++i)
+	for (; i < to; ++i)
 	{
-		double s = W0[i] * w_j[0];
-		if constexpr (C > 1) s = s + W1[i] * w_j[1];
-		if constexpr (C > 2) s = s + W2[i] * w_j[2];
-		if constexpr (C > 3) s = s + W3[i] * w_j[3];
-		const double p = Pj[i] - s;
-		Pj[i] = p;
-		P[i * n + j] = p;
+		double s = X0[i] * coef[0];
+		if constexpr (C > 1) s = s + X1[i] * coef[1];
+		if constexpr (C > 2) s = s + X2[i] * coef[2];
+		if constexpr (C > 3) s = s + X3[i] * coef[3];
+		const double v = y[i] - s;
+		y[i] = v;
+		if constexpr (kMirror) mirror[i * mirror_stride] = v;
 	}
 }
 
-/** P −= W Wᵀ for a symmetric P (exactly symmetric after), column by column,
- *  up to four columns of W per pass so that each entry is loaded and stored
- *  once per pass. */
-void downdateSymmetric(Covariance& P, const Eigen::MatrixXd& W)
+/** subtractColumns over m columns of X, in passes of four (then the rest). */
+template <bool kMirror = false, typename Coef>
+void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const double* X, Eigen::Index x_stride,
+						Eigen::Index m, Coef&& coef_of, double* mirror = nullptr, Eigen::Index mirror_stride = 0)
+{
+	for (Eigen::Index l = 0; l < m; l += 4)
+	{
+		const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
+		double coef[4] = {0, 0, 0, 0};
+		for (Eigen::Index c = 0; c < cnt; ++c) coef[c] = coef_of(l + c);
+		const double* Xl = X + l * x_stride;
+		switch (cnt)
+		{
+			case 4: subtractColumns<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			case 3: subtractColumns<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			case 2: subtractColumns<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			default: subtractColumns<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+		}
+	}
+}
+
+/** P −= W Wᵀ for a symmetric P, exactly symmetric after: column j's rows
+ *  j… are computed and each entry stored at its mirror too (one triangle's
+ *  arithmetic with no separate mirroring pass, whose strided loads cost
+ *  what the triangle saved). Entry (i, j) takes the products and order the
+ *  whole-matrix passes took before, so results are unchanged bit for bit. */
+void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	const Eigen::Index n = P.rows(), m = W.cols();
 	double* p = P.data();
 	for (Eigen::Index j = 0; j < n; ++j)
-	{
-		Eigen::Index l = 0;
-		for (; l < m; l += 4)
-		{
-			const double w_j[4] = {W(j, l), l + 1 < m ? W(j, l + 1) : 0.0, l + 2 < m ? W(j, l + 2) : 0.0,
-								   l + 3 < m ? W(j, l + 3) : 0.0};
-			const double* Wl = &W(0, l);
-			switch (std::min<Eigen::Index>(4, m - l))
-			{
-				case 4: downdateColumnTail<4>(p, n, j, Wl, w_j); break;
-				case 3: downdateColumnTail<3>(p, n, j, Wl, w_j); break;
-				case 2: downdateColumnTail<2>(p, n, j, Wl, w_j); break;
-				default: downdateColumnTail<1>(p, n, j, Wl, w_j); break;
-			}
-		}
-	}
+		subtractAllColumns<true>(p + j * n, j, n, W.data(), W.outerStride(), m, [&](Eigen::Index l) { return W(j, l); },
+								 p + j, n);
 }
 /** Columns [from, to) of the lower Cholesky factor of P over its first
  *  `rows` rows (all with rows < 0), the columns before `from` already in L
@@ -210,11 +223,10 @@ class InertialStepMap
 bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
 				  const NavState& x, const Covariance& P, double gamma, int kn, int k,
 				  const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
-				  Eigen::MatrixXd& At, const char*& why)
+				  Eigen::Ref<Eigen::VectorXd> dz, Eigen::Ref<Eigen::MatrixXd> At, const char*& why)
 {
 	const int n = static_cast<int>(P.rows());
-	At.setZero(k - kn, z0.size());
-	Eigen::VectorXd dz(z0.size());
+	At.setZero();
 	for (int i = kn; i < k; ++i)
 	{
 		if (!(blockOfCoordinate(i, n) & model.uses())) continue;
@@ -564,8 +576,10 @@ namespace
  *  q − β a²/(1 + β b) with q = νᵀS⁻¹ν, a = νᵀS⁻¹u, b = uᵀS⁻¹u. Only S⁻¹ is
  *  needed (never S_x⁻¹, which is near singular when the state hardly moves
  *  the measurement), and the added covariance is bounded by the innovation. */
-double inflationAlongCorrection(const Eigen::LLT<Eigen::MatrixXd>& llt_S, const Eigen::VectorXd& nu,
-								const Eigen::VectorXd& Si_nu, const Eigen::VectorXd& u, double gate)
+double inflationAlongCorrection(const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>>& llt_S,
+								const Eigen::Ref<const Eigen::VectorXd>& nu,
+								const Eigen::Ref<const Eigen::VectorXd>& Si_nu,
+								const Eigen::Ref<const Eigen::VectorXd>& u, double gate)
 {
 	const Eigen::VectorXd Si_u = llt_S.solve(u);
 	const double q = nu.dot(Si_nu), a = nu.dot(Si_u), b = u.dot(Si_u);
@@ -611,9 +625,26 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	if (observer_ && !observed_factor) P_before_ = P_;	// reported whole below
 	const double g = w_.gamma;
 	const int count = 2 * kn + 1;
-	if (z_sigma_.rows() != m || z_sigma_.cols() < count) z_sigma_.resize(m, 2 * n + 1);
+	// Temporaries as Maps into one grow-only buffer (sizes below).
+	using MapM = Eigen::Map<Eigen::MatrixXd>;
+	using MapV = Eigen::Map<Eigen::VectorXd>;
+	const std::size_t scratch_size =
+		static_cast<std::size_t>(m) * (9 + 3 * count + 2 * m + k + kn + 2 * n + 2 * (k - kn) + kn);
+	if (update_scratch_.size() < scratch_size) update_scratch_.resize(scratch_size);
+	double* cursor = update_scratch_.data();
+	auto takeM = [&](int rows, int cols) {
+		MapM out(cursor, rows, cols);
+		cursor += static_cast<std::ptrdiff_t>(rows) * cols;
+		return out;
+	};
+	auto takeV = [&](int rows) {
+		MapV out(cursor, rows);
+		cursor += rows;
+		return out;
+	};
+	MapM z_sigma = takeM(m, count + 1);	 // h at the sigma points; the last column h's scratch
 	// Sigma points that move the first k coordinates; the rest evaluate like the centre.
-	if (!model.predict(x_, meas, ctx, z_sigma_.col(0)))
+	if (!model.predict(x_, meas, ctx, z_sigma.col(0)))
 	{
 		res.why = "model could not evaluate h";
 		return res;
@@ -627,14 +658,14 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		for (int s = 0; s < 2; ++s)
 		{
 			const TangentVector c = (s == 0 ? step : -step) * L_.col(j);
-			if (!model.predict(x_.boxplus(c), meas, ctx, z_sigma_.col(1 + 2 * j + s)))
+			if (!model.predict(x_.boxplus(c), meas, ctx, z_sigma.col(1 + 2 * j + s)))
 			{
 				res.why = "model could not evaluate h";
 				return res;
 			}
 		}
 	}
-	if (!z_sigma_.leftCols(count).allFinite())
+	if (!z_sigma.leftCols(count).allFinite())
 	{
 		res.why = "model returned a non-finite h";
 		return res;
@@ -643,16 +674,17 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one. A
 	// scaled pair enters as deviations ±a/s + m from z₀ (no point of its own).
 	const double w_center_c = w_.wc0 + 2 * (n - kn) * w_.wi;
-	Eigen::VectorXd r(m), z_mean = z_sigma_.col(0);
-	Eigen::VectorXd acc = Eigen::VectorXd::Zero(m);
+	MapV r = takeV(m), z_mean = takeV(m), acc = takeV(m);
+	z_mean = z_sigma.col(0);
+	acc.setZero();
 	Eigen::MatrixXd D_scaled;  // ŷ± of the scaled pairs, about z₀ (rarely used)
 	for (int j = 0; j < std::min(kn, 3); ++j)
 		if (scale[j] < 1.0)
 		{
 			if (D_scaled.cols() == 0) D_scaled.resize(m, 6);
 			Eigen::VectorXd rm(m);
-			model.residual(z_sigma_.col(1 + 2 * j), z_sigma_.col(0), r);
-			model.residual(z_sigma_.col(2 + 2 * j), z_sigma_.col(0), rm);
+			model.residual(z_sigma.col(1 + 2 * j), z_sigma.col(0), r);
+			model.residual(z_sigma.col(2 + 2 * j), z_sigma.col(0), rm);
 			const Eigen::VectorXd a = 0.5 * (r - rm) / scale[j], mid = 0.5 * (r + rm);
 			D_scaled.col(2 * j) = mid + a;
 			D_scaled.col(2 * j + 1) = mid - a;
@@ -664,35 +696,37 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			acc += w_.wi * D_scaled.col(i - 1);
 		else
 		{
-			model.residual(z_sigma_.col(i), z_sigma_.col(0), r);
+			model.residual(z_sigma.col(i), z_sigma.col(0), r);
 			acc += w_.wi * r;
 		}
 	}
 	z_mean += acc;	// centre residual is zero; its weight does not matter
-	Eigen::MatrixXd E(m, count);
+	MapM E = takeM(m, count);
 	for (int i = 0; i < count; ++i)
 	{
 		if (isScaled(i))
 			E.col(i) = D_scaled.col(i - 1) - acc;
 		else
 		{
-			model.residual(z_sigma_.col(i), z_mean, r);
+			model.residual(z_sigma.col(i), z_mean, r);
 			E.col(i) = r;
 		}
 	}
 	// S = Σ W_i e_i e_iᵀ + R and Pxz = Σ_j W γ L_j (e₊ⱼ − e₋ⱼ)ᵀ, each as one
 	// product (not 2k+1 small outer products).
-	Eigen::MatrixXd EW = E;
-	EW.col(0) *= w_center_c;
-	EW.rightCols(count - 1) *= w_.wi;
-	Eigen::MatrixXd S = meas.R;
+	MapM EW = takeM(m, count);
+	EW.col(0) = w_center_c * E.col(0);
+	EW.rightCols(count - 1) = w_.wi * E.rightCols(count - 1);
+	MapM S = takeM(m, m);
+	S = meas.R;
 	S.noalias() += EW.lazyProduct(E.transpose());
-	Eigen::MatrixXd D(m, k);
+	MapM D = takeM(m, k);
 	for (int j = 0; j < kn; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
 	// Pxz = L_{:,0:kn} Mᵀ (+ the affine pairs' P_{:,kn:k} part below), with M
 	// the sigma points' D less, for affine pairs, their share through L_{:,0:kn}.
-	Eigen::MatrixXd M = D.leftCols(kn);
-	Eigen::MatrixXd Pxz(n, m);
+	MapM M = takeM(m, kn);
+	M = D.leftCols(kn);
+	MapM Pxz = takeM(n, m);
 	if (kn < k)
 	{
 		// The affine pairs (j ≥ kn): e± = e₀ ± γ A L_{kn:k,j}, so they add
@@ -701,8 +735,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// (C is never formed). A is h's slope along each read coordinate (a
 		// difference: exact for an affine h), at the sigma points' own step.
 		const int nk = k - kn;
-		Eigen::MatrixXd At;	 // Aᵀ: columns contiguous for the dot products
-		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma_.col(0), z_sigma_.col(count), At, res.why))
+		MapM At = takeM(nk, m);	 // Aᵀ: columns contiguous for the dot products
+		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count), takeV(m), At,
+						  res.why))
 			return res;
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
 		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
@@ -715,10 +750,12 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			Pxz.col(i) *= c_lin;
 		}
 		// G Aᵀ = P_{kn:k,kn:k} Aᵀ − L_{kn:k,0:kn} (A L_{kn:k,0:kn})ᵀ, for S.
-		Eigen::MatrixXd GAt = Pxz.middleRows(kn, nk);
+		MapM GAt = takeM(nk, m);
+		GAt = Pxz.middleRows(kn, nk);
 		if (kn > 0)
 		{
-			const Eigen::MatrixXd AL = At.transpose().lazyProduct(L_.block(kn, 0, nk, kn));  // m × kn
+			MapM AL = takeM(m, kn);
+			AL.noalias() = At.transpose().lazyProduct(L_.block(kn, 0, nk, kn));	 // m × kn
 			M.noalias() -= c_lin * AL;
 			GAt.noalias() -= c_lin * L_.block(kn, 0, nk, kn).lazyProduct(AL.transpose());
 		}
@@ -733,15 +770,22 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	if (kn > 0)
 		for (int i = 0; i < m; ++i) Pxz.col(i).noalias() += L_.leftCols(kn) * M.row(i).transpose();
 
-	Eigen::VectorXd nu(m);
+	MapV nu = takeV(m);
 	model.residual(meas.z, z_mean, nu);
-	Eigen::LLT<Eigen::MatrixXd> llt(S);
+	MapM S_factor = takeM(m, m);  // the LLT's storage (S itself is read again on a recovery)
+	S_factor = S;
+	Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(S_factor);
 	if (llt.info() != Eigen::Success || !nu.allFinite())
 	{
 		res.why = "innovation covariance not positive definite";
 		return res;
 	}
-	res.nis = nu.dot(llt.solve(nu));
+	{
+		MapV Si_nu = takeV(m);
+		Si_nu = nu;
+		llt.solveInPlace(Si_nu);
+		res.nis = nu.dot(Si_nu);
+	}
 	res.innovation = nu;
 	const double gate = chiSquareQuantile(m, model.gateProbability());
 	if (res.nis > gate)
@@ -786,9 +830,12 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// With S = L Lᵀ and W = Pxz L⁻ᵀ: dx = K ν = W (L⁻¹ ν) and
 	// P −= K S Kᵀ = W Wᵀ, a rank-m downdate (P
 	// stays exactly symmetric: no symmetrize pass).
-	Eigen::MatrixXd W = Pxz;
+	MapM W = takeM(n, m);
+	W = Pxz;
 	llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);
-	const Eigen::VectorXd u = llt.matrixL().solve(nu);
+	MapV u = takeV(m);
+	u = nu;
+	llt.matrixL().solveInPlace(u);
 	const TangentVector dx = W * u;
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);

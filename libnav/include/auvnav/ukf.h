@@ -225,8 +225,9 @@ class ManifoldUkf
 	int n_ = idx::core_dim;	 // state dimension (43 + plugin states)
 	Covariance P_ = Covariance::Identity(idx::core_dim, idx::core_dim);
 	Covariance L_;	// scratch: leading Cholesky columns
-	// Scratch buffers for updates (sized once per measurement dimension).
-	Eigen::MatrixXd z_sigma_;
+	// Update temporaries (grow-only: no heap allocation once the largest
+	// measurement has been seen), carved into Eigen::Maps per update.
+	std::vector<double> update_scratch_;
 	std::array<NavState, 2 * idx::acc + 1> sigma_scratch_;	// prediction sigma points (along attitude and gyro bias)
 	std::size_t repairs_ = 0;
 	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
