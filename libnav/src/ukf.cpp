@@ -216,9 +216,10 @@ class InertialStepMap
 	Eigen::Vector2d shear0_;
 };
 
-/** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, by
- *  a difference at the sigma points' step γσᵢ (exact for h affine there),
- *  zero for coordinates of blocks h does not read. z0 = h(x); z_scratch is
+/** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, the
+ *  model's own (MeasurementModel::affineSlopes) or else by a difference at
+ *  the sigma points' step γσᵢ (exact for h affine there), zero for
+ *  coordinates of blocks h does not read. z0 = h(x); z_scratch and dz are
  *  overwritten. False, with `why`, if h fails or is not finite. */
 bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
 				  const NavState& x, const Covariance& P, double gamma, int kn, int k,
@@ -227,6 +228,13 @@ bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const 
 {
 	const int n = static_cast<int>(P.rows());
 	At.setZero();
+	if (model.affineSlopes(x, meas, ctx, kn, k, At))
+	{
+		if (At.allFinite()) return true;
+		why = "model returned non-finite affine slopes";
+		return false;
+	}
+	At.setZero();  // a model that declined may have written some
 	for (int i = kn; i < k; ++i)
 	{
 		if (!(blockOfCoordinate(i, n) & model.uses())) continue;

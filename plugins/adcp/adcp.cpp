@@ -169,4 +169,35 @@ bool AdcpModel::doPredict(const NavState& x, const Measurement& m, const FilterC
 	return true;
 }
 
+bool AdcpModel::doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
+							   Eigen::Ref<Eigen::MatrixXd> At) const
+{
+	if (At.cols() != 3 || At.rows() != to - from) return false;
+	const AdcpCell& cell = m.payload<AdcpCell>();
+	const double w = adcpFarWeight(cell.distance_m, cell.max_distance_m);
+	if (!std::isfinite(w)) return false;
+	const Eigen::Map<const Eigen::Vector3d> r_s(cell.r_s);
+	const Eigen::Map<const Eigen::Matrix3d> R_bs(cell.R_bs);
+	const Eigen::Vector3d lever_b = r_s - ctx.imu_position_b;
+	// h = R_sb (R_bn (c(w) − v_n) − (ω_ib − b_w − R_bn ω_ie) × ℓ) + b_adcp, so
+	// along b_w,i: R_sb (e_i × ℓ); along v_n,i: −R_sb R_bn e_i; along the
+	// currents: (1 − w) and w times R_sb R_bn e_i; along b_adcp,i: e_i.
+	const Eigen::Matrix3d R_sn = R_bs.transpose() * x.R_nb.transpose();
+	auto put = [&](int i, const Eigen::Vector3d& slope) {
+		if (i >= from && i < to) At.row(i - from) = slope.transpose();
+	};
+	for (int i = 0; i < 3; ++i)
+	{
+		put(idx::gyro_bias + i, R_bs.transpose() * Eigen::Vector3d::Unit(i).cross(lever_b));
+		put(idx::vel + i, -R_sn.col(i));
+	}
+	for (int i = 0; i < 2; ++i)
+	{
+		put(idx::current_vehicle + i, (1.0 - w) * R_sn.col(i));
+		put(idx::current_far + i, w * R_sn.col(i));
+		put(idx::adcp_bias + i, Eigen::Vector3d::Unit(i));
+	}
+	return true;
+}
+
 }  // namespace auvnav::plugins

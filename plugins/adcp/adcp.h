@@ -99,6 +99,9 @@ class AdcpModel final : public SafeMeasurementModel
 							std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	/** h's slopes in closed form (MeasurementModel::affineSlopes). */
+	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
+						Eigen::Ref<Eigen::MatrixXd> At) const override;
 
    private:
 	std::string label_;

@@ -124,6 +124,12 @@ class AppliedCellsOnly final : public MeasurementModel
 		m_.residual(z, z_pred, r);
 	}
 	double gateProbability() const noexcept override { return m_.gateProbability(); }
+	uint32_t affineIn() const noexcept override { return m_.affineIn(); }
+	bool affineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
+					  Eigen::Ref<Eigen::MatrixXd> At) const noexcept override
+	{
+		return m_.affineSlopes(x, m, ctx, from, to, At);
+	}
 	std::size_t skipped = 0, applied = 0;
 
    private:

@@ -79,4 +79,24 @@ bool InertialModel::doPredict(const NavState& x, const Measurement& /*m*/, const
 	return true;
 }
 
+bool InertialModel::doAffineSlopes(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx, int from,
+								   int to, Eigen::Ref<Eigen::MatrixXd> At) const
+{
+	if (At.cols() != 3 || At.rows() != to - from) return false;
+	auto put = [&](int i, const Eigen::Vector3d& slope) {
+		if (i >= from && i < to) At.row(i - from) = slope.transpose();
+	};
+	// ∂h/∂a_n,i = R_nbᵀ e_i, and the same for the accelerometer bias: its
+	// tangent is in navigation axes (b_a ⊞ t e_i = b_a + t R_nbᵀ e_i, state.h).
+	for (int i = 0; i < 3; ++i)
+	{
+		const Eigen::Vector3d col = x.R_nb.row(i).transpose();
+		put(idx::acc + i, col);
+		put(idx::acc_bias + i, col);
+		if (coriolis_) put(idx::vel + i, x.R_nb.transpose() * (2 * ctx.omega_ie_n.cross(Eigen::Vector3d::Unit(i))));
+	}
+	put(idx::gravity, -x.R_nb.row(2).transpose());
+	return true;
+}
+
 }  // namespace auvnav::plugins

@@ -231,6 +231,20 @@ class MeasurementModel
 	 *  cost. Declaring a block h is not affine in gives wrong updates
 	 *  (auvnav/testing/model_checks.h checks it). 0: no such block. */
 	virtual uint32_t affineIn() const noexcept { return 0; }
+	/** Optionally (ABI 6), h's slopes along the tangent coordinates
+	 *  [from, to) at x, for an h affine in every block of uses() past
+	 *  `from` (the filter asks only then): At.row(i − from) = ∂h/∂x_i along
+	 *  the retraction of state.h (h(x ⊞ t e_i) = h(x) + t At.row(i − from)ᵀ).
+	 *  `At` is (to − from) × m and zero; rows of coordinates h does not read
+	 *  stay zero. False (the default): the filter takes the slopes by
+	 *  differences of h, one evaluation per coordinate, which is exact for
+	 *  an affine h; closed-form slopes save those evaluations and must equal
+	 *  them (auvnav/testing/model_checks.h checks it). */
+	virtual bool affineSlopes(const NavState& /*x*/, const Measurement& /*m*/, const FilterContext& /*ctx*/,
+							  int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const noexcept
+	{
+		return false;
+	}
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they
@@ -269,11 +283,30 @@ class SafeMeasurementModel : public MeasurementModel
 		}
 	}
 
+	bool affineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
+					  Eigen::Ref<Eigen::MatrixXd> At) const noexcept final
+	{
+		try
+		{
+			return doAffineSlopes(x, m, ctx, from, to, At);
+		}
+		catch (...)
+		{
+			return false;
+		}
+	}
+
    protected:
 	virtual PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 									std::vector<Measurement>& out, std::string& why) = 0;
 	virtual bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 						   Eigen::Ref<Eigen::VectorXd> z_pred) const = 0;
+	/** MeasurementModel::affineSlopes; false (the default): by differences. */
+	virtual bool doAffineSlopes(const NavState& /*x*/, const Measurement& /*m*/, const FilterContext& /*ctx*/,
+								int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const
+	{
+		return false;
+	}
 };
 
 }  // namespace auvnav

@@ -284,7 +284,9 @@ inline std::string vec(const Eigen::VectorXd& v)
  *    sigma points that matter, silently);
  *  - (x ⊞ δ) ⊟ x = δ for a random δ;
  *  - h is affine in the blocks of affineIn(), the others held: along a random
- *    δ in those blocks, h(x ⊞ δ) ⊟ h(x) = −(h(x ⊞ −δ) ⊟ h(x)) = ½ (h(x ⊞ 2δ) ⊟ h(x)).
+ *    δ in those blocks, h(x ⊞ δ) ⊟ h(x) = −(h(x ⊞ −δ) ⊟ h(x)) = ½ (h(x ⊞ 2δ) ⊟ h(x));
+ *  - closed-form affineSlopes(), if the model gives them, equal h's unit
+ *    differences along every coordinate the filter asks them for.
  *  `prepare` is called once (models may keep per-sensor state in it). */
 inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mrpt::obs::CObservation& obs,
 											   const FilterContext& ctx, const NavState& x,
@@ -384,6 +386,24 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 				return fail() << "h is not affine in the blocks affineIn() declares (" << blockNames(affine)
 							  << "): steps +d, -d, +2d move h by " << detail::vec(rp) << ", " << detail::vec(rm)
 							  << ", " << detail::vec(r2);
+			// The filter asks for slopes past the last non-affine block.
+			const int from = tangentPrefix(mask & ~affine, x.dim()), to = tangentPrefix(mask, x.dim());
+			Eigen::MatrixXd At = Eigen::MatrixXd::Zero(to - from, dim);
+			if (from < to && model.affineSlopes(x, m, ctx, from, to, At))
+				for (int i = from; i < to; ++i)
+				{
+					TangentVector e = TangentVector::Zero(x.dim());
+					e[i] = 1.0;
+					Eigen::VectorXd he(dim), slope(dim);
+					if (!model.predict(x.boxplus(e), m, ctx, he))
+						return fail() << "predict failed at a unit step along coordinate " << i;
+					model.residual(he, h, slope);
+					const double size_i = 1 + slope.cwiseAbs().maxCoeff() + h.cwiseAbs().maxCoeff();
+					if (!((At.row(i - from).transpose() - slope).cwiseAbs().maxCoeff() <= opt.tol * size_i))
+						return fail() << "affineSlopes() along coordinate " << i << " gives "
+									  << detail::vec(At.row(i - from).transpose()) << ", h's difference "
+									  << detail::vec(slope);
+				}
 		}
 	}
 	const auto rt = BoxplusRoundTrip(x, opt.seed);
