@@ -174,19 +174,25 @@ TangentVector NavState::boxminus(const NavState& y) const
 		throw std::invalid_argument("NavState::boxminus: states of " + std::to_string(dim()) + " and " +
 									std::to_string(y.dim()) + " coordinates");
 	TangentVector d(dim());	 // every entry is written below
-	// dR = Exp(Log(·)) is the relative rotation itself: taken as the product
-	// (no Exp per call: this runs per sigma point and mean iteration).
-	const Eigen::Matrix3d dR = R_nb * y.R_nb.transpose();
-	const Eigen::Vector3d dtheta = so3::Log(dR);
-	d.segment<3>(idx::att) = dtheta;
-	d.segment<3>(idx::gyro_bias) = b_w - y.b_w;
-	d[idx::gravity] = g - y.g;
-	d.segment<3>(idx::pos) = p_n - y.p_n;
+	d.head<idx::adcp_bias>() = boxminusHead(y);
 	d.segment<2>(idx::adcp_bias) = b_adcp - y.b_adcp;
 	put23(d, idx::inertia, M_sub - y.M_sub);
 	put23(d, idx::damping_lin, Dl_sub - y.Dl_sub);
 	put23(d, idx::damping_quad, Dq_sub - y.Dq_sub);
 	d.tail(extra.size()) = extra - y.extra;
+	return d;
+}
+
+Eigen::Matrix<double, idx::adcp_bias, 1> NavState::boxminusHead(const NavState& y) const
+{
+	Eigen::Matrix<double, idx::adcp_bias, 1> d;
+	// dR = Exp(Log(·)) is the relative rotation itself: taken as the product
+	// (no Exp per call: this runs per sigma point and mean iteration).
+	const Eigen::Matrix3d dR = R_nb * y.R_nb.transpose();
+	d.segment<3>(idx::att) = so3::Log(dR);
+	d.segment<3>(idx::gyro_bias) = b_w - y.b_w;
+	d[idx::gravity] = g - y.g;
+	d.segment<3>(idx::pos) = p_n - y.p_n;
 	d.segment<3>(idx::vel) = v_n - dR * y.v_n;
 	d.segment<3>(idx::acc) = a_n - dR * y.a_n;
 	d.segment<2>(idx::current_vehicle) =

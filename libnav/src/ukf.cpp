@@ -471,18 +471,18 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		if (scale[j] < 1.0)
 		{
 			any_scaled = true;
-			const Eigen::Matrix<double, k, 1> yp = X[1 + 2 * j].boxminus(X[0]).head<k>(),
-											  ym = X[2 + 2 * j].boxminus(X[0]).head<k>();
+			const Eigen::Matrix<double, k, 1> yp = X[1 + 2 * j].boxminusHead(X[0]),
+											  ym = X[2 + 2 * j].boxminusHead(X[0]);
 			const Eigen::Matrix<double, k, 1> a = 0.5 * (yp - ym) / scale[j], m = 0.5 * (yp + ym);
 			y[1 + 2 * j] = m + a;
 			y[2 + 2 * j] = m - a;
 		}
 	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1>& d) {
-		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminus(X[0]).head<k>().eval()
+		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminusHead(X[0])
 														  : Eigen::Matrix<double, k, 1>::Zero().eval();
-		d[0] = X[0].boxminus(mean).head<k>();
+		d[0] = X[0].boxminusHead(mean);
 		for (int i = 1; i < 2 * ks + 1; ++i)
-			d[i] = scale[(i - 1) / 2] < 1.0 ? (y[i] - mu).eval() : X[i].boxminus(mean).head<k>().eval();
+			d[i] = scale[(i - 1) / 2] < 1.0 ? (y[i] - mu).eval() : X[i].boxminusHead(mean);
 	};
 	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
 	// already the exact mean: A x̄ + b).

@@ -130,6 +130,11 @@ struct NavState
 	/** x ⊟ y: the tangent vector δ with y ⊞ δ = x. Both states have the
 	 *  same dimension (std::invalid_argument otherwise, as for ⊞). */
 	TangentVector boxminus(const NavState& y) const;
+	/** The first idx::adcp_bias coordinates of x ⊟ y (attitude … the two
+	 *  currents, the inertial block the prediction's mean iterates over),
+	 *  bit for bit those of boxminus, without the parameters' and plugin
+	 *  states' differences. */
+	Eigen::Matrix<double, idx::adcp_bias, 1> boxminusHead(const NavState& y) const;
 
 	/** Flat copy of the Euclidean part (everything but the attitude), in
 	 *  tangent order (entries 0..2 are zero), dim() entries. */
