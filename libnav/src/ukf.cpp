@@ -776,7 +776,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// n × kn × m, small: a matrix-vector product per measurement coordinate.
 	// (kn = 0: h affine in all it reads, no sigma point; M has no storage.)
 	if (kn > 0)
-		for (int i = 0; i < m; ++i) Pxz.col(i).noalias() += L_.leftCols(kn) * M.row(i).transpose();
+		for (int i = 0; i < m; ++i)	 // axpys of L's columns (a gemv's set-up costs more at these sizes)
+			subtractAllColumns(&Pxz(0, i), 0, n, L_.data(), L_.outerStride(), kn,
+							   [&](Eigen::Index j) { return -M(i, j); });
 
 	MapV nu = takeV(m);
 	model.residual(meas.z, z_mean, nu);
@@ -840,11 +842,19 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// stays exactly symmetric: no symmetrize pass).
 	MapM W = takeM(n, m);
 	W = Pxz;
-	llt.matrixU().solveInPlace<Eigen::OnTheRight>(W);
+	// W Lᵀ = Pxz column by column (forward substitution as axpys: the
+	// blocked triangular solver packs its operands, costly for m ≤ 6).
+	const auto& L_S = llt.matrixLLT();	// L in its lower triangle
+	for (int c = 0; c < m; ++c)
+	{
+		subtractAllColumns(&W(0, c), 0, n, W.data(), W.outerStride(), c, [&](Eigen::Index l) { return L_S(c, l); });
+		W.col(c) /= L_S(c, c);
+	}
 	MapV u = takeV(m);
 	u = nu;
 	llt.matrixL().solveInPlace(u);
-	const TangentVector dx = W * u;
+	TangentVector dx = TangentVector::Zero(n);
+	subtractAllColumns(dx.data(), 0, n, W.data(), W.outerStride(), m, [&](Eigen::Index l) { return -u[l]; });
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
 	downdateSymmetric(P_, W);
