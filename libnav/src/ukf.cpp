@@ -750,13 +750,22 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
 		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
 		// products per entry cost more in set-up than in arithmetic).
+		// Runs of coordinates h reads, up to four of P's columns per pass.
 		Pxz.setZero();
 		for (int i = 0; i < m; ++i)
-		{
-			for (int l = 0; l < nk; ++l)
-				if (At(l, i) != 0) Pxz.col(i) += At(l, i) * P_.col(kn + l);
-			Pxz.col(i) *= c_lin;
-		}
+			for (int l = 0; l < nk;)
+			{
+				if (At(l, i) == 0)
+				{
+					++l;
+					continue;
+				}
+				int end = l;
+				while (end < nk && At(end, i) != 0) ++end;
+				subtractAllColumns(&Pxz(0, i), 0, n, &P_(0, kn + l), P_.outerStride(), end - l,
+								   [&](Eigen::Index c) { return -c_lin * At(l + c, i); });
+				l = end;
+			}
 		// G Aᵀ = P_{kn:k,kn:k} Aᵀ − L_{kn:k,0:kn} (A L_{kn:k,0:kn})ᵀ, for S.
 		MapM GAt = takeM(nk, m);
 		GAt = Pxz.middleRows(kn, nk);
