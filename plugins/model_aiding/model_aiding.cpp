@@ -75,6 +75,52 @@ Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen:
 	return inertial + D_l * nu + D_q * nu.cwiseAbs().cwiseProduct(nu) + restoringWrench(vm, x.R_nb);
 }
 
+namespace
+{
+/** A v for A = diag(base) with rows x, y replaced by `sub` in columns x, y, ψ
+ *  (what place() makes of a diagonal matrix). */
+Vector6d applyPlaced(const Matrix6d& base, const Eigen::Matrix<double, 2, 3>& sub, const Vector6d& v)
+{
+	Vector6d y;
+	for (int r = 0; r < 2; ++r) y[r] = sub(r, 0) * v[0] + sub(r, 1) * v[1] + sub(r, 2) * v[5];
+	for (int i = 2; i < 6; ++i) y[i] = base(i, i) * v[i];
+	return y;
+}
+}  // namespace
+
+Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
+								 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
+{
+	const Eigen::Matrix3d Rt = x.R_nb.transpose();
+	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
+	Vector6d nu, nu_dot;
+	nu << Rt * (x.v_n - c_n) - omega_b.cross(r_imu_b), omega_b;
+	nu_dot << Rt * x.a_n - alpha_b.cross(r_imu_b) - omega_b.cross(omega_b.cross(r_imu_b)), alpha_b;
+	const Eigen::Matrix<double, 2, 3> M_sub = physicalSub(x.M_sub);
+	Vector6d inertial;
+	if (vm.coriolis)
+	{
+		nu_dot.head<3>() -= omega_b.cross(nu.head<3>());
+		// C(ν)ν with Ms = ½ (M + Mᵀ): the diagonal, and the sub-block's
+		// off-diagonal pairs (x, y), (x, ψ), (y, ψ) averaged with zeros or
+		// with each other.
+		const double m_xy = 0.5 * (M_sub(0, 1) + M_sub(1, 0)), m_xpsi = 0.5 * M_sub(0, 2), m_ypsi = 0.5 * M_sub(1, 2);
+		Vector6d p;
+		p[0] = M_sub(0, 0) * nu[0] + m_xy * nu[1] + m_xpsi * nu[5];
+		p[1] = m_xy * nu[0] + M_sub(1, 1) * nu[1] + m_ypsi * nu[5];
+		for (int i = 2; i < 5; ++i) p[i] = vm.M(i, i) * nu[i];
+		p[5] = m_xpsi * nu[0] + m_ypsi * nu[1] + vm.M(5, 5) * nu[5];
+		const Eigen::Vector3d v = nu.head<3>(), w = nu.tail<3>(), p1 = p.head<3>(), p2 = p.tail<3>();
+		Vector6d c;
+		c << w.cross(p1), v.cross(p1) + w.cross(p2);
+		inertial = applyPlaced(vm.M, M_sub, nu_dot) + c;
+	}
+	else
+		inertial = applyPlaced(vm.M, M_sub, nu_dot);
+	return inertial + applyPlaced(vm.D_l, physicalSub(x.Dl_sub), nu) +
+		   applyPlaced(vm.D_q, physicalSub(x.Dq_sub), nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
+}
+
 ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
 {
 	vm_.M = diagonal6(cfg, "inertia_diag");
@@ -126,6 +172,8 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& l
 	}
 	else
 		dofs_ = {0, 1, 2, 3, 4, 5};
+	auto diagonal = [](const Matrix6d& A) { return (A - Matrix6d(A.diagonal().asDiagonal())).isZero(0); };
+	diagonal_base_ = diagonal(vm_.M) && diagonal(vm_.D_l) && diagonal(vm_.D_q);
 }
 
 Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
@@ -191,7 +239,8 @@ bool ModelAidingModel::doPredict(const NavState& x, const Measurement& m, const 
 {
 	if (z_pred.size() != static_cast<Eigen::Index>(dofs_.size())) return false;
 	const Eigen::Vector3d omega_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
-	const Vector6d w = predictedWrench(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b);
+	const Vector6d w = diagonal_base_ ? predictedWrenchDiagonal(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b)
+									  : predictedWrench(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b);
 	for (std::size_t i = 0; i < dofs_.size(); ++i) z_pred[static_cast<Eigen::Index>(i)] = w[dofs_[i]];
 	(void)m;
 	return true;

@@ -283,3 +283,35 @@ TEST(ModelAiding, CoriolisFormEqualsInertialAccelerationFormForIsotropicMass)
 	aniso.coriolis = true;
 	EXPECT_GT((predictedWrench(aniso, x, omega, alpha, r_imu) - a_off).norm(), 1e-3);
 }
+
+TEST(ModelAiding, DiagonalWrenchEqualsTheGeneralOne)
+{
+	// The plugin evaluates predictedWrenchDiagonal (its configured matrices
+	// are diagonal): the same wrench as the general form on random states,
+	// with and without the Coriolis term.
+	VehicleModel vm;
+	vm.M = Eigen::Matrix<double, 6, 1>(851, 1042.95, 1200, 150, 160, 170).asDiagonal();
+	vm.D_l = Eigen::Matrix<double, 6, 1>(20, 30, 40, 5, 6, 7).asDiagonal();
+	vm.D_q = Eigen::Matrix<double, 6, 1>(8, 9, 10, 2, 3, 4).asDiagonal();
+	vm.weight_n = 2800;
+	vm.buoyancy_n = 2810;
+	vm.r_g_b = {0.01, -0.02, 0.05};
+	vm.r_b_b = {0.0, 0.01, -0.03};
+	int compared = 0;
+	for (bool coriolis : {true, false})
+		for (uint32_t seed = 1; seed <= 20; ++seed)
+		{
+			vm.coriolis = coriolis;
+			const NavState x = at::RandomNavState(seed);
+			const Eigen::Vector3d omega(0.01 * seed, -0.02, 0.15), alpha(0.001, 0.002 * seed, -0.002), r_imu(0.3, 0.1, -0.03);
+			const Vector6d general = predictedWrench(vm, x, omega, alpha, r_imu);
+			const Vector6d diagonal = predictedWrenchDiagonal(vm, x, omega, alpha, r_imu);
+			ASSERT_TRUE(general.allFinite());
+			EXPECT_LE((general - diagonal).cwiseAbs().maxCoeff(), 1e-12 * (1 + general.cwiseAbs().maxCoeff()))
+				<< "seed " << seed << ": " << general.transpose() << " vs " << diagonal.transpose();
+			// The random sub-blocks are full (every placed entry matters).
+			EXPECT_NE(x.M_sub(0, 2), 0.0);
+			++compared;
+		}
+	EXPECT_EQ(compared, 40);
+}
