@@ -114,18 +114,111 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 	}
 }
 
+/** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
+ *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
+ *  j + 1… of column j + 1, each new entry also stored at its mirror. Both
+ *  columns share the loads of W's rows; every entry takes the products and
+ *  order of subtractColumns. */
+template <int C>
+void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
+						Eigen::Index x_stride, const double* a, const double* b)
+{
+	double* __restrict P0 = P + j * n;
+	double* __restrict P1 = P0 + n;
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	auto sum = [&](const double* c, Eigen::Index i) {
+		double s = X0[i] * c[0];
+		if constexpr (C > 1) s = s + X1[i] * c[1];
+		if constexpr (C > 2) s = s + X2[i] * c[2];
+		if constexpr (C > 3) s = s + X3[i] * c[3];
+		return s;
+	};
+	P0[j] = P0[j] - sum(a, j);	// the diagonal of column j (its own mirror)
+	Eigen::Index i = j + 1;
+#if defined(__SSE2__)
+	__m128d ca[4], cb[4];
+	for (int c = 0; c < C; ++c)
+	{
+		ca[c] = _mm_set1_pd(a[c]);
+		cb[c] = _mm_set1_pd(b[c]);
+	}
+	for (; i + 2 <= n; i += 2)
+	{
+		const __m128d x0 = _mm_loadu_pd(X0 + i);
+		__m128d s0 = _mm_mul_pd(x0, ca[0]), s1 = _mm_mul_pd(x0, cb[0]);
+		if constexpr (C > 1)
+		{
+			const __m128d x = _mm_loadu_pd(X1 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[1]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[1]));
+		}
+		if constexpr (C > 2)
+		{
+			const __m128d x = _mm_loadu_pd(X2 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[2]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[2]));
+		}
+		if constexpr (C > 3)
+		{
+			const __m128d x = _mm_loadu_pd(X3 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[3]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[3]));
+		}
+		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
+		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
+		_mm_storeu_pd(P0 + i, v0);
+		_mm_storeu_pd(P1 + i, v1);
+		// Mirrors: (j, i), (j, i+1) and (j+1, i), (j+1, i+1) are adjacent
+		// pairs in columns i and i + 1.
+		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
+		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
+	}
+#endif
+	for (; i < n; ++i)
+	{
+		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		P0[i] = v0;
+		P1[i] = v1;
+		P[i * n + j] = v0;
+		P[i * n + j + 1] = v1;
+	}
+}
+
 /** P −= W Wᵀ for a symmetric P, exactly symmetric after: column j's rows
  *  j… are computed and each entry stored at its mirror too (one triangle's
  *  arithmetic with no separate mirroring pass, whose strided loads cost
- *  what the triangle saved). Entry (i, j) takes the products and order the
- *  whole-matrix passes took before, so results are unchanged bit for bit. */
+ *  what the triangle saved), two columns of P at a time sharing the loads
+ *  of W. Entry (i, j) takes the products and order the whole-matrix passes
+ *  took before, so results are unchanged bit for bit. */
 void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
-	const Eigen::Index n = P.rows(), m = W.cols();
+	const Eigen::Index n = P.rows(), m = W.cols(), ws = W.outerStride();
 	double* p = P.data();
-	for (Eigen::Index j = 0; j < n; ++j)
-		subtractAllColumns<true>(p + j * n, j, n, W.data(), W.outerStride(), m, [&](Eigen::Index l) { return W(j, l); },
-								 p + j, n);
+	Eigen::Index j = 0;
+	for (; j + 2 <= n; j += 2)
+		for (Eigen::Index l = 0; l < m; l += 4)
+		{
+			const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
+			double a[4] = {0, 0, 0, 0}, b[4] = {0, 0, 0, 0};
+			for (Eigen::Index c = 0; c < cnt; ++c)
+			{
+				a[c] = W(j, l + c);
+				b[c] = W(j + 1, l + c);
+			}
+			const double* Wl = W.data() + l * ws;
+			switch (cnt)
+			{
+				case 4: downdateColumnPair<4>(p, n, j, Wl, ws, a, b); break;
+				case 3: downdateColumnPair<3>(p, n, j, Wl, ws, a, b); break;
+				case 2: downdateColumnPair<2>(p, n, j, Wl, ws, a, b); break;
+				default: downdateColumnPair<1>(p, n, j, Wl, ws, a, b); break;
+			}
+		}
+	for (; j < n; ++j)
+		subtractAllColumns<true>(p + j * n, j, n, W.data(), ws, m, [&](Eigen::Index l) { return W(j, l); }, p + j, n);
 }
 /** Columns [from, to) of the lower Cholesky factor of P over its first
  *  `rows` rows (all with rows < 0), the columns before `from` already in L
