@@ -492,26 +492,45 @@ void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlo
 }
 
 
-// A real SIGKILL of the real process at ~2 s and ~5 s of the sample played
-// twice (to be still running at 5 s).
+/** Wall time of one uninterrupted run over `rawlog` with the kill tests'
+ *  output settings: kills are placed inside a run from it, so that a faster
+ *  navigator or machine does not finish before the kill (the navigator runs
+ *  the repeated sample at ~400× real time here, and our machines differ ~3×). */
+double uninterruptedRunWall(const fs::path& base, const fs::path& rawlog)
+{
+	const fs::path dir = base / "uninterrupted";
+	fs::create_directories(dir);
+	const Outcome o = runNavigator(
+		runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir);
+	EXPECT_EQ(o.signal, 0) << o.output;
+	fs::remove_all(dir);
+	return o.wall_s;
+}
+
+// A real SIGKILL of the real process at ~2 s and ~5 s (at most a fifth and
+// half of an uninterrupted run) of the sample played twice.
 TEST(RunKill, SigkillLeavesWholeLinesAndAValidSummary)
 {
 	const auto base = workDir();
 	const fs::path twice = base / "sample_twice.rawlog";
 	writeSampleRepeated(twice, 2);
-	expectKilledRunLeftWholeOutputs(base, twice, 2.0 * kKillDelayScale, false);
-	expectKilledRunLeftWholeOutputs(base, twice, 5.0 * kKillDelayScale, true);
+	const double whole_s = uninterruptedRunWall(base, twice);
+	std::printf("uninterrupted run: %.2f s\n", whole_s);
+	expectKilledRunLeftWholeOutputs(base, twice, std::min(2.0 * kKillDelayScale, 0.2 * whole_s), false);
+	expectKilledRunLeftWholeOutputs(base, twice, std::min(5.0 * kKillDelayScale, 0.5 * whole_s), true);
 }
 
-// The same at ~30 s, on the sample played 12 times (~2.8 h of data, ~60 s of
-// run on a fast machine): buffers that fill and files that grow past their
-// first megabytes are cut whole too.
+// The same at ~30 s (at most 60 % of an uninterrupted run), on the sample
+// played 12 times (~2.8 h of data, ~25 s of run on a fast machine): buffers
+// that fill and files that grow past their first megabytes are cut whole too.
 TEST(RunKill, SigkillAfterHalfAMinuteLeavesWholeLinesAndAValidSummary)
 {
 	const auto base = workDir();
 	const fs::path log = base / "sample_12x.rawlog";
 	writeSampleRepeated(log, 12);
-	expectKilledRunLeftWholeOutputs(base, log, 30.0, true);
+	const double whole_s = uninterruptedRunWall(base, log);
+	std::printf("uninterrupted run: %.2f s\n", whole_s);
+	expectKilledRunLeftWholeOutputs(base, log, std::min(30.0, 0.6 * whole_s), true);
 	fs::remove(log);
 }
 
