@@ -32,6 +32,15 @@ void place(Matrix6d& M, const Eigen::Matrix<double, 2, 3>& sub)
 		M(r, 5) = sub(r, 2);
 	}
 }
+/** ν (velocity relative to the water, turn rate) and ν̇ at the body origin. */
+void bodyMotion(const NavState& x, const Eigen::Vector3d& omega_b, const Eigen::Vector3d& alpha_b,
+				const Eigen::Vector3d& r_imu_b, Vector6d& nu, Vector6d& nu_dot)
+{
+	const Eigen::Matrix3d Rt = x.R_nb.transpose();
+	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
+	nu << Rt * (x.v_n - c_n) - omega_b.cross(r_imu_b), omega_b;
+	nu_dot << Rt * x.a_n - alpha_b.cross(r_imu_b) - omega_b.cross(omega_b.cross(r_imu_b)), alpha_b;
+}
 }  // namespace
 
 Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb)
@@ -56,11 +65,8 @@ Vector6d coriolisWrench(const Matrix6d& M, const Vector6d& nu)
 Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
 						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
 {
-	const Eigen::Matrix3d Rt = x.R_nb.transpose();
-	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
 	Vector6d nu, nu_dot;
-	nu << Rt * (x.v_n - c_n) - omega_b.cross(r_imu_b), omega_b;
-	nu_dot << Rt * x.a_n - alpha_b.cross(r_imu_b) - omega_b.cross(omega_b.cross(r_imu_b)), alpha_b;
+	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
 	Matrix6d M = vm.M, D_l = vm.D_l, D_q = vm.D_q;
 	place(M, physicalSub(x.M_sub));
 	place(D_l, physicalSub(x.Dl_sub));
@@ -91,11 +97,8 @@ Vector6d applyPlaced(const Matrix6d& base, const Eigen::Matrix<double, 2, 3>& su
 Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
 								 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
 {
-	const Eigen::Matrix3d Rt = x.R_nb.transpose();
-	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
 	Vector6d nu, nu_dot;
-	nu << Rt * (x.v_n - c_n) - omega_b.cross(r_imu_b), omega_b;
-	nu_dot << Rt * x.a_n - alpha_b.cross(r_imu_b) - omega_b.cross(omega_b.cross(r_imu_b)), alpha_b;
+	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
 	const Eigen::Matrix<double, 2, 3> M_sub = physicalSub(x.M_sub);
 	Vector6d inertial;
 	if (vm.coriolis)
