@@ -1,14 +1,13 @@
 #include <auvnav/so3.h>
 #include <auvnav/ukf.h>
 
+#include "column_kernels.h"
+
 #include <limits>
 #include <boost/math/distributions/chi_squared.hpp>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include <array>
 #include <cmath>
 #include <limits>
@@ -43,183 +42,6 @@ void symmetrize(Covariance& P)
 		}
 }
 
-/** y[i] −= Σ_c coef[c] X[c·x_stride + i] for i in [from, to), C ≤ 4
- *  columns of X at once so that y is loaded and stored once; the sums
- *  associate as ((x₀a + x₁b) + x₂c) + x₃d. With kMirror each new y[i] is
- *  also stored at mirror[i·mirror_stride] (a symmetric matrix's other
- *  triangle). SSE2 packets where the compiler has them (it left these
- *  multi-stream loops scalar, and Eigen's matrix-vector kernel costs more
- *  in set-up than in arithmetic at these sizes); the scalar loop is the same
- *  arithmetic. */
-template <int C, bool kMirror = false>
-void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, const double* __restrict X,
-					 Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
-					 Eigen::Index mirror_stride = 0)
-{
-	const double* X0 = X;
-	const double* X1 = C > 1 ? X + x_stride : X;
-	const double* X2 = C > 2 ? X + 2 * x_stride : X;
-	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	Eigen::Index i = from;
-#if defined(__SSE2__)
-	const __m128d a = _mm_set1_pd(coef[0]);
-	const __m128d b = _mm_set1_pd(C > 1 ? coef[1] : 0.0);
-	const __m128d c = _mm_set1_pd(C > 2 ? coef[2] : 0.0);
-	const __m128d d = _mm_set1_pd(C > 3 ? coef[3] : 0.0);
-	for (; i + 2 <= to; i += 2)
-	{
-		__m128d s = _mm_mul_pd(_mm_loadu_pd(X0 + i), a);
-		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X1 + i), b));
-		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X2 + i), c));
-		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X3 + i), d));
-		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s);
-		_mm_storeu_pd(y + i, v);
-		if constexpr (kMirror)
-		{
-			_mm_storel_pd(mirror + i * mirror_stride, v);
-			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, v);
-		}
-	}
-#endif
-	for (; i < to; ++i)
-	{
-		double s = X0[i] * coef[0];
-		if constexpr (C > 1) s = s + X1[i] * coef[1];
-		if constexpr (C > 2) s = s + X2[i] * coef[2];
-		if constexpr (C > 3) s = s + X3[i] * coef[3];
-		const double v = y[i] - s;
-		y[i] = v;
-		if constexpr (kMirror) mirror[i * mirror_stride] = v;
-	}
-}
-
-/** subtractColumns over m columns of X, in passes of four (then the rest). */
-template <bool kMirror = false, typename Coef>
-void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const double* X, Eigen::Index x_stride,
-						Eigen::Index m, Coef&& coef_of, double* mirror = nullptr, Eigen::Index mirror_stride = 0)
-{
-	for (Eigen::Index l = 0; l < m; l += 4)
-	{
-		const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
-		double coef[4] = {0, 0, 0, 0};
-		for (Eigen::Index c = 0; c < cnt; ++c) coef[c] = coef_of(l + c);
-		const double* Xl = X + l * x_stride;
-		switch (cnt)
-		{
-			case 4: subtractColumns<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			case 3: subtractColumns<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			case 2: subtractColumns<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			default: subtractColumns<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-		}
-	}
-}
-
-/** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
- *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
- *  j + 1… of column j + 1, each new entry also stored at its mirror. Both
- *  columns share the loads of W's rows; every entry takes the products and
- *  order of subtractColumns. */
-template <int C>
-void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
-						Eigen::Index x_stride, const double* a, const double* b)
-{
-	double* __restrict P0 = P + j * n;
-	double* __restrict P1 = P0 + n;
-	const double* X0 = X;
-	const double* X1 = C > 1 ? X + x_stride : X;
-	const double* X2 = C > 2 ? X + 2 * x_stride : X;
-	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	auto sum = [&](const double* c, Eigen::Index i) {
-		double s = X0[i] * c[0];
-		if constexpr (C > 1) s = s + X1[i] * c[1];
-		if constexpr (C > 2) s = s + X2[i] * c[2];
-		if constexpr (C > 3) s = s + X3[i] * c[3];
-		return s;
-	};
-	P0[j] = P0[j] - sum(a, j);	// the diagonal of column j (its own mirror)
-	Eigen::Index i = j + 1;
-#if defined(__SSE2__)
-	__m128d ca[4], cb[4];
-	for (int c = 0; c < C; ++c)
-	{
-		ca[c] = _mm_set1_pd(a[c]);
-		cb[c] = _mm_set1_pd(b[c]);
-	}
-	for (; i + 2 <= n; i += 2)
-	{
-		const __m128d x0 = _mm_loadu_pd(X0 + i);
-		__m128d s0 = _mm_mul_pd(x0, ca[0]), s1 = _mm_mul_pd(x0, cb[0]);
-		if constexpr (C > 1)
-		{
-			const __m128d x = _mm_loadu_pd(X1 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[1]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[1]));
-		}
-		if constexpr (C > 2)
-		{
-			const __m128d x = _mm_loadu_pd(X2 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[2]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[2]));
-		}
-		if constexpr (C > 3)
-		{
-			const __m128d x = _mm_loadu_pd(X3 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[3]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[3]));
-		}
-		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
-		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
-		_mm_storeu_pd(P0 + i, v0);
-		_mm_storeu_pd(P1 + i, v1);
-		// Mirrors: (j, i), (j, i+1) and (j+1, i), (j+1, i+1) are adjacent
-		// pairs in columns i and i + 1.
-		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
-		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
-	}
-#endif
-	for (; i < n; ++i)
-	{
-		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
-		P0[i] = v0;
-		P1[i] = v1;
-		P[i * n + j] = v0;
-		P[i * n + j + 1] = v1;
-	}
-}
-
-/** P −= W Wᵀ for a symmetric P, exactly symmetric after: column j's rows
- *  j… are computed and each entry stored at its mirror too (one triangle's
- *  arithmetic with no separate mirroring pass, whose strided loads cost
- *  what the triangle saved), two columns of P at a time sharing the loads
- *  of W. Entry (i, j) takes the products and order the whole-matrix passes
- *  took before, so results are unchanged bit for bit. */
-void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
-{
-	const Eigen::Index n = P.rows(), m = W.cols(), ws = W.outerStride();
-	double* p = P.data();
-	Eigen::Index j = 0;
-	for (; j + 2 <= n; j += 2)
-		for (Eigen::Index l = 0; l < m; l += 4)
-		{
-			const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
-			double a[4] = {0, 0, 0, 0}, b[4] = {0, 0, 0, 0};
-			for (Eigen::Index c = 0; c < cnt; ++c)
-			{
-				a[c] = W(j, l + c);
-				b[c] = W(j + 1, l + c);
-			}
-			const double* Wl = W.data() + l * ws;
-			switch (cnt)
-			{
-				case 4: downdateColumnPair<4>(p, n, j, Wl, ws, a, b); break;
-				case 3: downdateColumnPair<3>(p, n, j, Wl, ws, a, b); break;
-				case 2: downdateColumnPair<2>(p, n, j, Wl, ws, a, b); break;
-				default: downdateColumnPair<1>(p, n, j, Wl, ws, a, b); break;
-			}
-		}
-	for (; j < n; ++j)
-		subtractAllColumns<true>(p + j * n, j, n, W.data(), ws, m, [&](Eigen::Index l) { return W(j, l); }, p + j, n);
-}
 /** Columns [from, to) of the lower Cholesky factor of P over its first
  *  `rows` rows (all with rows < 0), the columns before `from` already in L
  *  over those rows; left-looking: column j is P's column less the axpys of
@@ -235,7 +57,11 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int r
 		L.col(j).head(j).setZero();
 		auto Lj = L.col(j).segment(j, n - j);
 		Lj = P.col(j).segment(j, n - j);
-		if (j > 0) Lj.noalias() -= L.block(j, 0, n - j, j) * L.row(j).head(j).transpose();
+		// Axpys of the earlier columns' rows j… (four per pass; AVX where the
+		// CPU has it: column_kernels.h).
+		if (j > 0)
+			subtractAllColumns(Lj.data(), 0, n - j, L.data() + j, L.outerStride(), j,
+							   [&](Eigen::Index l) { return L(j, l); });
 		const double d = Lj[0];
 		if (!(d > 0) || !std::isfinite(d)) return false;
 		const double root = std::sqrt(d);
@@ -346,6 +172,14 @@ bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const 
 }
 
 }  // namespace
+
+bool wideKernels() { return g_wide_kernels.load(); }
+
+bool setWideKernels(bool on)
+{
+	g_wide_kernels.store(on && cpuHasAvx());
+	return wideKernels();
+}
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
 {
@@ -592,29 +426,26 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		mean = mean.boxplus(mean_step);
 	}
 	// P_NN = Σ W_i d_i d_iᵀ over the propagated points (the centre with the
-	// lumped pairs' weight), then the lumped pairs' closed-form sums:
-	// J P Jᵀ − (J L_{:,<ks})(J L_{:,<ks})ᵀ and the q terms. The two outer
-	// products as one: rows of Dt (and their weighted DtW) are the points'
-	// deviations and the J L_j, with weight −1.
+	// lumped pairs' weight), then the lumped pairs' closed-form sums: their
+	// J L_j L_jᵀ Jᵀ (2 W γ² = 1) and the q terms. As one product: rows of Dt
+	// (and their weighted DtW) are the points' deviations and the J L_j.
+	// (Σ_{j≥ks} J L_j L_jᵀ Jᵀ = J P Jᵀ − (J L_{:,<ks})(J L_{:,<ks})ᵀ over these
+	// rows, formed without J P Jᵀ and without the difference's cancellation.)
 	Eigen::Matrix<double, k, ks> JL_turn = L_.block<k, ks>(0, 0);
 	step_map.apply(JL_turn);
-	constexpr int rows = 2 * ks + 1 + ks;
+	constexpr int rows = 2 * ks + 1 + (k - ks);
 	Eigen::Matrix<double, rows, k> Dt, DtW;
 	for (int i = 0; i < 2 * ks + 1; ++i) Dt.row(i) = d[i].transpose();
-	Dt.bottomRows<ks>() = JL_turn.transpose();
+	Dt.bottomRows<k - ks>() = JL_rest.transpose();
 	DtW.row(0) = (w_.wc0 + 2 * lumped_pairs * w_.wi) * Dt.row(0);
 	DtW.middleRows<2 * ks>(1) = w_.wi * Dt.middleRows<2 * ks>(1);
-	DtW.bottomRows<ks>() = -Dt.bottomRows<ks>();
-	Eigen::Matrix<double, k, k> JPJ = P_.topLeftCorner<k, k>();
-	step_map.apply(JPJ);  // J P
-	JPJ.transposeInPlace();
-	step_map.apply(JPJ);  // J P Jᵀ (symmetric to rounding: its triangles' mean below)
+	DtW.bottomRows<k - ks>() = Dt.bottomRows<k - ks>();
 	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
 	Eigen::Matrix<double, k, k> P_NN;
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i)
-			P_NN(i, j) = P_NN(j, i) = 0.5 * (JPJ(i, j) + JPJ(j, i)) + DtW.col(i).dot(Dt.col(j)) +
-									  (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
+			P_NN(i, j) = P_NN(j, i) =
+				DtW.col(i).dot(Dt.col(j)) + (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
 	for (int r : {idx::current_vehicle, idx::current_far})
 		for (int c : {idx::current_vehicle, idx::current_far}) P_NN.block<2, 2>(r, c) += (2 * w_.wi) * qq;
 	// Pair differences, Σ_j W γ (d₊ⱼ − d₋ⱼ)(·)ᵀ: D_turn for the propagated

@@ -1055,3 +1055,54 @@ TEST(SmootherStretches, AChangeReportedWholeEqualsTheFactoredUpdate)
 	EXPECT_GT(a.sum_dP.diagonal().maxCoeff(), 0.0);	 // the update is there at all
 	(void)n;
 }
+
+// The covariance kernels' AVX path (column_kernels.h) against the SSE2 one:
+// the same products in the same order, so the filter must agree bit for bit,
+// through predictions, whole-state updates (a 43-column factor and downdate)
+// and prefix updates.
+TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
+{
+	if (!setWideKernels(true)) GTEST_SKIP() << "this CPU has no AVX: only the baseline path runs";
+	struct Restore
+	{
+		~Restore() { setWideKernels(true); }
+	} restore;
+	const NavState x0 = test::makeState(0.7);
+	const Covariance P0 = test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
+	const DvlModel dvl;
+	const HydroModel hydro;
+	const RangeDepthModel range;
+	FilterContext ctx;
+	ctx.omega_ie_n = earthRate();
+	ctx.omega_ib_b << 0.02, -0.01, 0.05;
+	const NavState truth = x0.boxplus(0.5 * P0.diagonal().cwiseSqrt());
+	auto run = [&](bool wide) {
+		EXPECT_EQ(setWideKernels(wide), wide);
+		ManifoldUkf ukf(test::makeProcessModel(), UtParams{});
+		ukf.initialize(x0, P0);
+		std::mt19937 rng(11);
+		for (int step = 0; step < 60; ++step)
+		{
+			ukf.predict(ctx.omega_ib_b, ctx.omega_ie_n, 0.01);
+			for (const TestModel* model : {static_cast<const TestModel*>(&dvl), static_cast<const TestModel*>(&hydro),
+										   static_cast<const TestModel*>(&range)})
+			{
+				if (model == &hydro && step % 3 != 0) continue;
+				const Measurement m = makeMeasurement(*model, truth, ctx, rng);
+				EXPECT_NE(ukf.update(*model, m, ctx).status, UpdateStatus::Invalid) << model->name();
+			}
+		}
+		return ukf;
+	};
+	const ManifoldUkf base = run(false), wide = run(true);
+	const Covariance &Pb = base.covariance(), &Pw = wide.covariance();
+	ASSERT_EQ(Pb.rows(), Pw.rows());
+	int differing = 0;
+	for (int j = 0; j < Pb.cols(); ++j)
+		for (int i = 0; i < Pb.rows(); ++i) differing += Pb(i, j) != Pw(i, j);
+	EXPECT_EQ(differing, 0) << "covariance entries that differ between the paths";
+	EXPECT_TRUE((base.state().euclidean().array() == wide.state().euclidean().array()).all());
+	EXPECT_TRUE((base.state().R_nb.array() == wide.state().R_nb.array()).all());
+	// The run moved the state at all (the comparison is not of two initial states).
+	EXPECT_GT(base.state().boxminus(x0).norm(), 1e-3);
+}

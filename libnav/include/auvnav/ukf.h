@@ -66,6 +66,16 @@ struct UtParams
  *  that its attitude part turns by at most `max_rad`. */
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad);
 
+/** Whether the covariance kernels (the update's downdate and column
+ *  products) run 256-bit AVX packets: on when the CPU has AVX, checked at
+ *  run time. The results are the same bit for bit either way (the same
+ *  products in the same order, no fused multiply-add); for tests and
+ *  diagnostics. */
+bool wideKernels();
+/** Turns the AVX path on (only where the CPU has AVX) or off; returns
+ *  wideKernels(). Not meant to be called while a filter runs elsewhere. */
+bool setWideKernels(bool on);
+
 /** Sigma-point weights for dimension n. */
 struct UtWeights
 {

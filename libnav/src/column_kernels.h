@@ -1,0 +1,385 @@
+#pragma once
+/** @file column_kernels.h
+ *  The covariance kernels of ukf.cpp (private to it): y −= Σ_c coef_c X_c
+ *  over up to four columns at once, and the symmetric rank-m downdate
+ *  P −= W Wᵀ written one triangle and mirrored.
+ *
+ *  Three paths, the same arithmetic: every entry takes the same products
+ *  summed in the same order, as separate IEEE multiplies and adds (never a
+ *  fused multiply-add), so results are equal bit for bit whichever path ran:
+ *   - 256-bit AVX packets, when the CPU has AVX (checked at run time, so the
+ *     build keeps the x86-64 baseline); four rows per instruction;
+ *   - 128-bit SSE2 packets (the baseline of x86-64);
+ *   - a scalar loop elsewhere.
+ *  Eigen's own products are left to Eigen: its packet width is fixed at
+ *  compile time, and its matrix-vector kernel costs more in set-up than in
+ *  arithmetic at these sizes anyway.
+ *
+ *  wideKernels() says which path runs; setWideKernels() exists for the tests
+ *  that compare the paths (tests/libnav/test_column_kernels.cpp).
+ */
+#include <auvnav/ukf.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <atomic>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define AUVNAV_AVX_KERNELS 1
+#include <immintrin.h>
+#else
+#define AUVNAV_AVX_KERNELS 0
+#endif
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace auvnav
+{
+namespace
+{
+/** Whether the CPU (and the OS, which must save the wide registers) has AVX. */
+inline bool cpuHasAvx()
+{
+#if AUVNAV_AVX_KERNELS
+	__builtin_cpu_init();
+	return __builtin_cpu_supports("avx");
+#else
+	return false;
+#endif
+}
+/** Whether the AVX path runs: on when the CPU has AVX (setWideKernels). */
+std::atomic<bool> g_wide_kernels{cpuHasAvx()};
+
+/** y[i] −= Σ_c coef[c] X[c·x_stride + i] for i in [from, to), C ≤ 4
+ *  columns of X at once so that y is loaded and stored once; the sums
+ *  associate as ((x₀a + x₁b) + x₂c) + x₃d. With kMirror each new y[i] is
+ *  also stored at mirror[i·mirror_stride] (a symmetric matrix's other
+ *  triangle). SSE2 packets where the compiler has them (it left these
+ *  multi-stream loops scalar); the scalar loop is the same arithmetic. */
+template <int C, bool kMirror = false>
+void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, const double* __restrict X,
+					 Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
+					 Eigen::Index mirror_stride = 0)
+{
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	Eigen::Index i = from;
+#if defined(__SSE2__)
+	const __m128d a = _mm_set1_pd(coef[0]);
+	const __m128d b = _mm_set1_pd(C > 1 ? coef[1] : 0.0);
+	const __m128d c = _mm_set1_pd(C > 2 ? coef[2] : 0.0);
+	const __m128d d = _mm_set1_pd(C > 3 ? coef[3] : 0.0);
+	for (; i + 2 <= to; i += 2)
+	{
+		__m128d s = _mm_mul_pd(_mm_loadu_pd(X0 + i), a);
+		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X1 + i), b));
+		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X2 + i), c));
+		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X3 + i), d));
+		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s);
+		_mm_storeu_pd(y + i, v);
+		if constexpr (kMirror)
+		{
+			_mm_storel_pd(mirror + i * mirror_stride, v);
+			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, v);
+		}
+	}
+#endif
+	for (; i < to; ++i)
+	{
+		double s = X0[i] * coef[0];
+		if constexpr (C > 1) s = s + X1[i] * coef[1];
+		if constexpr (C > 2) s = s + X2[i] * coef[2];
+		if constexpr (C > 3) s = s + X3[i] * coef[3];
+		const double v = y[i] - s;
+		y[i] = v;
+		if constexpr (kMirror) mirror[i * mirror_stride] = v;
+	}
+}
+
+#if AUVNAV_AVX_KERNELS
+/** subtractColumns with four rows per packet (AVX, no FMA: the same
+ *  arithmetic); the rows past the last whole packet as the scalar loop. */
+template <int C, bool kMirror = false>
+__attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eigen::Index from, Eigen::Index to,
+													   const double* __restrict X, Eigen::Index x_stride,
+													   const double* coef, double* __restrict mirror = nullptr,
+													   Eigen::Index mirror_stride = 0)
+{
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	Eigen::Index i = from;
+	const __m256d a = _mm256_set1_pd(coef[0]);
+	const __m256d b = _mm256_set1_pd(C > 1 ? coef[1] : 0.0);
+	const __m256d c = _mm256_set1_pd(C > 2 ? coef[2] : 0.0);
+	const __m256d d = _mm256_set1_pd(C > 3 ? coef[3] : 0.0);
+	for (; i + 4 <= to; i += 4)
+	{
+		__m256d s = _mm256_mul_pd(_mm256_loadu_pd(X0 + i), a);
+		if constexpr (C > 1) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X1 + i), b));
+		if constexpr (C > 2) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X2 + i), c));
+		if constexpr (C > 3) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X3 + i), d));
+		const __m256d v = _mm256_sub_pd(_mm256_loadu_pd(y + i), s);
+		_mm256_storeu_pd(y + i, v);
+		if constexpr (kMirror)
+		{
+			const __m128d lo = _mm256_castpd256_pd128(v), hi = _mm256_extractf128_pd(v, 1);
+			_mm_storel_pd(mirror + i * mirror_stride, lo);
+			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, lo);
+			_mm_storel_pd(mirror + (i + 2) * mirror_stride, hi);
+			_mm_storeh_pd(mirror + (i + 3) * mirror_stride, hi);
+		}
+	}
+	for (; i < to; ++i)
+	{
+		double s = X0[i] * coef[0];
+		if constexpr (C > 1) s = s + X1[i] * coef[1];
+		if constexpr (C > 2) s = s + X2[i] * coef[2];
+		if constexpr (C > 3) s = s + X3[i] * coef[3];
+		const double v = y[i] - s;
+		y[i] = v;
+		if constexpr (kMirror) mirror[i * mirror_stride] = v;
+	}
+}
+#endif
+
+/** subtractColumns over m columns of X, in passes of four (then the rest). */
+template <bool kMirror = false, typename Coef>
+void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const double* X, Eigen::Index x_stride,
+						Eigen::Index m, Coef&& coef_of, double* mirror = nullptr, Eigen::Index mirror_stride = 0)
+{
+#if AUVNAV_AVX_KERNELS
+	const bool wide = g_wide_kernels.load(std::memory_order_relaxed);
+#endif
+	for (Eigen::Index l = 0; l < m; l += 4)
+	{
+		const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
+		double coef[4] = {0, 0, 0, 0};
+		for (Eigen::Index c = 0; c < cnt; ++c) coef[c] = coef_of(l + c);
+		const double* Xl = X + l * x_stride;
+#if AUVNAV_AVX_KERNELS
+		if (wide)
+		{
+			switch (cnt)
+			{
+				case 4: subtractColumnsAvx<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 3: subtractColumnsAvx<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 2: subtractColumnsAvx<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				default: subtractColumnsAvx<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			}
+			continue;
+		}
+#endif
+		switch (cnt)
+		{
+			case 4: subtractColumns<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			case 3: subtractColumns<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			case 2: subtractColumns<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			default: subtractColumns<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+		}
+	}
+}
+
+/** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
+ *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
+ *  j + 1… of column j + 1, each new entry also stored at its mirror. Both
+ *  columns share the loads of W's rows; every entry takes the products and
+ *  order of subtractColumns. */
+template <int C>
+void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
+						Eigen::Index x_stride, const double* a, const double* b)
+{
+	double* __restrict P0 = P + j * n;
+	double* __restrict P1 = P0 + n;
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	auto sum = [&](const double* c, Eigen::Index i) {
+		double s = X0[i] * c[0];
+		if constexpr (C > 1) s = s + X1[i] * c[1];
+		if constexpr (C > 2) s = s + X2[i] * c[2];
+		if constexpr (C > 3) s = s + X3[i] * c[3];
+		return s;
+	};
+	P0[j] = P0[j] - sum(a, j);	// the diagonal of column j (its own mirror)
+	Eigen::Index i = j + 1;
+#if defined(__SSE2__)
+	__m128d ca[4], cb[4];
+	for (int c = 0; c < C; ++c)
+	{
+		ca[c] = _mm_set1_pd(a[c]);
+		cb[c] = _mm_set1_pd(b[c]);
+	}
+	for (; i + 2 <= n; i += 2)
+	{
+		const __m128d x0 = _mm_loadu_pd(X0 + i);
+		__m128d s0 = _mm_mul_pd(x0, ca[0]), s1 = _mm_mul_pd(x0, cb[0]);
+		if constexpr (C > 1)
+		{
+			const __m128d x = _mm_loadu_pd(X1 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[1]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[1]));
+		}
+		if constexpr (C > 2)
+		{
+			const __m128d x = _mm_loadu_pd(X2 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[2]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[2]));
+		}
+		if constexpr (C > 3)
+		{
+			const __m128d x = _mm_loadu_pd(X3 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[3]));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[3]));
+		}
+		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
+		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
+		_mm_storeu_pd(P0 + i, v0);
+		_mm_storeu_pd(P1 + i, v1);
+		// Mirrors: (j, i), (j, i+1) and (j+1, i), (j+1, i+1) are adjacent
+		// pairs in columns i and i + 1.
+		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
+		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
+	}
+#endif
+	for (; i < n; ++i)
+	{
+		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		P0[i] = v0;
+		P1[i] = v1;
+		P[i * n + j] = v0;
+		P[i * n + j + 1] = v1;
+	}
+}
+
+#if AUVNAV_AVX_KERNELS
+/** downdateColumnPair with four rows per packet (AVX, no FMA). */
+template <int C>
+__attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, Eigen::Index n, Eigen::Index j,
+														  const double* __restrict X, Eigen::Index x_stride,
+														  const double* a, const double* b)
+{
+	double* __restrict P0 = P + j * n;
+	double* __restrict P1 = P0 + n;
+	const double* X0 = X;
+	const double* X1 = C > 1 ? X + x_stride : X;
+	const double* X2 = C > 2 ? X + 2 * x_stride : X;
+	const double* X3 = C > 3 ? X + 3 * x_stride : X;
+	auto sum = [&](const double* c, Eigen::Index i) {
+		double s = X0[i] * c[0];
+		if constexpr (C > 1) s = s + X1[i] * c[1];
+		if constexpr (C > 2) s = s + X2[i] * c[2];
+		if constexpr (C > 3) s = s + X3[i] * c[3];
+		return s;
+	};
+	P0[j] = P0[j] - sum(a, j);
+	Eigen::Index i = j + 1;
+	__m256d ca[4], cb[4];
+	for (int c = 0; c < C; ++c)
+	{
+		ca[c] = _mm256_set1_pd(a[c]);
+		cb[c] = _mm256_set1_pd(b[c]);
+	}
+	for (; i + 4 <= n; i += 4)
+	{
+		const __m256d x0 = _mm256_loadu_pd(X0 + i);
+		__m256d s0 = _mm256_mul_pd(x0, ca[0]), s1 = _mm256_mul_pd(x0, cb[0]);
+		if constexpr (C > 1)
+		{
+			const __m256d x = _mm256_loadu_pd(X1 + i);
+			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[1]));
+			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[1]));
+		}
+		if constexpr (C > 2)
+		{
+			const __m256d x = _mm256_loadu_pd(X2 + i);
+			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[2]));
+			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[2]));
+		}
+		if constexpr (C > 3)
+		{
+			const __m256d x = _mm256_loadu_pd(X3 + i);
+			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[3]));
+			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[3]));
+		}
+		const __m256d v0 = _mm256_sub_pd(_mm256_loadu_pd(P0 + i), s0);
+		const __m256d v1 = _mm256_sub_pd(_mm256_loadu_pd(P1 + i), s1);
+		_mm256_storeu_pd(P0 + i, v0);
+		_mm256_storeu_pd(P1 + i, v1);
+		// Mirrors: rows i…i+3 of columns j, j+1 are the adjacent pairs
+		// (j, j+1) of columns i…i+3. unpacklo/hi work within 128-bit lanes:
+		// lo = (v0₀, v1₀ | v0₂, v1₂), hi = (v0₁, v1₁ | v0₃, v1₃).
+		const __m256d lo = _mm256_unpacklo_pd(v0, v1), hi = _mm256_unpackhi_pd(v0, v1);
+		_mm_storeu_pd(P + i * n + j, _mm256_castpd256_pd128(lo));
+		_mm_storeu_pd(P + (i + 1) * n + j, _mm256_castpd256_pd128(hi));
+		_mm_storeu_pd(P + (i + 2) * n + j, _mm256_extractf128_pd(lo, 1));
+		_mm_storeu_pd(P + (i + 3) * n + j, _mm256_extractf128_pd(hi, 1));
+	}
+	for (; i < n; ++i)
+	{
+		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		P0[i] = v0;
+		P1[i] = v1;
+		P[i * n + j] = v0;
+		P[i * n + j + 1] = v1;
+	}
+}
+#endif
+
+/** P −= W Wᵀ for a symmetric P, exactly symmetric after: column j's rows
+ *  j… are computed and each entry stored at its mirror too (one triangle's
+ *  arithmetic with no separate mirroring pass, whose strided loads cost
+ *  what the triangle saved), two columns of P at a time sharing the loads
+ *  of W. Entry (i, j) takes the products and order of the whole-matrix
+ *  passes of earlier versions, so results are unchanged bit for bit. */
+inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
+{
+	const Eigen::Index n = P.rows(), m = W.cols(), ws = W.outerStride();
+	double* p = P.data();
+#if AUVNAV_AVX_KERNELS
+	const bool wide = g_wide_kernels.load(std::memory_order_relaxed);
+#endif
+	Eigen::Index j = 0;
+	for (; j + 2 <= n; j += 2)
+		for (Eigen::Index l = 0; l < m; l += 4)
+		{
+			const Eigen::Index cnt = std::min<Eigen::Index>(4, m - l);
+			double a[4] = {0, 0, 0, 0}, b[4] = {0, 0, 0, 0};
+			for (Eigen::Index c = 0; c < cnt; ++c)
+			{
+				a[c] = W(j, l + c);
+				b[c] = W(j + 1, l + c);
+			}
+			const double* Wl = W.data() + l * ws;
+#if AUVNAV_AVX_KERNELS
+			if (wide)
+			{
+				switch (cnt)
+				{
+					case 4: downdateColumnPairAvx<4>(p, n, j, Wl, ws, a, b); break;
+					case 3: downdateColumnPairAvx<3>(p, n, j, Wl, ws, a, b); break;
+					case 2: downdateColumnPairAvx<2>(p, n, j, Wl, ws, a, b); break;
+					default: downdateColumnPairAvx<1>(p, n, j, Wl, ws, a, b); break;
+				}
+				continue;
+			}
+#endif
+			switch (cnt)
+			{
+				case 4: downdateColumnPair<4>(p, n, j, Wl, ws, a, b); break;
+				case 3: downdateColumnPair<3>(p, n, j, Wl, ws, a, b); break;
+				case 2: downdateColumnPair<2>(p, n, j, Wl, ws, a, b); break;
+				default: downdateColumnPair<1>(p, n, j, Wl, ws, a, b); break;
+			}
+		}
+	for (; j < n; ++j)
+		subtractAllColumns<true>(p + j * n, j, n, W.data(), ws, m, [&](Eigen::Index l) { return W(j, l); }, p + j, n);
+}
+
+}  // namespace
+}  // namespace auvnav
