@@ -5,7 +5,9 @@
 #include <auvnav/state.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <set>
 #include <string>
@@ -81,6 +83,37 @@ TEST(So3, RoundTripNearIdentityIsRelativelyAccurate)
 			const Eigen::Vector3d a(0.3, -1.2, 0.7);
 			EXPECT_LT((so3::Exp(v) * a - a - v.cross(a)).norm(), angle * angle * a.squaredNorm() + 1e-15) << angle;
 		}
+}
+
+// Exp and Log switch to Taylor series below θ = 0.1 (so3.h); on both sides
+// of the switch they equal the closed forms evaluated in long double.
+TEST(So3, SeriesBranchesEqualTheClosedFormsInLongDouble)
+{
+	std::mt19937 rng(5);
+	double worst_exp = 0, worst_log = 0;
+	for (double angle : {1e-9, 1e-4, 0.01, 0.05, 0.0999, 0.1001, 0.2, 1.0, 1.6})
+		for (int k = 0; k < 50; ++k)
+		{
+			const Eigen::Vector3d v = angle * randomAxis(rng);
+			// Rodrigues in long double.
+			const long double th = std::sqrt(static_cast<long double>(v.squaredNorm()));
+			const long double a = std::sin(th) / th, b = (1 - std::cos(th)) / (th * th);
+			Eigen::Matrix<long double, 3, 3> K;
+			K << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+			const Eigen::Matrix<long double, 3, 3> R_ld = Eigen::Matrix<long double, 3, 3>::Identity() + a * K + b * K * K;
+			const Eigen::Matrix3d R = so3::Exp(v);
+			worst_exp = std::max(worst_exp, static_cast<double>((R.cast<long double>() - R_ld).cwiseAbs().maxCoeff()));
+			// Log of that rotation (rounded to double) against θ / (2 sin θ) w in long double.
+			const Eigen::Matrix<long double, 3, 3> Rd = R.cast<long double>();
+			const Eigen::Matrix<long double, 3, 1> w(Rd(2, 1) - Rd(1, 2), Rd(0, 2) - Rd(2, 0), Rd(1, 0) - Rd(0, 1));
+			const long double s = 0.5L * w.norm(), c = 0.5L * (Rd.trace() - 1);
+			const long double t = std::atan2(s, c);
+			const Eigen::Matrix<long double, 3, 1> l_ld = (t / (2 * s)) * w;
+			worst_log = std::max(worst_log, static_cast<double>(((so3::Log(R).cast<long double>() - l_ld).norm() / l_ld.norm())));
+		}
+	std::printf("Exp: worst entry difference %.2e; Log: worst relative difference %.2e\n", worst_exp, worst_log);
+	EXPECT_LT(worst_exp, 4e-16);
+	EXPECT_LT(worst_log, 4e-16);
 }
 
 TEST(So3, RoundTripRandom)

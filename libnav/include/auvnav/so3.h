@@ -23,12 +23,37 @@ inline Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 	return S;
 }
 
+namespace detail
+{
+/** Taylor series in x = θ² for |θ| < 0.1 (x < 0.01), where the next term is
+ *  below 1e-20 of the sum: sin θ / θ, (1 − cos θ) / θ², and asin(s) / s in
+ *  x = s². Cheaper than the library's sin, cos and atan2 (every sigma point
+ *  takes an Exp or a Log) and as accurate there. */
+constexpr double kSeriesMaxX = 0.01;
+inline double sinc(double x)
+{
+	return 1 + x * (-1.0 / 6 + x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880 + x * (-1.0 / 39916800 +
+															x * (1.0 / 6227020800.0))))));
+}
+inline double versinOver2(double x)	 // (1 − cos θ) / θ²
+{
+	return 0.5 + x * (-1.0 / 24 + x * (1.0 / 720 + x * (-1.0 / 40320 + x * (1.0 / 3628800 + x * (-1.0 / 479001600 +
+															x * (1.0 / 87178291200.0))))));
+}
+inline double asinOverS(double x)  // asin(s) / s, x = s²: Σ C(2n,n) xⁿ / (4ⁿ (2n + 1))
+{
+	return 1 + x * (1.0 / 6 + x * (3.0 / 40 + x * (5.0 / 112 + x * (35.0 / 1152 + x * (63.0 / 2816 + x * (231.0 / 13312 +
+														 x * (143.0 / 10240 + x * (6435.0 / 557056))))))));
+}
+}  // namespace detail
+
 /** Rotation matrix of the rotation vector `phi` (Rodrigues). */
 inline Eigen::Matrix3d Exp(const Eigen::Vector3d& phi)
 {
 	const double theta2 = phi.squaredNorm();
 	const Eigen::Matrix3d K = skew(phi);
-	if (theta2 < 1e-16) return Eigen::Matrix3d::Identity() + K + 0.5 * K * K;
+	if (theta2 < detail::kSeriesMaxX)
+		return Eigen::Matrix3d::Identity() + detail::sinc(theta2) * K + detail::versinOver2(theta2) * (K * K);
 	const double theta = std::sqrt(theta2);
 	return Eigen::Matrix3d::Identity() + (std::sin(theta) / theta) * K +
 		   ((1 - std::cos(theta)) / theta2) * K * K;
@@ -39,6 +64,9 @@ inline Eigen::Vector3d Log(const Eigen::Matrix3d& R)
 {
 	const Eigen::Vector3d w(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));  // 2 sin θ · axis
 	const double c = std::clamp(0.5 * (R.trace() - 1.0), -1.0, 1.0);
+	// θ < π/2 (c > 0) and sin θ < 0.1: θ / (2 sin θ) from the series in sin²θ.
+	const double s2 = 0.25 * w.squaredNorm();
+	if (c > 0 && s2 < detail::kSeriesMaxX) return (0.5 * detail::asinOverS(s2)) * w;
 	const double s = 0.5 * w.norm();
 	const double theta = std::atan2(s, c);
 	if (theta < 1e-6) return 0.5 * (1 + theta * theta / 6) * w;  // θ/sinθ ≈ 1 + θ²/6
