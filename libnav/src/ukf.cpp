@@ -427,25 +427,28 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	}
 	// P_NN = Σ W_i d_i d_iᵀ over the propagated points (the centre with the
 	// lumped pairs' weight), then the lumped pairs' closed-form sums: their
-	// J L_j L_jᵀ Jᵀ (2 W γ² = 1) and the q terms. As one product: rows of Dt
-	// (and their weighted DtW) are the points' deviations and the J L_j.
+	// J L_j L_jᵀ Jᵀ (2 W γ² = 1) and the q terms. As one product: columns of
+	// Dc (and their weighted DWc) are the points' deviations and the J L_j.
 	// (Σ_{j≥ks} J L_j L_jᵀ Jᵀ = J P Jᵀ − (J L_{:,<ks})(J L_{:,<ks})ᵀ over these
 	// rows, formed without J P Jᵀ and without the difference's cancellation.)
 	Eigen::Matrix<double, k, ks> JL_turn = L_.block<k, ks>(0, 0);
 	step_map.apply(JL_turn);
 	constexpr int rows = 2 * ks + 1 + (k - ks);
-	Eigen::Matrix<double, rows, k> Dt, DtW;
-	for (int i = 0; i < 2 * ks + 1; ++i) Dt.row(i) = d[i].transpose();
-	Dt.bottomRows<k - ks>() = JL_rest.transpose();
-	DtW.row(0) = (w_.wc0 + 2 * lumped_pairs * w_.wi) * Dt.row(0);
-	DtW.middleRows<2 * ks>(1) = w_.wi * Dt.middleRows<2 * ks>(1);
-	DtW.bottomRows<k - ks>() = Dt.bottomRows<k - ks>();
+	constexpr int kp = (k + 3) / 4 * 4;	 // k padded with zero rows to the Gram kernel's 4-row blocks
+	Eigen::Matrix<double, kp, rows> Dc, DWc;
+	for (int i = 0; i < 2 * ks + 1; ++i) Dc.col(i).head<k>() = d[i];
+	Dc.block<k, k - ks>(0, 2 * ks + 1) = JL_rest;
+	Dc.bottomRows<kp - k>().setZero();
+	DWc.col(0) = (w_.wc0 + 2 * lumped_pairs * w_.wi) * Dc.col(0);
+	DWc.middleCols<2 * ks>(1) = w_.wi * Dc.middleCols<2 * ks>(1);
+	DWc.rightCols<k - ks>() = Dc.rightCols<k - ks>();
+	Eigen::Matrix<double, kp, kp> gram;	 // its blocks on and below the diagonal
+	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), gram.data());
 	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
 	Eigen::Matrix<double, k, k> P_NN;
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i)
-			P_NN(i, j) = P_NN(j, i) =
-				DtW.col(i).dot(Dt.col(j)) + (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
+			P_NN(i, j) = P_NN(j, i) = gram(i, j) + (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
 	for (int r : {idx::current_vehicle, idx::current_far})
 		for (int c : {idx::current_vehicle, idx::current_far}) P_NN.block<2, 2>(r, c) += (2 * w_.wi) * qq;
 	// Pair differences, Σ_j W γ (d₊ⱼ − d₋ⱼ)(·)ᵀ: D_turn for the propagated
