@@ -433,24 +433,30 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// rows, formed without J P Jᵀ and without the difference's cancellation.)
 	Eigen::Matrix<double, k, ks> JL_turn = L_.block<k, ks>(0, 0);
 	step_map.apply(JL_turn);
-	constexpr int rows = 2 * ks + 1 + (k - ks);
+	// The centre's cross terms with the q sums, d₀ q_crossᵀ + q_cross d₀ᵀ,
+	// ride along as two more columns.
+	constexpr int points = 2 * ks + 1, rows = points + (k - ks) + 2;
 	constexpr int kp = (k + 3) / 4 * 4;	 // k padded with zero rows to the Gram kernel's 4-row blocks
+	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
 	Eigen::Matrix<double, kp, rows> Dc, DWc;
-	for (int i = 0; i < 2 * ks + 1; ++i) Dc.col(i).head<k>() = d[i];
-	Dc.block<k, k - ks>(0, 2 * ks + 1) = JL_rest;
+	for (int i = 0; i < points; ++i) Dc.col(i).head<k>() = d[i];
+	Dc.block<k, k - ks>(0, points) = JL_rest;
+	Dc.col(rows - 2).head<k>() = q_cross;
+	Dc.col(rows - 1).head<k>() = d[0];
 	Dc.bottomRows<kp - k>().setZero();
 	DWc.col(0) = (w_.wc0 + 2 * lumped_pairs * w_.wi) * Dc.col(0);
 	DWc.middleCols<2 * ks>(1) = w_.wi * Dc.middleCols<2 * ks>(1);
-	DWc.rightCols<k - ks>() = Dc.rightCols<k - ks>();
-	Eigen::Matrix<double, kp, kp> gram;	 // its blocks on and below the diagonal
-	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), gram.data());
-	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
-	Eigen::Matrix<double, k, k> P_NN;
-	for (int j = 0; j < k; ++j)
-		for (int i = j; i < k; ++i)
-			P_NN(i, j) = P_NN(j, i) = gram(i, j) + (d[0][i] * q_cross[j] + q_cross[i] * d[0][j]);
+	DWc.middleCols<k - ks>(points) = Dc.middleCols<k - ks>(points);
+	DWc.col(rows - 2) = Dc.col(rows - 1);
+	DWc.col(rows - 1) = Dc.col(rows - 2);
+	Eigen::Matrix<double, kp, kp> P_NN;	 // its blocks on and below the diagonal; the first k rows and columns
+	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), P_NN.data());
+	// The q q term of both currents (their lower triangle).
 	for (int r : {idx::current_vehicle, idx::current_far})
-		for (int c : {idx::current_vehicle, idx::current_far}) P_NN.block<2, 2>(r, c) += (2 * w_.wi) * qq;
+		for (int c : {idx::current_vehicle, idx::current_far})
+			for (int i = 0; i < 2; ++i)
+				for (int j = 0; j < 2; ++j)
+					if (r + i >= c + j) P_NN(r + i, c + j) += (2 * w_.wi) * qq(i, j);
 	// Pair differences, Σ_j W γ (d₊ⱼ − d₋ⱼ)(·)ᵀ: D_turn for the propagated
 	// pairs; J L_j for the lumped ones (2 W γ² = 1).
 	Eigen::Matrix<double, k, ks> D_turn;
@@ -492,7 +498,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 			P_(k + i, k + j) = p;
 			P_(k + j, k + i) = p;
 		}
-	P_.topLeftCorner<k, k>() = P_NN;
+	for (int j = 0; j < k; ++j)
+		for (int i = j; i < k; ++i) P_(i, j) = P_(j, i) = P_NN(i, j);
 	P_.topRightCorner(k, nl) = P_NL;
 	P_.bottomLeftCorner(nl, k) = P_NL.transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
