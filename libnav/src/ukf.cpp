@@ -238,6 +238,7 @@ void ManifoldUkf::restore(const NavState& x, const Covariance& P)
 									" coordinates for a filter of " + std::to_string(n_));
 	x_ = x;
 	P_ = P;
+	symmetrize(P_);	 // the prediction relies on it (a checkpoint's P already is)
 }
 
 void repairCovariance(Covariance& P, const TangentVector& variance_floor)
@@ -487,17 +488,17 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		P_cross->leftCols(k).noalias() = L_.leftCols(k) * D_pairs.transpose();
 		P_cross->rightCols(nl) = (a.asDiagonal() * P_.bottomRows(nl)).transpose();
 	}
-	// Affine block: A P Aᵀ = P_ij a_i a_j, taken from P's two triangles'
-	// mean so that P leaves exactly symmetric (every other block is written
-	// symmetric and the noise is, so no pass over the whole matrix).
+	// Affine block: A P Aᵀ = P_ij a_i a_j, column by column (contiguous). P
+	// is exactly symmetric between steps (initialize() and restore()
+	// symmetrise it; every step writes both triangles alike), and a_i a_j =
+	// a_j a_i, so it stays so.
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
 	for (int j = 0; j < nl; ++j)
-		for (int i = j; i < nl; ++i)
-		{
-			const double p = (a[i] * a[j]) * (0.5 * (P_(k + i, k + j) + P_(k + j, k + i)));
-			P_(k + i, k + j) = p;
-			P_(k + j, k + i) = p;
-		}
+	{
+		double* col = &P_(k, k + j);
+		const double aj = a[j];
+		for (int i = 0; i < nl; ++i) col[i] *= a[i] * aj;
+	}
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i) P_(i, j) = P_(j, i) = P_NN(i, j);
 	P_.topRightCorner(k, nl) = P_NL;

@@ -1101,6 +1101,8 @@ TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
 	for (int j = 0; j < Pb.cols(); ++j)
 		for (int i = 0; i < Pb.rows(); ++i) differing += Pb(i, j) != Pw(i, j);
 	EXPECT_EQ(differing, 0) << "covariance entries that differ between the paths";
+	// Exactly symmetric after every step (the prediction's affine block relies on it).
+	EXPECT_TRUE((Pw.array() == Pw.transpose().array()).all());
 	EXPECT_TRUE((base.state().euclidean().array() == wide.state().euclidean().array()).all());
 	EXPECT_TRUE((base.state().R_nb.array() == wide.state().R_nb.array()).all());
 	// The run moved the state at all (the comparison is not of two initial states).
