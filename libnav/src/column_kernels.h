@@ -320,6 +320,36 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 		_mm_storeu_pd(P + (i + 2) * n + j, _mm256_extractf128_pd(lo, 1));
 		_mm_storeu_pd(P + (i + 3) * n + j, _mm256_extractf128_pd(hi, 1));
 	}
+	if (i + 2 <= n)	 // two rows left: a 128-bit step, as the SSE2 path's
+	{
+		const __m128d x0 = _mm_loadu_pd(X0 + i);
+		__m128d s0 = _mm_mul_pd(x0, _mm256_castpd256_pd128(ca[0])), s1 = _mm_mul_pd(x0, _mm256_castpd256_pd128(cb[0]));
+		if constexpr (C > 1)
+		{
+			const __m128d x = _mm_loadu_pd(X1 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[1])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[1])));
+		}
+		if constexpr (C > 2)
+		{
+			const __m128d x = _mm_loadu_pd(X2 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[2])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[2])));
+		}
+		if constexpr (C > 3)
+		{
+			const __m128d x = _mm_loadu_pd(X3 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[3])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[3])));
+		}
+		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
+		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
+		_mm_storeu_pd(P0 + i, v0);
+		_mm_storeu_pd(P1 + i, v1);
+		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
+		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
+		i += 2;
+	}
 	for (; i < n; ++i)
 	{
 		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
@@ -327,6 +357,25 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 		P1[i] = v1;
 		P[i * n + j] = v0;
 		P[i * n + j + 1] = v1;
+	}
+}
+
+/** downdateColumnPairAvx over every column pair (0, 1), (2, 3), … of P for
+ *  C columns of W (X, stride x_stride): one call per group of columns, not
+ *  per pair, with the pairs' coefficients read here. */
+template <int C>
+__attribute__((target("avx"))) void downdateAllPairsAvx(double* __restrict P, Eigen::Index n,
+														const double* __restrict X, Eigen::Index x_stride)
+{
+	for (Eigen::Index j = 0; j + 2 <= n; j += 2)
+	{
+		double a[4], b[4];
+		for (int c = 0; c < C; ++c)
+		{
+			a[c] = X[c * x_stride + j];
+			b[c] = X[c * x_stride + j + 1];
+		}
+		downdateColumnPairAvx<C>(P, n, j, X, x_stride, a, b);
 	}
 }
 #endif
@@ -428,10 +477,26 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 {
 	const Eigen::Index n = P.rows(), m = W.cols(), ws = W.outerStride();
 	double* p = P.data();
-#if AUVNAV_AVX_KERNELS
-	const bool wide = g_wide_kernels.load(std::memory_order_relaxed);
-#endif
 	Eigen::Index j = 0;
+#if AUVNAV_AVX_KERNELS
+	// Group by group of W's columns, every pair of P's columns in one call
+	// (each entry still takes the groups in order: the same sums).
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+	{
+		for (Eigen::Index l = 0; l < m; l += 4)
+		{
+			const double* Wl = W.data() + l * ws;
+			switch (std::min<Eigen::Index>(4, m - l))
+			{
+				case 4: downdateAllPairsAvx<4>(p, n, Wl, ws); break;
+				case 3: downdateAllPairsAvx<3>(p, n, Wl, ws); break;
+				case 2: downdateAllPairsAvx<2>(p, n, Wl, ws); break;
+				default: downdateAllPairsAvx<1>(p, n, Wl, ws); break;
+			}
+		}
+		j = n - n % 2;
+	}
+#endif
 	for (; j + 2 <= n; j += 2)
 		for (Eigen::Index l = 0; l < m; l += 4)
 		{
@@ -443,19 +508,6 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 				b[c] = W(j + 1, l + c);
 			}
 			const double* Wl = W.data() + l * ws;
-#if AUVNAV_AVX_KERNELS
-			if (wide)
-			{
-				switch (cnt)
-				{
-					case 4: downdateColumnPairAvx<4>(p, n, j, Wl, ws, a, b); break;
-					case 3: downdateColumnPairAvx<3>(p, n, j, Wl, ws, a, b); break;
-					case 2: downdateColumnPairAvx<2>(p, n, j, Wl, ws, a, b); break;
-					default: downdateColumnPairAvx<1>(p, n, j, Wl, ws, a, b); break;
-				}
-				continue;
-			}
-#endif
 			switch (cnt)
 			{
 				case 4: downdateColumnPair<4>(p, n, j, Wl, ws, a, b); break;
