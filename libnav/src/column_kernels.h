@@ -134,6 +134,21 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
 			_mm_storeh_pd(mirror + (i + 3) * mirror_stride, hi);
 		}
 	}
+	if (i + 2 <= to)  // two rows left: a 128-bit step, as the SSE2 path's
+	{
+		__m128d s2 = _mm_mul_pd(_mm_loadu_pd(X0 + i), _mm256_castpd256_pd128(a));
+		if constexpr (C > 1) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X1 + i), _mm256_castpd256_pd128(b)));
+		if constexpr (C > 2) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X2 + i), _mm256_castpd256_pd128(c)));
+		if constexpr (C > 3) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X3 + i), _mm256_castpd256_pd128(d)));
+		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s2);
+		_mm_storeu_pd(y + i, v);
+		if constexpr (kMirror)
+		{
+			_mm_storel_pd(mirror + i * mirror_stride, v);
+			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, v);
+		}
+		i += 2;
+	}
 	for (; i < to; ++i)
 	{
 		double s = X0[i] * coef[0];
