@@ -1,6 +1,7 @@
 #pragma once
 /** @file column_kernels.h
- *  The covariance kernels of ukf.cpp (private to it): y −= Σ_c coef_c X_c
+ *  The covariance kernels of ukf.cpp and smoother.cpp (private to the
+ *  library): y −= Σ_c coef_c X_c
  *  over up to four columns at once, and the symmetric rank-m downdate
  *  P −= W Wᵀ written one triangle and mirrored.
  *
@@ -23,6 +24,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <type_traits>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define AUVNAV_AVX_KERNELS 1
@@ -36,7 +38,7 @@
 
 namespace auvnav
 {
-namespace
+namespace detail
 {
 /** Whether the CPU (and the OS, which must save the wide registers) has AVX. */
 inline bool cpuHasAvx()
@@ -48,8 +50,14 @@ inline bool cpuHasAvx()
 	return false;
 #endif
 }
-/** Whether the AVX path runs: on when the CPU has AVX (setWideKernels). */
-std::atomic<bool> g_wide_kernels{cpuHasAvx()};
+/** Whether the AVX path runs: on when the CPU has AVX (setWideKernels);
+ *  one flag for every file of the library that includes this header. */
+inline std::atomic<bool> g_wide_kernels{cpuHasAvx()};
+}  // namespace detail
+
+namespace
+{
+using detail::g_wide_kernels;
 
 /** y[i] −= Σ_c coef[c] X[c·x_stride + i] for i in [from, to), C ≤ 4
  *  columns of X at once so that y is loaded and stored once; the sums
@@ -57,7 +65,7 @@ std::atomic<bool> g_wide_kernels{cpuHasAvx()};
  *  also stored at mirror[i·mirror_stride] (a symmetric matrix's other
  *  triangle). SSE2 packets where the compiler has them (it left these
  *  multi-stream loops scalar); the scalar loop is the same arithmetic. */
-template <int C, bool kMirror = false>
+template <int C, bool kMirror = false, bool kAssign = false>
 void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, const double* __restrict X,
 					 Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
 					 Eigen::Index mirror_stride = 0)
@@ -78,7 +86,7 @@ void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, c
 		if constexpr (C > 1) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X1 + i), b));
 		if constexpr (C > 2) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X2 + i), c));
 		if constexpr (C > 3) s = _mm_add_pd(s, _mm_mul_pd(_mm_loadu_pd(X3 + i), d));
-		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s);
+		const __m128d v = _mm_sub_pd(kAssign ? _mm_setzero_pd() : _mm_loadu_pd(y + i), s);
 		_mm_storeu_pd(y + i, v);
 		if constexpr (kMirror)
 		{
@@ -93,7 +101,7 @@ void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, c
 		if constexpr (C > 1) s = s + X1[i] * coef[1];
 		if constexpr (C > 2) s = s + X2[i] * coef[2];
 		if constexpr (C > 3) s = s + X3[i] * coef[3];
-		const double v = y[i] - s;
+		const double v = (kAssign ? 0.0 : y[i]) - s;
 		y[i] = v;
 		if constexpr (kMirror) mirror[i * mirror_stride] = v;
 	}
@@ -102,7 +110,7 @@ void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, c
 #if AUVNAV_AVX_KERNELS
 /** subtractColumns with four rows per packet (AVX, no FMA: the same
  *  arithmetic); the rows past the last whole packet as the scalar loop. */
-template <int C, bool kMirror = false>
+template <int C, bool kMirror = false, bool kAssign = false>
 __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eigen::Index from, Eigen::Index to,
 													   const double* __restrict X, Eigen::Index x_stride,
 													   const double* coef, double* __restrict mirror = nullptr,
@@ -123,7 +131,7 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
 		if constexpr (C > 1) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X1 + i), b));
 		if constexpr (C > 2) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X2 + i), c));
 		if constexpr (C > 3) s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X3 + i), d));
-		const __m256d v = _mm256_sub_pd(_mm256_loadu_pd(y + i), s);
+		const __m256d v = _mm256_sub_pd(kAssign ? _mm256_setzero_pd() : _mm256_loadu_pd(y + i), s);
 		_mm256_storeu_pd(y + i, v);
 		if constexpr (kMirror)
 		{
@@ -140,7 +148,7 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
 		if constexpr (C > 1) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X1 + i), _mm256_castpd256_pd128(b)));
 		if constexpr (C > 2) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X2 + i), _mm256_castpd256_pd128(c)));
 		if constexpr (C > 3) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X3 + i), _mm256_castpd256_pd128(d)));
-		const __m128d v = _mm_sub_pd(_mm_loadu_pd(y + i), s2);
+		const __m128d v = _mm_sub_pd(kAssign ? _mm_setzero_pd() : _mm_loadu_pd(y + i), s2);
 		_mm_storeu_pd(y + i, v);
 		if constexpr (kMirror)
 		{
@@ -155,15 +163,17 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
 		if constexpr (C > 1) s = s + X1[i] * coef[1];
 		if constexpr (C > 2) s = s + X2[i] * coef[2];
 		if constexpr (C > 3) s = s + X3[i] * coef[3];
-		const double v = y[i] - s;
+		const double v = (kAssign ? 0.0 : y[i]) - s;
 		y[i] = v;
 		if constexpr (kMirror) mirror[i * mirror_stride] = v;
 	}
 }
 #endif
 
-/** subtractColumns over m columns of X, in passes of four (then the rest). */
-template <bool kMirror = false, typename Coef>
+/** subtractColumns over m columns of X, in passes of four (then the rest).
+ *  kAssign: y's old values are not read, y = 0 − Σ … (what a zeroed y
+ *  would give, bit for bit, without the zeroing pass). */
+template <bool kMirror = false, bool kAssign = false, typename Coef>
 void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const double* X, Eigen::Index x_stride,
 						Eigen::Index m, Coef&& coef_of, double* mirror = nullptr, Eigen::Index mirror_stride = 0)
 {
@@ -176,27 +186,39 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 		double coef[4] = {0, 0, 0, 0};
 		for (Eigen::Index c = 0; c < cnt; ++c) coef[c] = coef_of(l + c);
 		const double* Xl = X + l * x_stride;
+		auto pass = [&](auto assign) {
+			constexpr bool kA = decltype(assign)::value;
 #if AUVNAV_AVX_KERNELS
-		if (wide)
-		{
+			if (wide)
+			{
+				switch (cnt)
+				{
+					case 4: subtractColumnsAvx<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+					case 3: subtractColumnsAvx<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+					case 2: subtractColumnsAvx<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+					default: subtractColumnsAvx<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				}
+				return;
+			}
+#endif
 			switch (cnt)
 			{
-				case 4: subtractColumnsAvx<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				case 3: subtractColumnsAvx<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				case 2: subtractColumnsAvx<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				default: subtractColumnsAvx<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 4: subtractColumns<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 3: subtractColumns<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 2: subtractColumns<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				default: subtractColumns<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
 			}
-			continue;
-		}
-#endif
-		switch (cnt)
+		};
+		if constexpr (kAssign)
 		{
-			case 4: subtractColumns<4, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			case 3: subtractColumns<3, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			case 2: subtractColumns<2, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-			default: subtractColumns<1, kMirror>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+			if (l == 0) pass(std::true_type{});
+			else pass(std::false_type{});
 		}
+		else
+			pass(std::false_type{});
 	}
+	if (kAssign && m == 0)
+		for (Eigen::Index i = from; i < to; ++i) y[i] = 0.0;
 }
 
 /** Columns j and j + 1 of a symmetric P less C columns of W (X, stride

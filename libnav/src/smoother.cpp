@@ -2,6 +2,8 @@
 #include <auvnav/smoother.h>
 #include <auvnav/so3.h>
 
+#include "column_kernels.h"
+
 #include <Eigen/Cholesky>
 #include <array>
 
@@ -149,10 +151,21 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 	}
 	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
 	// StepObserver): the first k columns times L11⁻ᵀ Dᵀ, the others scaled.
-	Eigen::Matrix<double, kNonlinearStates, kNonlinearStates> F = D;  // F L11 = D
-	L.topLeftCorner(k, k).triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(F);
+	// F L11 = D by columns from the last: F_c = (D_c − Σ_{l>c} F_l L_lc) / L_cc,
+	// as column axpys (column_kernels.h: AVX where the CPU has it; Eigen's
+	// blocked solver and product run these odd shapes at SSE2 width).
+	Eigen::Matrix<double, kNonlinearStates, kNonlinearStates> F = D;
+	for (int c = k - 1; c >= 0; --c)
+	{
+		subtractAllColumns(F.col(c).data(), 0, k, F.data() + (c + 1) * k, k, k - 1 - c,
+						   [&](Eigen::Index l) { return L(c + 1 + l, c); });
+		F.col(c) /= L(c, c);
+	}
+	// Y = X_{:,1:k} Fᵀ.
 	Eigen::Matrix<double, Eigen::Dynamic, kNonlinearStates, 0, 2 * idx::max_dim, kNonlinearStates> Y(2 * n, k);
-	Y.noalias() = XX_.leftCols(k) * F.transpose();
+	for (int j = 0; j < k; ++j)
+		subtractAllColumns<false, true>(Y.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
+										[&](Eigen::Index l) { return -F(j, l); });
 	XX_.leftCols(k) = Y;
 	TangentVector a = TangentVector::Ones(n);
 	model.applyLinearRows(a, step);	 // rows k… only scale: their factors
@@ -174,7 +187,11 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 	// X_now = X − MW_p W_pᵀ (this tick's earlier updates, not yet applied).
 	// m is small (3 for most sensors): gemv, not the blocked kernel.
 	auto MW = MW_pending_.middleCols(pending_, m);
-	for (int j = 0; j < m; ++j) MW.col(j).noalias() = XX_.leftCols(k) * B.col(j);
+	for (int j = 0; j < m; ++j)
+	{
+		subtractAllColumns<false, true>(MW.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
+										[&](Eigen::Index l) { return -B(l, j); });
+	}
 	if (pending_ > 0)
 	{
 		const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPending, kMaxPending> C =
@@ -207,7 +224,10 @@ void RtsStretchRecorder::flushUpdates()
 	if (dP_pending_ + pending_ > kMaxDpPending) flushDp();
 	MW_dP_.middleCols(dP_pending_, pending_) = MW_pending_.topLeftCorner(n, pending_);
 	dP_pending_ += pending_;
-	XX_.noalias() -= MW_pending_.leftCols(pending_) * W_pending_.leftCols(pending_).transpose();
+	// XX −= MW Wᵀ column by column (r ≈ 5 columns of MW per column of XX).
+	for (int c = 0; c < n; ++c)
+		subtractAllColumns(XX_.col(c).data(), 0, XX_.rows(), MW_pending_.data(), MW_pending_.outerStride(), pending_,
+						   [&](Eigen::Index l) { return W_pending_(c, l); });
 	pending_ = 0;
 }
 

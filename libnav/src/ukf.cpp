@@ -177,7 +177,7 @@ bool wideKernels() { return g_wide_kernels.load(); }
 
 bool setWideKernels(bool on)
 {
-	g_wide_kernels.store(on && cpuHasAvx());
+	g_wide_kernels.store(on && detail::cpuHasAvx());
 	return wideKernels();
 }
 
