@@ -109,7 +109,7 @@ void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, c
 
 #if AUVNAV_AVX_KERNELS
 /** subtractColumns with four rows per packet (AVX, no FMA: the same
- *  arithmetic); the rows past the last whole packet by subtractColumns. */
+ *  arithmetic); the rows past the last whole packet as the scalar loop. */
 template <int C, bool kMirror = false, bool kAssign = false>
 __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eigen::Index from, Eigen::Index to,
 													   const double* __restrict X, Eigen::Index x_stride,
@@ -142,8 +142,31 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
 			_mm_storeh_pd(mirror + (i + 3) * mirror_stride, hi);
 		}
 	}
-	// The rows past the last whole packet: the baseline kernel (the same arithmetic).
-	subtractColumns<C, kMirror, kAssign>(y, i, to, X, x_stride, coef, mirror, mirror_stride);
+	if (i + 2 <= to)  // two rows left: a 128-bit step, as the SSE2 path's
+	{
+		__m128d s2 = _mm_mul_pd(_mm_loadu_pd(X0 + i), _mm256_castpd256_pd128(a));
+		if constexpr (C > 1) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X1 + i), _mm256_castpd256_pd128(b)));
+		if constexpr (C > 2) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X2 + i), _mm256_castpd256_pd128(c)));
+		if constexpr (C > 3) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(X3 + i), _mm256_castpd256_pd128(d)));
+		const __m128d v = _mm_sub_pd(kAssign ? _mm_setzero_pd() : _mm_loadu_pd(y + i), s2);
+		_mm_storeu_pd(y + i, v);
+		if constexpr (kMirror)
+		{
+			_mm_storel_pd(mirror + i * mirror_stride, v);
+			_mm_storeh_pd(mirror + (i + 1) * mirror_stride, v);
+		}
+		i += 2;
+	}
+	for (; i < to; ++i)
+	{
+		double s = X0[i] * coef[0];
+		if constexpr (C > 1) s = s + X1[i] * coef[1];
+		if constexpr (C > 2) s = s + X2[i] * coef[2];
+		if constexpr (C > 3) s = s + X3[i] * coef[3];
+		const double v = (kAssign ? 0.0 : y[i]) - s;
+		y[i] = v;
+		if constexpr (kMirror) mirror[i * mirror_stride] = v;
+	}
 }
 #endif
 
@@ -198,25 +221,14 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 		for (Eigen::Index i = from; i < to; ++i) y[i] = 0.0;
 }
 
-/** Σ_c coef[c] X[c·x_stride + i], associated as subtractColumns does. */
-template <int C>
-inline double columnSum(const double* X, Eigen::Index x_stride, const double* coef, Eigen::Index i)
-{
-	double s = X[i] * coef[0];
-	if constexpr (C > 1) s = s + X[x_stride + i] * coef[1];
-	if constexpr (C > 2) s = s + X[2 * x_stride + i] * coef[2];
-	if constexpr (C > 3) s = s + X[3 * x_stride + i] * coef[3];
-	return s;
-}
-
 /** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
  *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
  *  j + 1… of column j + 1, each new entry also stored at its mirror. Both
  *  columns share the loads of W's rows; every entry takes the products and
- *  order of subtractColumns. This part: rows from… (> j). */
+ *  order of subtractColumns. */
 template <int C>
-void downdateColumnPairRows(double* __restrict P, Eigen::Index n, Eigen::Index j, Eigen::Index from,
-							const double* __restrict X, Eigen::Index x_stride, const double* a, const double* b)
+void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
+						Eigen::Index x_stride, const double* a, const double* b)
 {
 	double* __restrict P0 = P + j * n;
 	double* __restrict P1 = P0 + n;
@@ -224,7 +236,15 @@ void downdateColumnPairRows(double* __restrict P, Eigen::Index n, Eigen::Index j
 	const double* X1 = C > 1 ? X + x_stride : X;
 	const double* X2 = C > 2 ? X + 2 * x_stride : X;
 	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	Eigen::Index i = from;
+	auto sum = [&](const double* c, Eigen::Index i) {
+		double s = X0[i] * c[0];
+		if constexpr (C > 1) s = s + X1[i] * c[1];
+		if constexpr (C > 2) s = s + X2[i] * c[2];
+		if constexpr (C > 3) s = s + X3[i] * c[3];
+		return s;
+	};
+	P0[j] = P0[j] - sum(a, j);	// the diagonal of column j (its own mirror)
+	Eigen::Index i = j + 1;
 #if defined(__SSE2__)
 	__m128d ca[4], cb[4];
 	for (int c = 0; c < C; ++c)
@@ -266,22 +286,12 @@ void downdateColumnPairRows(double* __restrict P, Eigen::Index n, Eigen::Index j
 #endif
 	for (; i < n; ++i)
 	{
-		const double v0 = P0[i] - columnSum<C>(X, x_stride, a, i), v1 = P1[i] - columnSum<C>(X, x_stride, b, i);
+		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
 		P0[i] = v0;
 		P1[i] = v1;
 		P[i * n + j] = v0;
 		P[i * n + j + 1] = v1;
 	}
-}
-
-/** downdateColumnPairRows with the diagonal of column j first. */
-template <int C>
-void downdateColumnPair(double* P, Eigen::Index n, Eigen::Index j, const double* X, Eigen::Index x_stride,
-						const double* a, const double* b)
-{
-	double* P0 = P + j * n;
-	P0[j] = P0[j] - columnSum<C>(X, x_stride, a, j);	// the diagonal of column j (its own mirror)
-	downdateColumnPairRows<C>(P, n, j, j + 1, X, x_stride, a, b);
 }
 
 #if AUVNAV_AVX_KERNELS
@@ -297,7 +307,14 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 	const double* X1 = C > 1 ? X + x_stride : X;
 	const double* X2 = C > 2 ? X + 2 * x_stride : X;
 	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	P0[j] = P0[j] - columnSum<C>(X, x_stride, a, j);
+	auto sum = [&](const double* c, Eigen::Index i) {
+		double s = X0[i] * c[0];
+		if constexpr (C > 1) s = s + X1[i] * c[1];
+		if constexpr (C > 2) s = s + X2[i] * c[2];
+		if constexpr (C > 3) s = s + X3[i] * c[3];
+		return s;
+	};
+	P0[j] = P0[j] - sum(a, j);
 	Eigen::Index i = j + 1;
 	__m256d ca[4], cb[4];
 	for (int c = 0; c < C; ++c)
@@ -340,8 +357,44 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 		_mm_storeu_pd(P + (i + 2) * n + j, _mm256_extractf128_pd(lo, 1));
 		_mm_storeu_pd(P + (i + 3) * n + j, _mm256_extractf128_pd(hi, 1));
 	}
-	// The rows past the last whole packet: the baseline kernel (the same arithmetic).
-	downdateColumnPairRows<C>(P, n, j, i, X, x_stride, a, b);
+	if (i + 2 <= n)	 // two rows left: a 128-bit step, as the SSE2 path's
+	{
+		const __m128d x0 = _mm_loadu_pd(X0 + i);
+		__m128d s0 = _mm_mul_pd(x0, _mm256_castpd256_pd128(ca[0])), s1 = _mm_mul_pd(x0, _mm256_castpd256_pd128(cb[0]));
+		if constexpr (C > 1)
+		{
+			const __m128d x = _mm_loadu_pd(X1 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[1])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[1])));
+		}
+		if constexpr (C > 2)
+		{
+			const __m128d x = _mm_loadu_pd(X2 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[2])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[2])));
+		}
+		if constexpr (C > 3)
+		{
+			const __m128d x = _mm_loadu_pd(X3 + i);
+			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[3])));
+			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[3])));
+		}
+		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
+		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
+		_mm_storeu_pd(P0 + i, v0);
+		_mm_storeu_pd(P1 + i, v1);
+		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
+		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
+		i += 2;
+	}
+	for (; i < n; ++i)
+	{
+		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		P0[i] = v0;
+		P1[i] = v1;
+		P[i * n + j] = v0;
+		P[i * n + j + 1] = v1;
+	}
 }
 
 /** downdateColumnPairAvx over every column pair (0, 1), (2, 3), … of P for
