@@ -185,13 +185,11 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 	if (pending_ + m > kMaxPending) flushUpdates();
 	// M W = X_now P⁻¹ W = X_now_{:,1:k} B, for X and X_mean at once, with
 	// X_now = X − MW_p W_pᵀ (this tick's earlier updates, not yet applied).
-	// m is small (3 for most sensors): gemv, not the blocked kernel.
+	// m is small (3 for most sensors): a column kernel per column of B.
 	auto MW = MW_pending_.middleCols(pending_, m);
 	for (int j = 0; j < m; ++j)
-	{
 		subtractAllColumns<false, true>(MW.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
 										[&](Eigen::Index l) { return -B(l, j); });
-	}
 	if (pending_ > 0)
 	{
 		const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPending, kMaxPending> C =
