@@ -6,6 +6,7 @@
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
 #include <gtest/gtest.h>
+#include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/CFileOutputStream.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/math/CMatrixD.h>
@@ -411,6 +412,49 @@ TEST(RawlogTruncation, GzFileCutInsideTheDataRaisesRawlogError)
 			EXPECT_EQ(3u, expectRawlogError(path, {"truncated rawlog", "object #3", "byte"}))
 			    << "the three small objects survive";
 		}
+	}
+}
+
+// The block reader under RawlogReader: reads of every size, across its
+// 4 KiB blocks, give the file's bytes in order with the right positions, and
+// the end is reported only once a read has found it.
+TEST(BufferedGzInput, ReadsOfAnySizeGiveTheBytesAndPositionsOfTheFile)
+{
+	TempDir tmp;
+	std::vector<char> bytes(20000);
+	std::mt19937 rng(7);
+	for (auto& b : bytes) b = static_cast<char>(rng() & 0xFF);
+	for (const bool compress : {false, true})
+	{
+		SCOPED_TRACE(compress ? "gzip" : "plain");
+		const auto path = tmp.file(compress ? "bytes.gz" : "bytes.bin");
+		if (compress)
+		{
+			mrpt::io::CFileGZOutputStream out(path);
+			out.Write(bytes.data(), bytes.size());
+		}
+		else
+			writeBytes(path, bytes.data(), bytes.size());
+		auvnav::io::BufferedGzInput in;
+		ASSERT_TRUE(in.open(path));
+		std::vector<char> back;
+		std::size_t n = 1;
+		while (back.size() < bytes.size())
+		{
+			EXPECT_FALSE(in.checkEOF()) << "at byte " << back.size();
+			std::vector<char> chunk(n);
+			const std::size_t got = in.Read(chunk.data(), n);
+			ASSERT_GT(got, 0u) << "at byte " << back.size();
+			ASSERT_LE(got, n);
+			back.insert(back.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
+			EXPECT_EQ(back.size(), in.getPosition());
+			n = n * 3 % 9001 + 1;  // 1, 4, 13, ... up to 9001: within and across blocks
+		}
+		EXPECT_TRUE(back == bytes);
+		char c = 0;
+		EXPECT_EQ(0u, in.Read(&c, 1));
+		EXPECT_TRUE(in.checkEOF());
+		EXPECT_EQ(bytes.size(), in.getPosition());
 	}
 }
 

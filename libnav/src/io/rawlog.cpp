@@ -41,7 +41,7 @@ struct ObjectHeader
 };
 
 /** Reads exactly `n` bytes; throws (a short object) if the stream ends first. */
-void readExactly(mrpt::io::CStream& in, void* buf, std::size_t n, const char* what)
+void readExactly(BufferedGzInput& in, void* buf, std::size_t n, const char* what)
 {
 	auto* p = static_cast<char*>(buf);
 	for (std::size_t done = 0; done < n;)
@@ -55,7 +55,7 @@ void readExactly(mrpt::io::CStream& in, void* buf, std::size_t n, const char* wh
 /** The next object's header. Throws CExceptionEOF if not one byte is left
  *  (a clean end, or undecodable compressed data: the caller tells them
  *  apart), std::runtime_error if the header is cut or malformed. */
-ObjectHeader readHeader(mrpt::io::CStream& in)
+ObjectHeader readHeader(BufferedGzInput& in)
 {
 	ObjectHeader h;
 	uint8_t len = 0;
@@ -81,9 +81,10 @@ ObjectHeader readHeader(mrpt::io::CStream& in)
 class ReplayStream : public mrpt::io::CStream
 {
  public:
-	ReplayStream(const std::string& head, mrpt::io::CStream& rest) : head_(head), rest_(rest) {}
+	ReplayStream(const std::string& head, BufferedGzInput& rest) : head_(head), rest_(rest) {}
 	size_t Read(void* buf, size_t n) override
 	{
+		if (used_ == head_.size()) return rest_.Read(buf, n);
 		const std::size_t from_head = std::min(n, head_.size() - used_);
 		std::memcpy(buf, head_.data() + used_, from_head);
 		used_ += from_head;
@@ -97,13 +98,13 @@ class ReplayStream : public mrpt::io::CStream
 
  private:
 	const std::string& head_;
-	mrpt::io::CStream& rest_;
+	BufferedGzInput& rest_;
 	std::size_t used_ = 0;
 };
 
 /** The object whose header is `h` (already read from `in`), built by its
  *  class's own reader, end flag included. */
-mrpt::serialization::CSerializable::Ptr readBody(const ObjectHeader& h, mrpt::io::CStream& in)
+mrpt::serialization::CSerializable::Ptr readBody(const ObjectHeader& h, BufferedGzInput& in)
 {
 	ReplayStream replay(h.raw, in);
 	return mrpt::serialization::archiveFrom(replay).ReadObject();
@@ -145,7 +146,7 @@ void checkMrptFlags(const mrpt::obs::CObservation& o)
 
 /** An observation whose header is `h`, read by its class's reader and
  *  checked (checkMrptFlags). */
-mrpt::obs::CObservation::Ptr readObservation(const ObjectHeader& h, mrpt::io::CStream& in)
+mrpt::obs::CObservation::Ptr readObservation(const ObjectHeader& h, BufferedGzInput& in)
 {
 	auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(readBody(h, in));
 	if (!o) throw std::runtime_error("the reader of '" + h.class_name + "' returned no observation");
@@ -160,7 +161,7 @@ bool isA(const ObjectHeader& h, const mrpt::rtti::TRuntimeClassId* base)
 
 /** One object inside a CSensoryFrame or CActionCollection: refused unless
  *  of class `base` before it is built. */
-mrpt::serialization::CSerializable::Ptr readMember(mrpt::io::CStream& in,
+mrpt::serialization::CSerializable::Ptr readMember(BufferedGzInput& in,
                                                    const mrpt::rtti::TRuntimeClassId* base,
                                                    const char* container)
 {
@@ -171,7 +172,7 @@ mrpt::serialization::CSerializable::Ptr readMember(mrpt::io::CStream& in,
 	return readBody(h, in);
 }
 
-uint32_t readFrameCount(mrpt::io::CStream& in, const char* container)
+uint32_t readFrameCount(BufferedGzInput& in, const char* container)
 {
 	uint32_t n = 0;
 	readExactly(in, &n, sizeof n, container);
@@ -181,7 +182,7 @@ uint32_t readFrameCount(mrpt::io::CStream& in, const char* container)
 	return n;
 }
 
-void readEndFlag(mrpt::io::CStream& in, const char* container)
+void readEndFlag(BufferedGzInput& in, const char* container)
 {
 	uint8_t flag = 0;
 	readExactly(in, &flag, 1, container);
@@ -193,7 +194,7 @@ void readEndFlag(mrpt::io::CStream& in, const char* container)
  *  by one instead of by MRPT's reader, which allocates the claimed count at
  *  once and accepts an object of any class. All or nothing: a damaged frame
  *  gives none of its observations. */
-std::vector<mrpt::obs::CObservation::Ptr> readSensoryFrame(const ObjectHeader& h, mrpt::io::CStream& in)
+std::vector<mrpt::obs::CObservation::Ptr> readSensoryFrame(const ObjectHeader& h, BufferedGzInput& in)
 {
 	constexpr const char* kWhat = "a sensory frame";
 	if (h.version > 2)
@@ -218,7 +219,7 @@ std::vector<mrpt::obs::CObservation::Ptr> readSensoryFrame(const ObjectHeader& h
 }
 
 /** Reads (and drops) a CActionCollection, checked like a sensory frame. */
-void skipActionCollection(const ObjectHeader& h, mrpt::io::CStream& in)
+void skipActionCollection(const ObjectHeader& h, BufferedGzInput& in)
 {
 	constexpr const char* kWhat = "an action collection";
 	if (h.version != 0)
@@ -229,6 +230,35 @@ void skipActionCollection(const ObjectHeader& h, mrpt::io::CStream& in)
 	readEndFlag(in, kWhat);
 }
 }  // namespace
+
+bool BufferedGzInput::refill()
+{
+	pos_ = end_ = 0;
+	const std::size_t got = file_.Read(block_.data(), block_.size());
+	// gzread's -1 (a zlib error) arrives as a huge size_t: no bytes.
+	at_end_ = got == 0;
+	if (got == 0 || got > block_.size()) return false;
+	end_ = got;
+	return true;
+}
+
+size_t BufferedGzInput::readAcross(void* buf, size_t n)
+{
+	auto* out = static_cast<char*>(buf);
+	std::size_t done = 0;
+	while (done < n)
+	{
+		if (pos_ == end_ && !refill()) break;
+		const std::size_t k = std::min(n - done, end_ - pos_);
+		std::memcpy(out + done, block_.data() + pos_, k);
+		pos_ += k;
+		done += k;
+	}
+	handed_out_ += done;
+	return done;
+}
+
+uint64_t BufferedGzInput::Seek(int64_t, CStream::TSeekOrigin) { throw std::logic_error("BufferedGzInput::Seek"); }
 
 RawlogReader::RawlogReader(const std::string& path) : path_(path)
 {
