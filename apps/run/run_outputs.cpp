@@ -1,5 +1,6 @@
 #include "run_outputs.h"
 
+#include <auvnav/io/decimal.h>
 #include <auvnav/io/json.h>
 #include <auvnav/state.h>
 
@@ -64,20 +65,8 @@ RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::
 
 namespace
 {
-/** Appends v as printf's "%.<precision>f" would print it. */
-void appendFixed(std::string& s, double v, int precision)
-{
-	char buf[64];
-	const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, precision);
-	s.append(buf, r.ptr);
-}
-/** Appends v as printf's "%.<precision>g" would print it. */
-void appendGeneral(std::string& s, double v, int precision)
-{
-	char buf[40];
-	const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, precision);
-	s.append(buf, r.ptr);
-}
+using io::appendFixed;
+using io::appendGeneral;
 /** Appends ",v" as "%.10g" would print v. */
 void appendG10(std::string& s, double v)
 {
@@ -96,7 +85,7 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 															   : "invalid";
 	const bool has_nis = r.status != UpdateStatus::Invalid || r.nis > 0;
 	// One row per update of every sensor (~25 per IMU tick with an ADCP):
-	// std::to_chars, as printf's "%.6f,%.6f,%s,%s,%.6g,%d" would write it.
+	// io::appendFixed / appendGeneral, as printf's "%.6f,%.6f,%s,%s,%.6g,%d" would write it.
 	std::string& s = update_row_;
 	s.clear();
 	appendFixed(s, t_filter_s, 6);
@@ -166,7 +155,7 @@ void formatStatesRow(std::string& s, double t, const NavState& x, const Eigen::V
 	const double roll = std::atan2(R(2, 1), R(2, 2)) * kRad2Deg;
 	const double pitch = -std::asin(std::clamp(R(2, 0), -1.0, 1.0)) * kRad2Deg;
 	const double yaw = std::atan2(R(1, 0), R(0, 0)) * kRad2Deg;
-	// std::to_chars writes what "%.10g" (and an ostream at precision 10)
+	// io::appendGeneral writes what "%.10g" (and an ostream at precision 10)
 	// writes, at a fraction of the cost: this row is the run's biggest output.
 	s.clear();
 	appendFixed(s, t, 10);
