@@ -15,6 +15,8 @@
 #   sensor updates  Navigator::dispatch (every sensor's prepare + update)
 #   outputs         RunOutputs::onState (states.csv, trajectory.tum rows)
 #   rawlog reading  RawlogReader::next
+#   process start-up  everything outside main() (dynamic loading, static
+#                   constructors); and the whole program less that
 # then, unless --no-sensors, one callgrind run per sensor with collection on
 # only inside that sensor's updates (AUVNAV_CALLGRIND_SENSOR, navigator.cpp).
 # Each figure is divided by the run's IMU predictions (summary.json).
@@ -84,6 +86,13 @@ row "prediction" "$(inclusive "$work/all.cg" "auvnav::ManifoldUkf::predict(Eigen
 row "sensor updates (all)" "$(inclusive "$work/all.cg" "auvnav::Navigator::dispatch(")"
 row "outputs" "$(inclusive "$work/all.cg" "auvnav::run::RunOutputs::onState(")"
 row "rawlog reading" "$(inclusive "$work/all.cg" "auvnav::io::RawlogReader::next(")"
+# Loading and relocating the ~170 shared libraries MRPT's observation library
+# pulls in (OpenCV's codecs bring GDAL, GDCM, poppler ...) and their static
+# constructors: a fixed cost per process, not per tick (it is spread over the
+# cut's ticks here; over a 1 h log it is ~30 times smaller per tick).
+in_main=$(inclusive "$work/all.cg" "main [")
+row "process start-up (outside main)" "$((all - in_main))"
+row "whole program less start-up" "$in_main"
 
 if ((per_sensor)); then
   # Sensor labels (not the IMU prediction's "(prediction)" entry) from summary.json.
