@@ -572,7 +572,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	using MapM = Eigen::Map<Eigen::MatrixXd>;
 	using MapV = Eigen::Map<Eigen::VectorXd>;
 	const std::size_t scratch_size =
-		static_cast<std::size_t>(m) * (9 + 3 * count + 2 * m + k + kn + 2 * n + 2 * (k - kn) + kn);
+		static_cast<std::size_t>(m) * (16 + 3 * count + 2 * m + k + kn + 2 * n + 2 * (k - kn) + kn);
 	if (update_scratch_.size() < scratch_size) update_scratch_.resize(scratch_size);
 	double* cursor = update_scratch_.data();
 	auto takeM = [&](int rows, int cols) {
@@ -620,17 +620,18 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	MapV r = takeV(m), z_mean = takeV(m), acc = takeV(m);
 	z_mean = z_sigma.col(0);
 	acc.setZero();
-	Eigen::MatrixXd D_scaled;  // ŷ± of the scaled pairs, about z₀ (rarely used)
+	// ŷ± of the scaled pairs, about z₀: every update while the heading is
+	// unknown (a vehicle without a heading source), so from the arena too.
+	MapM D_scaled = takeM(m, 6);
+	MapV rm = takeV(m);
 	for (int j = 0; j < std::min(kn, 3); ++j)
 		if (scale[j] < 1.0)
 		{
-			if (D_scaled.cols() == 0) D_scaled.resize(m, 6);
-			Eigen::VectorXd rm(m);
 			model.residual(z_sigma.col(1 + 2 * j), z_sigma.col(0), r);
 			model.residual(z_sigma.col(2 + 2 * j), z_sigma.col(0), rm);
-			const Eigen::VectorXd a = 0.5 * (r - rm) / scale[j], mid = 0.5 * (r + rm);
-			D_scaled.col(2 * j) = mid + a;
-			D_scaled.col(2 * j + 1) = mid - a;
+			const double s = scale[j];
+			D_scaled.col(2 * j) = 0.5 * (r + rm) + 0.5 * (r - rm) / s;
+			D_scaled.col(2 * j + 1) = 0.5 * (r + rm) - 0.5 * (r - rm) / s;
 		}
 	auto isScaled = [&](int i) { return i >= 1 && i <= 6 && i <= 2 * kn && scale[(i - 1) / 2] < 1.0; };
 	for (int i = 1; i < count; ++i)
