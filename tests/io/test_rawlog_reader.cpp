@@ -19,7 +19,6 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -647,9 +646,10 @@ TEST(RawlogHardening, AbsurdSensoryFrameCountIsRefusedAtOnce)
 	std::memcpy(&bytes[count_at], &n, 4);
 	const auto path = tmp.file("sf_count.rawlog");
 	writeBytes(path, reinterpret_cast<const char*>(bytes.data()), bytes.size());
-	const auto t0 = std::chrono::steady_clock::now();
+	// The count is named in the error only by the reader's own check, made
+	// before anything is allocated for the members (readFrameCount): no
+	// wall-clock bound needed (it made the test depend on the machine's load).
 	EXPECT_EQ(0u, expectRawlogError(path, {"corrupt rawlog", "object #0", "3556769794 objects"}));
-	EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
 }
 
 TEST(RawlogHardening, DamagedSensoryFrameYieldsNoneOfItsObservations)
