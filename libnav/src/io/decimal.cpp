@@ -125,35 +125,53 @@ constexpr char kDigitPairs[] =
     "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
     "8081828384858687888990919293949596979899";
 
-/** Writes x in decimal, exactly `width` digits (zero-padded); returns the end. */
-char* writeDigits(char* p, uint64_t x, int width)
+/** Writes x < 10^8 as exactly `width` <= 8 digits (zero-padded), in 32-bit
+ *  arithmetic (cheaper divisions than 64-bit). */
+void writeDigits32(char* p, uint32_t x, int width)
 {
 	int i = width;
 	for (; i >= 2; i -= 2)
 	{
-		std::memcpy(p + i - 2, kDigitPairs + 2 * (x % 100), 2);
-		x /= 100;
+		const uint32_t q = x / 100;
+		std::memcpy(p + i - 2, kDigitPairs + 2 * (x - 100 * q), 2);
+		x = q;
 	}
-	if (i == 1) p[0] = static_cast<char>('0' + x % 10);
-	return p + width;
+	if (i == 1) p[0] = static_cast<char>('0' + x);
 }
 
+/** Writes x in decimal, exactly `width` digits (zero-padded; width <= 20);
+ *  returns the end. Eight digits per 64-bit division. */
+char* writeDigits(char* p, uint64_t x, int width)
+{
+	char* end = p + width;
+	char* at = end;
+	while (width > 8)
+	{
+		const uint64_t q = x / 100000000;
+		at -= 8;
+		writeDigits32(at, static_cast<uint32_t>(x - q * 100000000), 8);
+		x = q;
+		width -= 8;
+	}
+	writeDigits32(p, static_cast<uint32_t>(x), width);
+	return end;
+}
+
+/** Number of decimal digits of x (1 for 0). */
 int decimalDigits(uint64_t x)
 {
-	int n = 1;
-	while (x >= 10)
-	{
-		x /= 10;
-		++n;
-	}
-	return n;
+	// floor(log10) from the bit length (1233 / 4096 ≈ log10 2), then one check.
+	if (x == 0) return 1;
+	const int bits = 64 - __builtin_clzll(x);
+	const int guess = (bits * 1233) >> 12;
+	return guess + (x >= static_cast<uint64_t>(pow10(guess)) ? 1 : 0);
 }
 
 void appendWithLibrary(std::string& out, double v, std::chars_format format, int precision)
 {
 	char buf[400];  // "%.17f" of the largest double: 309 digits, a point, 17 decimals, a sign
 	const auto r = std::to_chars(buf, buf + sizeof buf, v, format, precision);
-	out.append(buf, r.ptr);
+	out.append(buf, static_cast<std::size_t>(r.ptr - buf));
 }
 }  // namespace
 
@@ -198,7 +216,7 @@ void appendFixed(std::string& out, double v, int precision)
 		*p++ = '.';
 		p = writeDigits(p, decimals, precision);
 	}
-	out.append(buf, p);
+	out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, count): no replace() machinery
 }
 
 void appendGeneral(std::string& out, double v, int precision)
@@ -213,7 +231,7 @@ void appendGeneral(std::string& out, double v, int precision)
 	if (b.m == 0)
 	{
 		*p++ = '0';
-		out.append(buf, p);
+		out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, count): no replace() machinery
 		return;
 	}
 	// floor(log10 |v|) is x or x + 1: floor(log2 |v|)·log10(2), rounded down
@@ -277,6 +295,6 @@ void appendGeneral(std::string& out, double v, int precision)
 			}
 		}
 	}
-	out.append(buf, p);
+	out.append(buf, static_cast<std::size_t>(p - buf));  // (pointer, count): no replace() machinery
 }
 }  // namespace auvnav::io
