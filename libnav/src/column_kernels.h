@@ -560,5 +560,142 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 		subtractAllColumns<true>(p + j * n, j, n, W.data(), ws, m, [&](Eigen::Index l) { return W(j, l); }, p + j, n);
 }
 
+
+/** Two and four doubles as one value (GCC/Clang vector extensions): a
+ *  128-bit register in the baseline, a 256-bit one inside a target("avx")
+ *  function; element-wise IEEE multiplies and adds (no FMA is enabled, so
+ *  none is contracted). Used only inside always-inlined bodies, never
+ *  passed between functions (no ABI question). */
+typedef double Pack2 __attribute__((vector_size(16)));
+typedef double Pack4 __attribute__((vector_size(32)));
+
+/** One row entry of X Fᵀ in the order subtractAllColumns<false, true> with
+ *  coefficients −F(j, l) sums it: t_g = ((x_l F_jl + x_l+1 F_j,l+1) + …)
+ *  over groups of four l, then ((t_0 + t_1) + t_2) + … (the negations are
+ *  exact, so this equals 0 − Σ (−t_g) bit for bit). */
+template <int K>
+inline double rightTransposedEntry(const double* row, const double* F, int j)
+{
+	double acc = 0;
+	for (int l0 = 0; l0 < K; l0 += 4)
+	{
+		double t = row[l0] * F[l0 * K + j];
+		for (int l = l0 + 1; l < std::min(K, l0 + 4); ++l) t = t + row[l] * F[l * K + j];
+		acc = l0 == 0 ? t : acc + t;
+	}
+	return acc;
+}
+
+/** Output columns j … j + JB − 1 (JB ≤ 3) of one panel of P Packs of rows:
+ *  `panel` holds its K input columns (P·width contiguous rows each), `out`
+ *  points at X(r0, j). The sums of rightTransposedEntry, with up to six
+ *  accumulators and six group sums in registers; each group of four l
+ *  unrolled (no loop test per multiply). */
+template <typename Pack, int P, int K, int JB>
+__attribute__((always_inline)) inline void rightTransposedPanelBlock(const double* __restrict panel,
+																	  const double* __restrict F, int j,
+																	  double* __restrict out, Eigen::Index xs)
+{
+	constexpr int w = sizeof(Pack) / sizeof(double), h = P * w;
+	Pack acc[P][JB];
+	auto group = [&](int l0, auto count) {
+		constexpr int G = decltype(count)::value;
+		Pack t[P][JB];
+#pragma GCC unroll 4
+		for (int g = 0; g < G; ++g)
+		{
+			const int l = l0 + g;
+			Pack x[P];
+#pragma GCC unroll 2
+			for (int p = 0; p < P; ++p) __builtin_memcpy(&x[p], panel + l * h + p * w, sizeof(Pack));
+#pragma GCC unroll 3
+			for (int b = 0; b < JB; ++b)
+			{
+				const double f = F[l * K + j + b];
+#pragma GCC unroll 2
+				for (int p = 0; p < P; ++p) t[p][b] = g == 0 ? x[p] * f : t[p][b] + x[p] * f;
+			}
+		}
+#pragma GCC unroll 3
+		for (int b = 0; b < JB; ++b)
+#pragma GCC unroll 2
+			for (int p = 0; p < P; ++p) acc[p][b] = l0 == 0 ? t[p][b] : acc[p][b] + t[p][b];
+	};
+	int l0 = 0;
+	for (; l0 + 4 <= K; l0 += 4) group(l0, std::integral_constant<int, 4>{});
+	if constexpr (K % 4 != 0) group(l0, std::integral_constant<int, K % 4>{});
+#pragma GCC unroll 3
+	for (int b = 0; b < JB; ++b)
+#pragma GCC unroll 2
+		for (int p = 0; p < P; ++p) __builtin_memcpy(out + b * xs + p * w, &acc[p][b], sizeof(Pack));
+}
+
+/** All K output columns of the panel of P Packs of rows at row r (copied to
+ *  the stack first: the product is in place), three at a time. */
+template <typename Pack, int P, int K>
+__attribute__((always_inline)) inline void rightTransposedPanel(double* __restrict X, Eigen::Index r, Eigen::Index xs,
+																 const double* __restrict F)
+{
+	constexpr int h = P * static_cast<int>(sizeof(Pack) / sizeof(double));
+	alignas(32) double panel[K * h];
+	for (int l = 0; l < K; ++l) __builtin_memcpy(panel + l * h, X + l * xs + r, h * sizeof(double));
+	int j = 0;
+	for (; j + 3 <= K; j += 3) rightTransposedPanelBlock<Pack, P, K, 3>(panel, F, j, X + j * xs + r, xs);
+	if constexpr (K % 3 == 2) rightTransposedPanelBlock<Pack, P, K, 2>(panel, F, j, X + j * xs + r, xs);
+	if constexpr (K % 3 == 1) rightTransposedPanelBlock<Pack, P, K, 1>(panel, F, j, X + j * xs + r, xs);
+}
+
+/** The body of rightMultiplyTransposed: panels of two Packs of rows, then
+ *  one Pack, then (AVX) one 128-bit Pack, then a last row alone. */
+template <typename Pack, int K>
+__attribute__((always_inline)) inline void rightMultiplyTransposedBody(double* __restrict X, Eigen::Index rows,
+																		Eigen::Index xs, const double* __restrict F)
+{
+	constexpr int w = static_cast<int>(sizeof(Pack) / sizeof(double));
+	Eigen::Index r = 0;
+	for (; r + 2 * w <= rows; r += 2 * w) rightTransposedPanel<Pack, 2, K>(X, r, xs, F);
+	if (r + w <= rows)
+	{
+		rightTransposedPanel<Pack, 1, K>(X, r, xs, F);
+		r += w;
+	}
+	if constexpr (w > 2)
+		if (r + 2 <= rows)
+		{
+			rightTransposedPanel<Pack2, 1, K>(X, r, xs, F);
+			r += 2;
+		}
+	for (; r < rows; ++r)
+	{
+		double row[K];
+		for (int l = 0; l < K; ++l) row[l] = X[l * xs + r];
+		for (int j = 0; j < K; ++j) X[j * xs + r] = rightTransposedEntry<K>(row, F, j);
+	}
+}
+
+#if AUVNAV_AVX_KERNELS
+template <int K>
+__attribute__((target("avx"))) void rightMultiplyTransposedAvx(double* X, Eigen::Index rows, Eigen::Index xs,
+																const double* F)
+{
+	rightMultiplyTransposedBody<Pack4, K>(X, rows, xs, F);
+}
+#endif
+
+/** X's first K columns ← X_{:,0:K} Fᵀ in place (X: `rows` rows, column
+ *  stride xs; F: K × K, column-major). Entry (r, j) is rightTransposedEntry's
+ *  sum whichever path runs (eight-row panels with AVX, four-row ones on the
+ *  SSE2 baseline, the same sums): what Y = 0 − Σ_l X_l (−F(j, l)) by
+ *  subtractAllColumns<false, true> gave, bit for bit, without Y or its copy
+ *  back, and with each load of X shared by three output columns. */
+template <int K>
+void rightMultiplyTransposed(double* X, Eigen::Index rows, Eigen::Index xs, const double* F)
+{
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed)) return rightMultiplyTransposedAvx<K>(X, rows, xs, F);
+#endif
+	rightMultiplyTransposedBody<Pack2, K>(X, rows, xs, F);
+}
+
 }  // namespace
 }  // namespace auvnav

@@ -161,12 +161,8 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 						   [&](Eigen::Index l) { return L(c + 1 + l, c); });
 		F.col(c) /= L(c, c);
 	}
-	// Y = X_{:,1:k} Fᵀ.
-	Eigen::Matrix<double, Eigen::Dynamic, kNonlinearStates, 0, 2 * idx::max_dim, kNonlinearStates> Y(2 * n, k);
-	for (int j = 0; j < k; ++j)
-		subtractAllColumns<false, true>(Y.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
-										[&](Eigen::Index l) { return -F(j, l); });
-	XX_.leftCols(k) = Y;
+	// X_{:,1:k} ← X_{:,1:k} Fᵀ in place (eight-row panels, column_kernels.h).
+	rightMultiplyTransposed<kNonlinearStates>(XX_.data(), 2 * n, XX_.outerStride(), F.data());
 	TangentVector a = TangentVector::Ones(n);
 	model.applyLinearRows(a, step);	 // rows k… only scale: their factors
 	XX_.rightCols(n - k) *= a.tail(n - k).asDiagonal();
@@ -209,7 +205,7 @@ void RtsStretchRecorder::applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
 	const Eigen::MatrixXd MW = XX_.leftCols(k) * B;
 	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
-	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW.topRows(n));
+	downdateSymmetric(current_.sum_dP, MW.topRows(n));  // − Σ M ΔP Mᵀ while open (flushDp)
 	XX_.noalias() -= MW * W.transpose();
 }
 
@@ -232,8 +228,11 @@ void RtsStretchRecorder::flushUpdates()
 void RtsStretchRecorder::flushDp()
 {
 	if (dP_pending_ == 0) return;
-	// The lower triangle only (mirrored at close).
-	current_.sum_dP.selfadjointView<Eigen::Lower>().rankUpdate(MW_dP_.leftCols(dP_pending_));
+	// While the stretch is open, sum_dP holds −Σ M ΔP Mᵀ, so that the rank
+	// update is the filter's symmetric downdate kernel (column_kernels.h:
+	// AVX where the CPU has it; Eigen's rankUpdate ran it at SSE2 width and
+	// ~3 instructions a multiply-add). close() turns the sign back.
+	downdateSymmetric(current_.sum_dP, MW_dP_.leftCols(dP_pending_));
 	dP_pending_ = 0;
 }
 
@@ -254,7 +253,7 @@ void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covaria
 					 Mm = llt.solve(XX_.bottomRows(n).transpose()).transpose();
 	current_.sum_dx.noalias() += Mm * dx;
 	scratch_.noalias() = M * (P_before - P_after);
-	current_.sum_dP.noalias() += scratch_ * M.transpose();
+	current_.sum_dP.noalias() -= scratch_ * M.transpose();	// − Σ while open (flushDp)
 	XX_.topRows(n).noalias() = M * P_after;
 	XX_.bottomRows(n).noalias() = Mm * P_after;
 }
@@ -329,7 +328,8 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 	const int n = ukf.dim();
 	checkRepairs(ukf);
 	RtsStretch done = std::move(current_);
-	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();	// onUpdate kept the lower triangle
+	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();	// the lower triangle rules
+	done.sum_dP = -done.sum_dP;	 // −Σ M ΔP Mᵀ while open (flushDp)
 	const Eigen::LLT<Covariance> llt(ukf.covariance());
 	if (llt.info() != Eigen::Success) done.broken = true;
 	if (!done.broken)

@@ -343,11 +343,14 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	constexpr int k = kNonlinear, ks = kTurning;
 	const int n = n_, nl = n - k;
 	// The filter reads columns past the turning ones only over the first k
-	// rows; an observer and P_cross read whole columns.
-	leadingCholeskyColumns(k, observer_ || P_cross ? k : ks);
-	// The observer (a smoother) also needs P's inverse: the remaining columns,
-	// without a repair (the filter must not change because it is observed).
-	const bool full_factor = observer_ && observer_->wantsFullFactor() && choleskyColumns(P_, k, n, L_);
+	// rows, and so does an observer (its F needs L11 only) unless it wants the
+	// whole factor; P_cross reads whole columns.
+	const bool wants_full = observer_ && observer_->wantsFullFactor();
+	leadingCholeskyColumns(k, wants_full || P_cross ? k : ks);
+	// The observer (a smoother) then also needs P's inverse: the remaining
+	// columns, without a repair (the filter must not change because it is
+	// observed).
+	const bool full_factor = wants_full && choleskyColumns(P_, k, n, L_);
 	const double g = w_.gamma;
 	// Sigma points are propagated only along the first ks Cholesky columns,
 	// the ones that turn the attitude; every other pair keeps the centre's
@@ -563,8 +566,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	const int kn = affine ? tangentPrefix(model.uses() & ~affine, n) : k;
 	leadingCholeskyColumns(kn);
 	// A smoother needs the update's B over all k columns: the rest of them,
-	// without a repair (the filter must not change because it is observed).
-	const bool observed_factor = observer_ && (kn == k || choleskyColumns(P_, kn, k, L_));
+	// without a repair (the filter must not change because it is observed),
+	// over the first k rows only (B reads L11, the affine pairs L's rows kn…k).
+	const bool observed_factor = observer_ && (kn == k || choleskyColumns(P_, kn, k, L_, k));
 	if (observer_ && !observed_factor) P_before_ = P_;	// reported whole below
 	const double g = w_.gamma;
 	const int count = 2 * kn + 1;
