@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -141,4 +142,26 @@ TEST(Decimal, AppendsToWhatTheStringHolds)
 	s += ",x=";
 	auvnav::io::appendGeneral(s, 0.000123456789012, 10);
 	EXPECT_EQ("t=2.5,x=0.000123456789", s);
+}
+
+// Precisions past the fast path go to std::to_chars with a buffer of their
+// size: the largest double with 100 decimals (~410 characters) and 400
+// significant digits, against printf.
+TEST(Decimal, LargePrecisionsMatchPrintf)
+{
+	auto printed = [](const char* format, int precision, double v) {
+		std::vector<char> buf(2000);
+		const int n = std::snprintf(buf.data(), buf.size(), format, precision, v);
+		return std::string(buf.data(), static_cast<std::size_t>(n));
+	};
+	for (const double v : {std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(), 1.0 / 3.0,
+						   std::numeric_limits<double>::denorm_min(), -2.5})
+		for (const int precision : {18, 80, 100, 400, 760})
+		{
+			std::string fixed, general;
+			auvnav::io::appendFixed(fixed, v, precision);
+			auvnav::io::appendGeneral(general, v, precision);
+			EXPECT_EQ(printed("%.*f", precision, v), fixed) << v << " at " << precision;
+			EXPECT_EQ(printed("%.*g", precision, v), general) << v << " at " << precision;
+		}
 }

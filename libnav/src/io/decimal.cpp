@@ -1,9 +1,11 @@
 #include <auvnav/io/decimal.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 
 namespace auvnav::io
 {
@@ -169,8 +171,21 @@ int decimalDigits(uint64_t x)
 
 void appendWithLibrary(std::string& out, double v, std::chars_format format, int precision)
 {
-	char buf[400];  // "%.17f" of the largest double: 309 digits, a point, 17 decimals, a sign
-	const auto r = std::to_chars(buf, buf + sizeof buf, v, format, precision);
+	// "%.Pf" of the largest double: a sign, 309 digits, a point and P
+	// decimals; "%.Pg" at most P digits, a point and a five-character
+	// exponent. Large precisions get a buffer of their size.
+	const std::size_t need = 330 + static_cast<std::size_t>(std::max(precision, 0));
+	char small[400];
+	std::string large;
+	char* buf = small;
+	if (need > sizeof small)
+	{
+		large.resize(need);
+		buf = large.data();
+	}
+	const auto r = std::to_chars(buf, buf + need, v, format, precision);
+	if (r.ec != std::errc())  // not with the size above; never append a buffer to_chars did not fill
+		throw std::length_error("decimal: " + std::to_string(precision) + " digits do not fit the buffer");
 	out.append(buf, static_cast<std::size_t>(r.ptr - buf));
 }
 }  // namespace
