@@ -827,15 +827,28 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			subtractAllColumns(&B(0, c), 0, k, B.data(), B.outerStride(), c, [&](Eigen::Index l) { return L_S(c, l); });
 			B.col(c) /= L_S(c, c);
 		}
-		for (int j = 0; j < m; ++j)
+		// The m columns side by side and four partial sums per dot: the
+		// entries of a column depend on each other in turn, and one running
+		// sum made each step wait for the one before (~2/3 of the update's
+		// own time with a smoother, perf on the square mission).
+		for (int i = k - 1; i >= 0; --i)
 		{
-			double* b = &B(0, j);
-			for (int i = k - 1; i >= 0; --i)
+			const double* Li = &L_(i + 1, i);
+			const int len = k - 1 - i;
+			for (int j = 0; j < m; ++j)
 			{
-				const double* Li = &L_(i + 1, i);
-				double s = 0;
-				for (int l = 0; l < k - 1 - i; ++l) s += Li[l] * b[i + 1 + l];
-				b[i] = (b[i] - s) / L_(i, i);
+				double* b = &B(0, j) + i + 1;
+				double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+				int l = 0;
+				for (; l + 4 <= len; l += 4)
+				{
+					s0 += Li[l] * b[l];
+					s1 += Li[l + 1] * b[l + 1];
+					s2 += Li[l + 2] * b[l + 2];
+					s3 += Li[l + 3] * b[l + 3];
+				}
+				for (; l < len; ++l) s0 += Li[l] * b[l];
+				B(i, j) = (B(i, j) - ((s0 + s1) + (s2 + s3))) / L_(i, i);
 			}
 		}
 		observer_->onUpdate(B, u, W);
