@@ -2,6 +2,7 @@
 #include <auvnav/smoother_stream.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -154,6 +155,24 @@ StretchReader::StretchReader(const std::string& path) : path_(path)
 	errno = 0;
 	f_ = std::fopen(path.c_str(), "rb");
 	if (!f_) throw ioError(path, "cannot open the smoother's stretch file");
+	try
+	{
+		readHeader();
+	}
+	catch (...)
+	{
+		// A refused file is closed here: no destructor runs for an object
+		// whose constructor throws (found by fuzz_stretch: a handle per
+		// refused file).
+		std::fclose(f_);
+		f_ = nullptr;
+		throw;
+	}
+}
+
+void StretchReader::readHeader()
+{
+	const std::string& path = path_;
 	char magic[8];
 	readAll(f_, magic, sizeof magic, path_);
 	if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw std::runtime_error(path + ": not an auvnav stretch file");
@@ -194,16 +213,27 @@ StretchRecord StretchReader::read(std::size_t i)
 	if (fseeko(f_, static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
 	readAll(f_, buf_.data(), buf_.size() * sizeof(double), path_);
 	const int n = header_.n;
+	// A damaged file is refused here, naming the record, never converted:
+	// a double out of an integer's range is undefined behaviour to cast.
+	auto refuse = [&](const std::string& what) {
+		throw std::runtime_error(path_ + ": record " + std::to_string(i) + ": " + what);
+	};
+	for (const double v : buf_)
+		if (!std::isfinite(v)) refuse("a number that is not finite");
 	const double* p = buf_.data();
+	auto count = [&](double v, double max, const char* what) {
+		if (!(v >= 0 && v <= max && v == std::floor(v))) refuse(std::string("bad ") + what);
+		return v;
+	};
 	StretchRecord r;
 	RtsStretch& s = r.stretch;
 	s.t_s = *p++;
-	s.ticks = static_cast<std::size_t>(*p++);
-	const int flags = static_cast<int>(*p++);
+	s.ticks = static_cast<std::size_t>(count(*p++, 9007199254740992.0, "tick count"));
+	const int flags = static_cast<int>(count(*p++, 3, "flags"));
 	s.broken = flags & 1;
 	r.ends_segment = flags & 2;
-	r.repairs = static_cast<std::uint32_t>(*p++);
-	r.limit_hits = static_cast<std::uint32_t>(*p++);
+	r.repairs = static_cast<std::uint32_t>(count(*p++, 4294967295.0, "repair count"));
+	r.limit_hits = static_cast<std::uint32_t>(count(*p++, 4294967295.0, "sigma-limit count"));
 	++p;
 	std::memcpy(s.x_filtered.R_nb.data(), p, 9 * sizeof(double));
 	p += 9;

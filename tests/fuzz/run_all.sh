@@ -19,7 +19,7 @@ artifacts="${ARTIFACTS:-$(mktemp -d /tmp/auvnav-fuzz-artifacts.XXXXXX)}"
 mkdir -p "$artifacts"
 # Largest input per harness: room for a few records, small enough to keep
 # executions fast (rawlogs of several objects, YAML files of a few KB).
-declare -A max_len=([rawlog]=16384 [config]=8192 [csv_import]=4096 [plugin_prepare]=2048)
+declare -A max_len=([rawlog]=16384 [config]=8192 [csv_import]=4096 [plugin_prepare]=2048 [stretch]=4096)
 # Leak detection off where MRPT's YAML reader (libfyaml) leaks on parse
 # errors: libFuzzer then runs a full LeakSanitizer pass after nearly every
 # input (17 instead of 400 executions/s). The replay tests (ctest -L fuzz)

@@ -15,6 +15,7 @@
 #include <array>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -1051,6 +1052,49 @@ TEST(SmootherStream, RefusesWhatIsNotAStretchFile)
 	}
 	std::filesystem::remove(path);
 	EXPECT_THROW(StretchReader("/nonexistent/auvnav/stretches.bin"), std::runtime_error);
+}
+
+// A damaged record (a count or flag out of range, a number that is not
+// finite) is refused naming the file and the record, never converted.
+TEST(SmootherStream, RefusesADamagedRecordNamingIt)
+{
+	Recorded rec;
+	rec.keep_every = 10;
+	runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), {}, {}, &rec);
+	const std::string path = writeStretchFile(rec, "auvnav_test_damaged.bin");
+	const auto record_bytes = stretchRecordBytes(rec.fast_end.dim());
+	const std::size_t records = StretchReader(path).records();
+	ASSERT_GE(records, 4u);
+	const auto data_offset = std::filesystem::file_size(path) - records * record_bytes;
+	auto damaged = [&](std::size_t record, std::size_t field, double value) {
+		const std::string copy = path + ".damaged";
+		std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
+		std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
+		f.seekp(static_cast<std::streamoff>(data_offset + record * record_bytes + field * sizeof(double)));
+		f.write(reinterpret_cast<const char*>(&value), sizeof value);
+		return copy;
+	};
+	auto refusal = [&](const std::string& file) {
+		try
+		{
+			smoothStretchFile(file, [](double, const NavState&, const Covariance&, SmoothedKind) {});
+		}
+		catch (const std::runtime_error& e)
+		{
+			return std::string(e.what());
+		}
+		return std::string("(accepted)");
+	};
+	EXPECT_EQ(refusal(path), "(accepted)");
+	const std::string flags = refusal(damaged(2, 2, 1e300));	// field 2: the flags
+	EXPECT_NE(flags.find("record 2: bad flags"), std::string::npos) << flags;
+	const std::string ticks = refusal(damaged(1, 1, -3.5));  // field 1: the tick count
+	EXPECT_NE(ticks.find("record 1: bad tick count"), std::string::npos) << ticks;
+	const std::string nan = refusal(damaged(3, 40, std::numeric_limits<double>::quiet_NaN()));
+	EXPECT_NE(nan.find("record 3: a number that is not finite"), std::string::npos) << nan;
+	EXPECT_NE(nan.find(path), std::string::npos) << nan;
+	std::filesystem::remove(path);
+	std::filesystem::remove(path + ".damaged");
 }
 
 // The recorder's general path (a change of P reported as a whole: sigma

@@ -96,6 +96,7 @@ class StretchReader
 	StretchRecord read(std::size_t i);
 
    private:
+	void readHeader();
 	std::string path_;
 	std::FILE* f_ = nullptr;
 	StretchFileHeader header_;
