@@ -85,6 +85,20 @@ StretchWriter::StretchWriter(const std::string& path, const StretchFileHeader& h
 	errno = 0;
 	f_ = std::fopen(path.c_str(), "wb");
 	if (!f_) throw ioError(path, "cannot create the smoother's stretch file");
+	try
+	{
+		writeHeader(h);
+	}
+	catch (...)
+	{
+		std::fclose(f_);  // no destructor runs for an object whose constructor throws
+		f_ = nullptr;
+		throw;
+	}
+}
+
+void StretchWriter::writeHeader(const StretchFileHeader& h)
+{
 	writeAll(f_, kMagic, sizeof kMagic, path_);
 	const std::uint32_t v[2] = {kVersion, static_cast<std::uint32_t>(h.n)};
 	writeAll(f_, v, sizeof v, path_);

@@ -1054,6 +1054,23 @@ TEST(SmootherStream, RefusesWhatIsNotAStretchFile)
 	EXPECT_THROW(StretchReader("/nonexistent/auvnav/stretches.bin"), std::runtime_error);
 }
 
+// A stretch file that cannot be written (a full disk: /dev/full takes the
+// open and fails the header's flush) is refused, and its handle closed.
+TEST(SmootherStream, AWriteFailureClosesTheFile)
+{
+	if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+	auto open_files = [] {
+		return std::distance(std::filesystem::directory_iterator("/proc/self/fd"), std::filesystem::directory_iterator{});
+	};
+	StretchFileHeader h;
+	h.n = idx::core_dim;
+	h.tangent_names.assign(h.n, "t");
+	h.stored_names.assign(h.n, "s");
+	const auto before = open_files();
+	for (int i = 0; i < 20; ++i) EXPECT_THROW(StretchWriter("/dev/full", h), std::runtime_error);
+	EXPECT_EQ(open_files(), before);
+}
+
 // A damaged record (a count or flag out of range, a number that is not
 // finite) is refused naming the file and the record, never converted.
 TEST(SmootherStream, RefusesADamagedRecordNamingIt)

@@ -74,6 +74,7 @@ class StretchWriter
 	std::uint64_t bytes() const;
 
    private:
+	void writeHeader(const StretchFileHeader& h);
 	std::string path_;
 	std::FILE* f_ = nullptr;
 	int n_ = 0;
