@@ -1,6 +1,7 @@
 #include "gps.h"
 
 #include <auvnav/earth.h>
+#include <auvnav/state_block_config.h>
 #include <mrpt/obs/CObservationGPS.h>
 
 #include <Eigen/Cholesky>
@@ -22,6 +23,19 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	  correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
+	if (cfg.has("states"))
+	{
+		const auto st = cfg.child("states");
+		st.allowOnly({"bias"});
+		if (st.has("bias"))
+		{
+			blocks_.push_back(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
+			has_bias_ = true;
+			if (correlated_sigma_m_ > 0)
+				cfg.fail("correlated_sigma_m",
+						 "the correlated error is modelled by states.bias already (give one of them, not both)");
+		}
+	}
 }
 
 PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
@@ -131,10 +145,18 @@ bool GpsModel::likelyOutlier(const Measurement& m, const FilterContext& ctx) con
 {
 	if (!ctx.mean || !ctx.covariance || ctx.covariance->rows() < idx::pos + 2) return false;
 	const NavState& x = *ctx.mean;
-	const Eigen::Vector2d nu = m.z - (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
-	// Linearised in position alone (the lever arm's attitude share is mm):
-	// S ≈ P_pos + R; the 2-dof χ² quantile is −2 ln(1 − p).
-	const Eigen::Matrix2d S = ctx.covariance->block<2, 2>(idx::pos, idx::pos) + m.R;
+	Eigen::Vector2d nu = m.z - (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
+	// Linearised in position (and bias) alone (the lever arm's attitude share
+	// is mm): S ≈ P_pos + R, with the bias H = [I I]; the 2-dof χ² quantile
+	// is −2 ln(1 − p).
+	Eigen::Matrix2d S = ctx.covariance->block<2, 2>(idx::pos, idx::pos) + m.R;
+	const int b = idx::extra + bias_at_;
+	if (bias_at_ >= 0 && x.extra.size() >= bias_at_ + 2 && ctx.covariance->rows() >= b + 2)
+	{
+		nu -= x.extra.segment<2>(bias_at_);
+		const Eigen::Matrix2d P_pb = ctx.covariance->block<2, 2>(idx::pos, b);
+		S += ctx.covariance->block<2, 2>(b, b) + P_pb + P_pb.transpose();
+	}
 	const double nis = nu.dot(S.ldlt().solve(nu));
 	return std::isfinite(nis) && nis > -2 * std::log(1 - std::min(gate_probability_, 1 - 1e-12));
 }
@@ -155,6 +177,11 @@ bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const Filt
 {
 	if (z_pred.size() != 2) return false;
 	z_pred = (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
+	if (bias_at_ >= 0)
+	{
+		if (x.extra.size() < bias_at_ + 2) return false;  // a state built without the bias block
+		z_pred += x.extra.segment<2>(bias_at_);
+	}
 	return true;
 }
 

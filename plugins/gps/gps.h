@@ -22,6 +22,15 @@
  *  the filter's mean and position covariance (linearised) is still offered
  *  but does not start a new min_interval_s: the next fix is tried at once
  *  (wild fixes at the interval's phase must not be the only ones used).
+ *
+ *  Bias (`states: {bias: {sigma: …, process: gauss_markov, …}}`,
+ *  state_block_config.h): the slowly varying error as a plugin-owned state
+ *  b = (b_n, b_e) instead of an inflated R, h = … + b. The filter then knows
+ *  that fixes a few seconds apart share their error (every 1 Hz fix can be
+ *  used, min_interval_s 0) and how much of its position σ is that shared
+ *  error, which is what a smoother needs to weigh the fixes before a dive
+ *  against those after it. Exclusive with correlated_sigma_m (the same error
+ *  counted twice is refused).
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -36,9 +45,11 @@ class GpsModel final : public SafeMeasurementModel
    public:
 	GpsModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
-	//! The antenna is at p_n + R_nb r: affine in the position.
-	uint32_t affineIn() const noexcept override { return kPosition; }
+	uint32_t uses() const noexcept override { return kAttitude | kPosition | (has_bias_ ? kPluginStates : 0u); }
+	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
+	uint32_t affineIn() const noexcept override { return kPosition | (has_bias_ ? kPluginStates : 0u); }
+	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
+	void bindStates(int first_extra_index) noexcept override { bias_at_ = has_bias_ ? first_extra_index : -1; }
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 
@@ -72,5 +83,8 @@ class GpsModel final : public SafeMeasurementModel
 	double correlated_sigma_m_ = 0;	  // Gauss-Markov part of the error, per axis [m]
 	double correlation_time_s_ = 60;  // its time constant [s]
 	double last_used_s_ = -1e300;
+	bool has_bias_ = false;
+	int bias_at_ = -1;	// NavState::extra index of b_n (b_e follows); -1: unbound
+	std::vector<StateBlockSpec> blocks_;
 };
 }  // namespace auvnav::plugins

@@ -78,18 +78,23 @@ TEST(Gps, RejectsBadConfigNamingTheKey)
 TEST(Gps, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", "states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}",
+										  kAttitude | kPosition | kPluginStates));
 }
 
 TEST(Gps, WellFormedOnRandomStates)
 {
 	at::TestContext tc;
 	tc.ctx().imu_position_b = kImuPos;
-	for (const char* cfg : {"{}", "scale_by_hdop: true"})
+	for (const char* cfg : {"{}", "scale_by_hdop: true", "states: {bias: {sigma: 2}}"})
 	{
 		GpsModel model(pt::configText(cfg), "GPS");
+		// With the bias: one block of 2 after another plugin's 1 (bound at 1).
+		const int extra = model.stateBlocks().empty() ? 0 : 3;
+		if (extra) model.bindStates(1);
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
-			const NavState x = at::RandomNavState(seed);
+			const NavState x = at::RandomNavState(seed, extra);
 			const Eigen::Vector3d p = antennaPosition(at::RandomNavState(seed + 3), kImuPos);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
@@ -312,6 +317,71 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0, 1e-12);
 	EXPECT_THROW(GpsModel(pt::configText("correlated_sigma_m: -1\n"), "GPS"), config::ConfigError);
 	EXPECT_THROW(GpsModel(pt::configText("correlation_time_s: 0\n"), "GPS"), config::ConfigError);
+}
+
+TEST(Gps, BiasStateEntersHAndTheOutlierTest)
+{
+	at::TestContext tc;
+	tc.ctx().imu_position_b = kImuPos;
+	GpsModel model(pt::configText("states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}"),
+				   "GPS");
+	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPosition | kPluginStates));
+	EXPECT_EQ(model.affineIn(), uint32_t(kPosition | kPluginStates));
+	ASSERT_EQ(model.stateBlocks().size(), 1u);
+	const StateBlockSpec& b = model.stateBlocks()[0];
+	EXPECT_EQ(b.dimension(), 2);
+	EXPECT_EQ(b.process, StateProcess::GaussMarkov);
+	EXPECT_DOUBLE_EQ(b.tau_s, 60);
+	model.bindStates(2);
+	NavState x = at::RandomNavState(7, 4);
+	x.extra[2] = 0.8;
+	x.extra[3] = -1.3;
+	const Eigen::Vector3d a = antennaPosition(x, kImuPos);
+	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), a), tc.ctx());
+	EXPECT_NEAR(m.R(0, 0), 9.0, 1e-12);	 // sigma_m alone: no inflation for the correlated part
+	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
+	EXPECT_NEAR(h[0], a.x() + 0.8, 1e-12);
+	EXPECT_NEAR(h[1], a.y() - 1.3, 1e-12);
+	// A state without the bias coordinates cannot be evaluated.
+	EXPECT_TRUE(at::Predict(model, m, tc.ctx(), at::RandomNavState(7, 2)).array().isNaN().all());
+
+	// The rate limiter's outlier test counts the bias: a fix 12 m off, with a
+	// 12 m bias in the mean, is not an outlier (it does start the interval),
+	// and the same fix without that bias is (the next fix is tried at once).
+	auto offered = [&](double bias_n) {
+		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"), "GPS");
+		limited.bindStates(0);
+		NavState mean = at::RandomNavState(9, 2);
+		mean.extra << bias_n, 0;
+		Covariance P = Covariance::Identity(45, 45) * 0.01;
+		P(idx::extra, idx::extra) = P(idx::extra + 1, idx::extra + 1) = 1.0;
+		FilterContext ctx = tc.ctx();
+		ctx.mean = &mean;
+		ctx.covariance = &P;
+		const Eigen::Vector3d fix = antennaPosition(mean, kImuPos) + Eigen::Vector3d(12, 0, 0);
+		int used = 0;
+		for (int k = 0; k < 2; ++k)
+		{
+			auto o = ggaObs(tc.frame(), fix);
+			o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
+			std::vector<Measurement> out;
+			std::string why;
+			used += limited.prepare(*o, ctx, out, why) == PrepareStatus::Ok;
+		}
+		return used;
+	};
+	EXPECT_EQ(offered(12.0), 1);  // inside the gate: the second fix is within min_interval_s
+	EXPECT_EQ(offered(0.0), 2);	  // an outlier: the interval is not spent
+}
+
+TEST(Gps, BiasStateAndCorrelatedSigmaAreExclusive)
+{
+	EXPECT_THROW(GpsModel(pt::configText("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}"), "GPS"),
+				 config::ConfigError);
+	EXPECT_TRUE(pt::ModuleRefuses("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}", "states.bias"));
+	EXPECT_THROW(GpsModel(pt::configText("states: {bais: {sigma: 1}}"), "GPS"), config::ConfigError);
+	EXPECT_THROW(GpsModel(pt::configText("states: {bias: {sigma: 0}}"), "GPS"), config::ConfigError);
+	EXPECT_NO_THROW(GpsModel(pt::configText("{correlated_sigma_m: 0, states: {bias: {sigma: 1.5}}}"), "GPS"));
 }
 
 TEST(Gps, InitialFixIsTheAntennaPositionWithItsLeverArm)
