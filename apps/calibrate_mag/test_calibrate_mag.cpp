@@ -4,6 +4,7 @@
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <sys/wait.h>
@@ -103,18 +104,11 @@ void writeRawlog(const std::string& path, const std::vector<Eigen::Vector3d>& ra
 	}
 }
 
-class TempDir
+class TempDir : public auvnav::testing::ScratchDir
 {
- public:
-	TempDir() : path_(fs::temp_directory_path() / ("auvnav_calmag_" + std::to_string(::getpid())))
-	{
-		fs::create_directories(path_);
-	}
-	~TempDir() { fs::remove_all(path_); }
-	std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-	fs::path path_;
+   public:
+	TempDir() : ScratchDir("calmag") {}
+	std::string file(const std::string& name) const { return (*this / name).string(); }
 };
 
 struct CliRun

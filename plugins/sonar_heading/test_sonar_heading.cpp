@@ -6,6 +6,7 @@
 #include <auvnav/testing/model_checks.h>
 #include <auvnav/testing/sonar_frames.h>
 #include <auvnav/ukf.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -89,7 +90,8 @@ TEST(SonarHeading, PredictedBearingHandComputed)
 
 TEST(SonarHeading, UpdateModeIsWellFormedOnASyntheticFrame)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_sonar_heading_wf";
+	const auvnav::testing::ScratchDir scratch("sonar_heading_wf");
+	const fs::path& dir = scratch.path();
 	SonarHeadingModel m(pt::configText(pluginYaml("update", dir)), "SONAR");
 	at::TestContext tc;
 	const NavState x = levelAt(5);
@@ -114,8 +116,8 @@ TEST(SonarHeading, UpdateModeIsWellFormedOnASyntheticFrame)
 
 TEST(SonarHeading, ValidationModeLogsAndNeverApplies)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_sonar_heading_val";
-	fs::remove(dir / "validation.csv");
+	const auvnav::testing::ScratchDir scratch("sonar_heading_val");
+	const fs::path& dir = scratch.path();
 	{
 		SonarHeadingModel m(pt::configText(pluginYaml("validate", dir)), "SONAR");
 		EXPECT_TRUE(m.validateOnly());
@@ -149,7 +151,8 @@ TEST(SonarHeading, ValidationModeLogsAndNeverApplies)
 
 TEST(SonarHeading, UpdatePullsAWrongHeadingTowardTheTruth)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_sonar_heading_upd";
+	const auvnav::testing::ScratchDir scratch("sonar_heading_upd");
+	const fs::path& dir = scratch.path();
 	SonarHeadingModel m(pt::configText(pluginYaml("update", dir)), "SONAR");
 	const NavState truth = levelAt(-20);
 	NavState start = truth;
@@ -178,7 +181,8 @@ TEST(SonarHeading, UpdatePullsAWrongHeadingTowardTheTruth)
 
 TEST(SonarHeading, RejectsBadConfigNamingTheKey)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_sonar_heading_bad";
+	const auvnav::testing::ScratchDir scratch("sonar_heading_bad");
+	const fs::path& dir = scratch.path();
 	std::string yaml = pluginYaml("update", dir);
 	yaml.replace(yaml.find("mode: update"), 12, "mode: apply");
 	try
@@ -195,6 +199,7 @@ TEST(SonarHeading, RejectsBadConfigNamingTheKey)
 
 TEST(SonarHeading, ModuleExportsEntryAndCreates)
 {
-	const fs::path dir = fs::temp_directory_path() / "auvnav_sonar_heading_mod";
+	const auvnav::testing::ScratchDir scratch("sonar_heading_mod");
+	const fs::path& dir = scratch.path();
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("sonar_heading", pluginYaml("validate", dir), kAttitude | kPosition));
 }

@@ -1,4 +1,5 @@
 // auvnav-eval: chi-square bounds, errors and NEES on a hand-made run, a plot.
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -26,8 +27,8 @@ TEST(Eval, ChiSquareBoundsMatchTables)
 
 TEST(Eval, ErrorsAndNeesOnAHandMadeRun)
 {
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_eval_test_" + std::to_string(::getpid()));
-	fs::create_directories(dir);
+	const auvnav::testing::ScratchDir scratch("eval_test");
+	const fs::path& dir = scratch.path();
 	// Truth: level, heading 0, at (10, 20, 5); current (0.1, 0.0); 100 m travelled.
 	{
 		std::ofstream t(dir / "truth.csv");
@@ -80,8 +81,8 @@ TEST(Eval, TruthIsInterpolatedToTheStateTimes)
 {
 	// The truth turns at 0.2 rad/s and moves 1 m/s north, sampled at 10 Hz;
 	// the states sit between its rows, exactly on the true trajectory.
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_eval_interp_test_" + std::to_string(::getpid()));
-	fs::create_directories(dir);
+	const auvnav::testing::ScratchDir scratch("eval_interp_test");
+	const fs::path& dir = scratch.path();
 	auto yawAt = [](double t) { return 0.2 * (t - 1000); };
 	{
 		std::ofstream t(dir / "truth.csv");

@@ -10,6 +10,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <auvnav/import/importer.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -396,27 +397,22 @@ std::string slurp(const fs::path& p)
 
 /** Simulates the short mission and runs the navigator on it, in a folder of
  *  its own per bag kind (CTest runs the two tests as parallel processes). */
-fs::path simulated(const std::string& kind)
+auvnav::testing::ScratchDir simulated(const std::string& kind)
 {
-	{
-		const fs::path d = fs::temp_directory_path() / ("auvnav_bag_round_trip_" + std::to_string(::getpid()) + "_" + kind);
-		fs::remove_all(d);
-		fs::create_directories(d);
-		EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " +
-						  (d / "sim").string(),
-					  d / "sim.log"),
-				  0);
-		EXPECT_EQ(run(kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
-						  (d / "run_original").string() + " " + (d / "sim" / "short_test.rawlog").string(),
-					  d / "run_original.log"),
-				  0);
-		return d;
-	}
+	auvnav::testing::ScratchDir d("bag_round_trip_" + kind);
+	EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " + (d / "sim").string(),
+				  d / "sim.log"),
+			  0);
+	EXPECT_EQ(run(kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
+					  (d / "run_original").string() + " " + (d / "sim" / "short_test.rawlog").string(),
+				  d / "run_original.log"),
+			  0);
+	return d;
 }
 
 void checkBagRoundTrip(const std::string& kind)
 {
-	const fs::path d = simulated(kind);
+	const auvnav::testing::ScratchDir d = simulated(kind);
 	const std::string bag_name = kind == "ros1" ? "mission.bag" : "mission.db3";
 	{
 		std::unique_ptr<BagSink> sink;
@@ -472,9 +468,9 @@ std::string importError(const fs::path& dir, const std::string& spec, const std:
 	return "";
 }
 
-fs::path smallBags(const fs::path& d)
+auvnav::testing::ScratchDir smallBags(const std::string& name)
 {
-	fs::create_directories(d);
+	auvnav::testing::ScratchDir d(name);
 	{
 		Ros1BagWriter bag((d / "small.bag").string());
 		Ros2BagWriter db((d / "small.db3").string());
@@ -494,18 +490,18 @@ fs::path smallBags(const fs::path& d)
 
 TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 {
-	const fs::path d = smallBags(fs::temp_directory_path() / ("auvnav_bag_bad_topic_" + std::to_string(::getpid())));
+	const auto d = smallBags("bag_bad_topic");
 	for (const std::string kind : {"ros1", "ros2"})
 	{
 		const std::string bag = kind == "ros1" ? "small.bag" : "small.db3";
 		const std::string err = importError(
-			d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag + ", topic: /imu/data}, time: {field: header.stamp}}\n",
+			d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag + ", topic: /imu/data}, time: {field: header.stamp}}\n",
 			(d / bag).string());
 		EXPECT_THAT(err, ::testing::HasSubstr(bag)) << kind;
 		EXPECT_THAT(err, ::testing::HasSubstr("/imu/data")) << kind;
 		EXPECT_THAT(err, ::testing::HasSubstr("/imu (sensor_msgs")) << kind << ": " << err;
 		// The right topic imports.
-		EXPECT_EQ(importError(d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag +
+		EXPECT_EQ(importError(d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag +
 									 ", topic: /imu}, time: {field: header.stamp}}\n",
 							  (d / bag).string()),
 				  "")
@@ -515,7 +511,7 @@ TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 
 TEST(ImportBagBadInput, TruncatedBagIsAClearError)
 {
-	const fs::path d = smallBags(fs::temp_directory_path() / ("auvnav_bag_truncated_" + std::to_string(::getpid())));
+	const auto d = smallBags("bag_truncated");
 	for (const std::string bag : {"small.bag", "small.db3"})
 	{
 		const std::string cut = "cut_" + bag;
@@ -523,7 +519,7 @@ TEST(ImportBagBadInput, TruncatedBagIsAClearError)
 		fs::resize_file(d / cut, fs::file_size(d / bag) / 2);
 		const std::string kind = bag == "small.bag" ? "ros1" : "ros2";
 		const std::string err = importError(
-			d, "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + cut + ", topic: /imu}, time: {field: header.stamp}}\n",
+			d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + cut + ", topic: /imu}, time: {field: header.stamp}}\n",
 			(d / cut).string());
 		EXPECT_THAT(err, ::testing::HasSubstr(cut)) << err;
 		EXPECT_THAT(err, ::testing::HasSubstr("truncated"));

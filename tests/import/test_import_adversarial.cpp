@@ -16,6 +16,7 @@
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
 #include <gmock/gmock.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -41,13 +42,7 @@ namespace fs = std::filesystem;
 
 namespace
 {
-fs::path scratch(const std::string& name)
-{
-	const fs::path p = fs::temp_directory_path() / ("auvnav_import_adversarial_" + std::to_string(::getpid()) + "_" + name);
-	fs::remove_all(p);
-	fs::create_directories(p);
-	return p;
-}
+fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("import_adversarial", name); }
 
 void write(const fs::path& p, const std::string& text)
 {

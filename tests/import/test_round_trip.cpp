@@ -2,6 +2,7 @@
 // auvnav-export → auvnav-import (shipped spec) → auvnav-run gives the same
 // trajectory as auvnav-run on the simulator's own rawlog.
 #include <gmock/gmock.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,13 +21,7 @@ namespace
 const std::string kSource = AUVNAV_SOURCE_DIR;
 const std::string kBin = AUVNAV_BIN_DIR;
 
-fs::path scratch(const std::string& name)
-{
-	const fs::path p = fs::temp_directory_path() / ("auvnav_round_trip_" + std::to_string(::getpid()) + "_" + name);
-	fs::remove_all(p);
-	fs::create_directories(p);
-	return p;
-}
+fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("round_trip", name); }
 
 /** Runs `cmd` (output to `log`); its exit code. */
 int run(const std::string& cmd, const fs::path& log)

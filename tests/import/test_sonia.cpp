@@ -5,6 +5,7 @@
 #include <auvnav/import/importer.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <nlohmann/json.hpp>
@@ -35,13 +36,7 @@ const fs::path kData = AUVNAV_SONIA_DIR;
 		GTEST_SKIP() << kData << " not present";       \
 	}
 
-fs::path scratch(const std::string& name)
-{
-	const fs::path p = fs::temp_directory_path() / ("auvnav_sonia_" + std::to_string(::getpid()) + "_" + name);
-	fs::remove_all(p);
-	fs::create_directories(p);
-	return p;
-}
+fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("sonia", name); }
 
 ImportReport importRun(const std::string& spec, const std::vector<std::string>& inputs, const fs::path& out)
 {

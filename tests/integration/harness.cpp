@@ -72,16 +72,14 @@ HorizontalError horizontalError(const Navigator& nav, const std::vector<TruthRow
 	return e;
 }
 
-fs::path simulate(const std::string& mission, unsigned seed) { return simulate(mission, seed, {}, ""); }
+ScratchDir simulate(const std::string& mission, unsigned seed) { return simulate(mission, seed, {}, ""); }
 
-fs::path simulate(const std::string& mission, unsigned seed,
-				  const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag)
+ScratchDir simulate(const std::string& mission, unsigned seed,
+					const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag)
 {
 	auto spec = sim::MissionSpec::load(std::string(AUVNAV_SOURCE_DIR) + "/" + mission);
 	for (const auto& [k, v] : sensor_overrides) spec.sensors.set(k, v);
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_it_" + spec.name + tag + "_" + std::to_string(seed) +
-													  "_" + std::to_string(::getpid()));
-	fs::remove_all(dir);
+	ScratchDir dir("it_" + spec.name + tag + "_" + std::to_string(seed));
 	sim::runMission(spec, seed, dir.string());
 	return dir;
 }

@@ -6,6 +6,7 @@
 #include <auvnav/io/trajectory.h>
 #include <auvnav/navigator.h>
 #include <auvnav/rawlog_run.h>
+#include <auvnav/testing/scratch_dir.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -65,12 +66,17 @@ struct HorizontalError
 };
 HorizontalError horizontalError(const Navigator& nav, const std::vector<TruthRow>& truth);
 
-/** Simulates `mission` (repo-relative) with `seed` into a fresh scratch folder. */
-std::filesystem::path simulate(const std::string& mission, unsigned seed);
+/** A test's scratch folder, removed with its contents when it goes out of
+ *  scope (auvnav/testing/scratch_dir.h). */
+using ScratchDir = auvnav::testing::ScratchDir;
+
+/** Simulates `mission` (repo-relative) with `seed` into a fresh scratch
+ *  folder: the rawlog and ground_truth.csv; removed when the returned
+ *  object goes out of scope. */
+ScratchDir simulate(const std::string& mission, unsigned seed);
 /** The same with `sensor_overrides` (KEY=VALUE on the mission's sensor file,
  *  e.g. {"dvl.scale_factor_error", "0.005"}); `tag` keeps variants apart. */
-std::filesystem::path simulate(const std::string& mission, unsigned seed,
-							   const std::vector<std::pair<std::string, std::string>>& sensor_overrides,
-							   const std::string& tag);
+ScratchDir simulate(const std::string& mission, unsigned seed,
+					const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag);
 
 }  // namespace auvnav::test

@@ -38,7 +38,7 @@ struct SquareOutcome
 
 SquareOutcome runSquare(unsigned seed)
 {
-	const fs::path dir = simulate("config/missions/square_5x50m.yaml", seed);
+	const auto dir = simulate("config/missions/square_5x50m.yaml", seed);
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const auto span = diveAndResurfacing(truth);
 	const std::size_t dive = span.first, surf = span.second;
@@ -71,7 +71,6 @@ SquareOutcome runSquare(unsigned seed)
 	runRawlog(nav, (dir / "square_5x50m.rawlog").string()).rethrow();
 	EXPECT_TRUE(recorded);
 	out.distance_m = truth[surf].distance_m - truth[dive].distance_m;
-	fs::remove_all(dir);
 	return out;
 }
 
@@ -157,15 +156,14 @@ void headingSeeds(const std::vector<unsigned>& seeds, const std::vector<double>&
 	std::printf("heading (no GPS): seed | offset [deg] | error at 15 min [deg] | sigma at 15 min [deg] | worst |err|/sigma after 1 min | worst |roll err|/sigma on the surface line\n");
 	for (unsigned s : seeds)
 	{
-		const fs::path dir = simulate("config/missions/heading.yaml", s);
+		const auto dir = simulate("config/missions/heading.yaml", s);
 		for (double off : offsets)
 		{
-			const auto o = runHeading(dir, off, sigma_deg);
+			const auto o = runHeading(dir.path(), off, sigma_deg);
 			std::printf("  %u | %+.0f | %+.3f | %.3f | %.2f | %.2f | %s\n", s, off, o.error_15min_deg, o.sigma_15min_deg,
 						o.worst_ratio_after_1min, o.worst_roll_ratio_line, o.pass() ? "pass" : "FAIL");
 			EXPECT_TRUE(o.pass()) << "seed " << s << " offset " << off;
 		}
-		fs::remove_all(dir);
 	}
 }
 }  // namespace

@@ -305,9 +305,7 @@ Outcome runMode(const Mode& mode, unsigned seed)
 	auto spec = sim::MissionSpec::load(kRepo + "/config/missions/sample.yaml");
 	spec.sensors.set("dvl.output_frame", mode.frame);
 	spec.sensors.set("dvl.sign", mode.sign);
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_dvl_modes_" + std::string(mode.name) + "_" +
-													   std::to_string(seed) + "_" + std::to_string(::getpid()));
-	fs::remove_all(dir);
+	const ScratchDir dir("dvl_modes_" + std::string(mode.name) + "_" + std::to_string(seed));
 	sim::runMission(spec, seed, dir.string());
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	// Dive: first submerged row; resurfacing: the first surfaced row after it.
@@ -361,7 +359,6 @@ Outcome runMode(const Mode& mode, unsigned seed)
 			out.dvl_skipped = st.skipped;
 			out.dvl_nis_per_dim = st.nis_dim_sum > 0 ? st.nis_sum / st.nis_dim_sum : NAN;
 		}
-	fs::remove_all(dir);
 	return out;
 }
 

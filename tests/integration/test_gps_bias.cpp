@@ -75,10 +75,10 @@ AtDive runToDive(const fs::path& dir, bool bias_state)
 
 TEST(GpsBiasState, KeepsThePositionSigmaOfASlowGpsErrorAtTheDive)
 {
-	const fs::path dir =
+	const auto dir =
 		simulate(kMission, 2, {{"gps.correlated_sigma_m", "3.0"}, {"gps.correlation_time_s", "600"}}, "_slow_gps");
-	const AtDive white = runToDive(dir, false);
-	const AtDive state = runToDive(dir, true);
+	const AtDive white = runToDive(dir.path(), false);
+	const AtDive state = runToDive(dir.path(), true);
 	std::printf("at the dive: as white noise error %.2f m, sigma %.3f m (%zu fixes); with the bias state error "
 				"%.2f m, sigma %.2f m (%zu fixes)\n",
 				white.error_m, white.sigma_m, white.gps_used, state.error_m, state.sigma_m, state.gps_used);
@@ -92,5 +92,4 @@ TEST(GpsBiasState, KeepsThePositionSigmaOfASlowGpsErrorAtTheDive)
 	EXPECT_LT(white.sigma_m, 0.3);
 	EXPECT_GT(white.error_m, 3 * white.sigma_m);
 	EXPECT_EQ(state.status, NavStatus::Ok) << state.status_reason;
-	fs::remove_all(dir);
 }

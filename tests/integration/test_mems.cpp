@@ -120,8 +120,8 @@ void memsSeeds(const std::string& mission, const std::string& name, const std::v
 				name.c_str());
 	for (unsigned s : seeds)
 	{
-		const fs::path dir = simulate(mission, s);
-		const MemsOutcome o = runMems(dir, name, true, {}, imuMounting(mission));
+		const auto dir = simulate(mission, s);
+		const MemsOutcome o = runMems(dir.path(), name, true, {}, imuMounting(mission));
 		std::printf("  %u | %.2f | %.0f | %.2f %% | %.2f | %.2f | %.0f %% / %.0f %% (%.0f %%) | %s %s\n", s,
 					o.end_error_m, o.distance_m, 100 * o.end_error_m / o.distance_m, o.end_two_sigma_m,
 					o.worst_heading_ratio, 100 * o.nees_pos_inside, 100 * o.nees_att_inside, 100 * o.nees_tilt_inside,
@@ -141,7 +141,6 @@ void memsSeeds(const std::string& mission, const std::string& name, const std::v
 		{
 			EXPECT_GE(o.nees_att_inside, 0.9) << name << " seed " << s;
 		}
-		fs::remove_all(dir);
 	}
 }
 }  // namespace
@@ -153,14 +152,13 @@ TEST(MemsVehicle, PoolSquareWithMagnetometerDvlDepth)
 
 TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
-	const MemsOutcome o = runMems(dir, "bluerov2_pool_square", false);
+	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
+	const MemsOutcome o = runMems(dir.path(), "bluerov2_pool_square", false);
 	std::printf("no heading source: min heading sigma %.1f deg, worst displacement from the start / position sigma %.2f, "
 				"status %s (%s)\n",
 				o.min_heading_sigma_deg, o.worst_displacement_ratio, navStatusName(o.status), o.reason.c_str());
 	EXPECT_GE(o.min_heading_sigma_deg, 90.0);
 	EXPECT_EQ(o.status, NavStatus::Degraded) << o.reason;
-	fs::remove_all(dir);
 }
 
 // Worst displacement / position σ 0.59 (seed 1). It was 3.76 while the gyro
@@ -168,13 +166,12 @@ TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
 // (~0.1°/s) bent the path beyond the σ; config/bluerov2.yaml now keeps it.
 TEST(MemsVehicle, NoHeadingSourcePositionSigmaCoversTheDisplacement)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
-	const MemsOutcome o = runMems(dir, "bluerov2_pool_square", false);
+	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
+	const MemsOutcome o = runMems(dir.path(), "bluerov2_pool_square", false);
 	// With the heading unknown, where the vehicle is lies anywhere on a circle
 	// of its displacement d around the start (σ per axis d/√2): the position σ
 	// must cover at least half of d at every moment.
 	EXPECT_LE(o.worst_displacement_ratio, 2.0);
-	fs::remove_all(dir);
 }
 
 // The magnetometer's correlated heading errors (the simulated unit's
@@ -226,9 +223,9 @@ TEST(MemsVehicleSlow, ThreeSeedsLawnmowerInsideTwoSigma)
 // error 0.91 of 2σ, end error 2.25 m of 520 m (2σ 4.21 m), status ok.
 TEST(MemsVehicle, UndisclosedDvlScaleErrorIsNeverOkWithAWrongPosition)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_lawnmower.yaml", 1, {{"dvl.scale_factor_error", "0.05"}},
+	const auto dir = simulate("config/missions/bluerov2_lawnmower.yaml", 1, {{"dvl.scale_factor_error", "0.05"}},
 								  "_dvl_scale_5pct");
-	const MemsOutcome o = runMems(dir, "bluerov2_lawnmower", true, {},
+	const MemsOutcome o = runMems(dir.path(), "bluerov2_lawnmower", true, {},
 								  imuMounting("config/missions/bluerov2_lawnmower.yaml"));
 	std::printf("DVL 5 %% high, lawnmower seed 1: end error %.2f m (2 sigma %.2f m), worst error / 2 sigma %.2f, "
 				"status %s (%s)\n",
@@ -238,7 +235,6 @@ TEST(MemsVehicle, UndisclosedDvlScaleErrorIsNeverOkWithAWrongPosition)
 		EXPECT_LE(o.worst_error_to_two_sigma, 1.0);
 	}
 	EXPECT_NE(o.status, NavStatus::NotInitialized);
-	fs::remove_all(dir);
 }
 
 namespace
@@ -305,17 +301,15 @@ std::vector<std::vector<NoiseKey>> eachKey()
 // ('degraded': windowed NIS 1.75 / 2.44).
 TEST(MemsVehicleSlow, NoiseSweepEachFigureAlone)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
-	noiseSweep(dir, eachKey(), {0.3, 3.0});
-	fs::remove_all(dir);
+	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
+	noiseSweep(dir.path(), eachKey(), {0.3, 3.0});
 }
 
 // All figures x3 together: 0.34 m of 82 m, status ok (seed 1).
 TEST(MemsVehicle, NoiseSweepAllTimesThree)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
-	noiseSweep(dir, {kMemsNoise}, {3.0});
-	fs::remove_all(dir);
+	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
+	noiseSweep(dir.path(), {kMemsNoise}, {3.0});
 }
 
 // All figures x0.3 together: 0.18 m of 82 m, 'degraded' (DVL NIS 2.05 per
@@ -324,7 +318,6 @@ TEST(MemsVehicle, NoiseSweepAllTimesThree)
 // (Recovery::State) it ended 'diverged': the magnetometer rejected for good.
 TEST(MemsVehicle, NoiseSweepAllTimesZeroPointThree)
 {
-	const fs::path dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
-	noiseSweep(dir, {kMemsNoise}, {0.3});
-	fs::remove_all(dir);
+	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
+	noiseSweep(dir.path(), {kMemsNoise}, {0.3});
 }

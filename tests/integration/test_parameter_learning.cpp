@@ -33,7 +33,7 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 	int closer = 0;
 	for (unsigned seed = 1; seed <= 5; ++seed)
 	{
-		const fs::path dir = test::simulate("config/missions/square_5x50m.yaml", seed);
+		const auto dir = test::simulate("config/missions/square_5x50m.yaml", seed);
 		auto cfg = config::Node::load(repo + "/config/flatfish.yaml");
 		cfg.set("filter.vehicle_model_file", prior_file.string());
 		PluginHost host;
@@ -52,7 +52,6 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 		std::printf("seed %u: surge linear damping prior %.2f -> %.2f (simulator %.2f), sigma %.1f %% -> %.1f %% %s\n",
 					seed, prior, estimate, truth, 100 * sigma0, 100 * sigma, ok ? "pass" : "FAIL");
 		closer += ok;
-		fs::remove_all(dir);
 	}
 	fs::remove(prior_file);
 	EXPECT_GE(closer, 4);

@@ -150,24 +150,22 @@ SeedMeans dvlStateSeeds(const std::vector<unsigned>& seeds)
 				"(2 sigma) | scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
 	for (unsigned seed : seeds)
 	{
-		const fs::path clean = simulate(kMission, seed,
+		const auto clean = simulate(kMission, seed,
 										{{"dvl.scale_factor_error", "0"},
 										 {"dvl.misalignment_ypr_deg.0", "0"},
 										 {"dvl.misalignment_ypr_deg.1", "0"},
 										 {"dvl.misalignment_ypr_deg.2", "0"}},
 										"_clean");
-		const Outcome base = runSquare(clean, false);
-		const Outcome base_on = runSquare(clean, true);
-		fs::remove_all(clean);
-		const fs::path bad = simulate(kMission, seed,
+		const Outcome base = runSquare(clean.path(), false);
+		const Outcome base_on = runSquare(clean.path(), true);
+		const auto bad = simulate(kMission, seed,
 									  {{"dvl.scale_factor_error", std::to_string(kScaleError)},
 									   {"dvl.misalignment_ypr_deg.0", std::to_string(kMisalignmentYprDeg[0])},
 									   {"dvl.misalignment_ypr_deg.1", std::to_string(kMisalignmentYprDeg[1])},
 									   {"dvl.misalignment_ypr_deg.2", std::to_string(kMisalignmentYprDeg[2])}},
 									  "_misaligned");
-		const Outcome off = runSquare(bad, false);
-		const Outcome on = runSquare(bad, true);
-		fs::remove_all(bad);
+		const Outcome off = runSquare(bad.path(), false);
+		const Outcome on = runSquare(bad.path(), true);
 		std::printf("  %u | %.2f | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
 					base.error_m, base_on.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0],
 					100 * on.sigma[0],
@@ -204,7 +202,7 @@ TEST(DvlPluginStates, ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate)
 	// s low (the gain and the innovation share the velocity error with opposite signs): −2.4 %
 	// at resurfacing for a true 0, σ 0.23 %. With the scale's term at the velocity estimate of
 	// 10 s before (dvl.h, scale_reference_lag_s) it lands within 2σ of 0.
-	const fs::path dir = simulate(kMission, 1,
+	const auto dir = simulate(kMission, 1,
 								  {{"dvl.scale_factor_error", "0"},
 								   {"dvl.misalignment_ypr_deg.0", "0"},
 								   {"dvl.misalignment_ypr_deg.1", "0"},
@@ -217,9 +215,8 @@ TEST(DvlPluginStates, ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate)
 		{"sensors.IMU.config.extra_sigma_mps2", "2"}};
 	auto former = weak_accelerometer;
 	former.emplace_back("sensors.DVL.config.scale_reference_lag_s", "0");
-	const Outcome now = runSquare(dir, true, weak_accelerometer);
-	const Outcome before = runSquare(dir, true, former);
-	fs::remove_all(dir);
+	const Outcome now = runSquare(dir.path(), true, weak_accelerometer);
+	const Outcome before = runSquare(dir.path(), true, former);
 	std::printf("scale at resurfacing, true 0: %.3f / %.3f %% (lag 10 s), %.3f / %.3f %% (lag 0: h at the state's "
 				"velocity); error %.2f / %.2f m\n",
 				100 * now.estimate[0], 100 * now.sigma[0], 100 * before.estimate[0], 100 * before.sigma[0], now.error_m,

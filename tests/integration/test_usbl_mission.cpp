@@ -81,13 +81,13 @@ void print(const char* what, unsigned seed, const Figures& f)
 
 void checkSeed(unsigned seed)
 {
-	const fs::path immediate_dir = simulate(kMission, seed, {{"usbl.latency_s", "0"}}, "_lat0");
-	const Figures immediate = run(immediate_dir);
-	const fs::path late_dir = simulate(kMission, seed, {}, "_lat2");
-	const Figures handled = run(late_dir);
-	const fs::path untimed_dir = simulate(kMission, seed, {{"usbl.report_measurement_time", "false"}}, "_untimed");
-	const Figures declared = run(untimed_dir, {{"sensors.USBL.latency_s", "2"}});
-	const Figures ignored = run(untimed_dir);
+	const auto immediate_dir = simulate(kMission, seed, {{"usbl.latency_s", "0"}}, "_lat0");
+	const Figures immediate = run(immediate_dir.path());
+	const auto late_dir = simulate(kMission, seed, {}, "_lat2");
+	const Figures handled = run(late_dir.path());
+	const auto untimed_dir = simulate(kMission, seed, {{"usbl.report_measurement_time", "false"}}, "_untimed");
+	const Figures declared = run(untimed_dir.path(), {{"sensors.USBL.latency_s", "2"}});
+	const Figures ignored = run(untimed_dir.path());
 	print("no latency", seed, immediate);
 	print("2 s late, fix time in the fix", seed, handled);
 	print("2 s late, latency_s: 2 declared", seed, declared);
@@ -103,9 +103,6 @@ void checkSeed(unsigned seed)
 	// ... and measurably better than ignoring the latency.
 	EXPECT_GT(ignored.rms_m, 2.0 * handled.rms_m) << "seed " << seed;
 	EXPECT_LT(handled.final_m, handled.two_sigma_m * 1.5) << "seed " << seed;
-	fs::remove_all(immediate_dir);
-	fs::remove_all(late_dir);
-	fs::remove_all(untimed_dir);
 }
 }  // namespace
 
@@ -117,8 +114,8 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 	// alignment error). On the surface the GPS tells the bias apart, as well as
 	// its 5 min of fixes 30 s apart with σ ≈ 3 m each can (σ ≈ 0.8 m); submerged
 	// (GPS denied) the state keeps it. Without it the track sits on the bias.
-	const fs::path dir = simulate(kMission, 1, {{"usbl.bias_north_m", "3.0"}, {"usbl.bias_east_m", "-2.0"}}, "_bias");
-	const Figures off = run(dir);
+	const auto dir = simulate(kMission, 1, {{"usbl.bias_north_m", "3.0"}, {"usbl.bias_east_m", "-2.0"}}, "_bias");
+	const Figures off = run(dir.path());
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const std::size_t dive = diveAndResurfacing(truth).first;
 	auto cfg = config::Node::load(kConfig);
@@ -149,7 +146,6 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 	EXPECT_NEAR(b.y(), -2.0, 3 * sigma.y());
 	EXPECT_LT(sigma.maxCoeff(), 1.0);  // prior 5 m
 	EXPECT_LT(rms, 0.5 * off.rms_m);
-	fs::remove_all(dir);
 }
 
 TEST(UsblMissionSlow, TwoMoreSeeds)

@@ -200,7 +200,7 @@ TEST(WildFixes, AUsblReinitialisesAStartHundredMetresOff)
 {
 	// Any position sensor re-initialises: the USBL mission with GPS denied
 	// all along and the start given 100 m north of the truth (σ 3 m).
-	const fs::path dir = simulate("config/missions/usbl_sample.yaml", 1);
+	const auto dir = simulate("config/missions/usbl_sample.yaml", 1);
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	auto final_error = [&](const std::string& north_m, std::size_t& usbl_reinits, std::size_t& total) {
 		auto cfg = config::Node::load(kConfig);
@@ -224,5 +224,4 @@ TEST(WildFixes, AUsblReinitialisesAStartHundredMetresOff)
 	EXPECT_EQ(usbl_off, 1u);
 	EXPECT_EQ(total_off, 1u);
 	EXPECT_LE(off_m, 2 * clean_m + 0.01);
-	fs::remove_all(dir);
 }

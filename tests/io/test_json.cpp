@@ -1,6 +1,7 @@
 // The one JSON writer (auvnav/io/json.h): keys in insertion order, NaN and
 // infinities as null, bytes that are not UTF-8 replaced, atomic file writes.
 #include <auvnav/io/json.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -35,8 +36,8 @@ TEST(Json, EscapesStringsAndReplacesInvalidUtf8)
 
 TEST(Json, AtomicWriteLeavesNoTemporaryFile)
 {
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_json_test_" + std::to_string(::getpid()));
-	fs::create_directories(dir);
+	const auvnav::testing::ScratchDir scratch("json_test");
+	const fs::path& dir = scratch.path();
 	const fs::path file = dir / "summary.json";
 	std::ofstream(file) << "old";
 	Json j;

@@ -2,6 +2,7 @@
 // (one line out of an MRPT exception report).
 #include <auvnav/error_text.h>
 #include <auvnav/io/line_file.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -24,8 +25,8 @@ std::string slurp(const fs::path& f)
 
 fs::path scratch(const std::string& name)
 {
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_line_file_" + std::to_string(::getpid()));
-	fs::create_directories(dir);
+	// One folder for the process's files, removed at exit.
+	static const auvnav::testing::ScratchDir dir("line_file");
 	return dir / name;
 }
 }  // namespace

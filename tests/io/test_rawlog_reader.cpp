@@ -5,6 +5,7 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/CFileOutputStream.h>
@@ -130,26 +131,16 @@ std::vector<CObservation::Ptr> mixedRecording(int steps)
 
 // ------------------------------------------------------------ file helpers
 
-class TempDir
+/** A scratch folder named after the running test (scratch_dir.h). */
+class TempDir : public auvnav::testing::ScratchDir
 {
- public:
+   public:
 	TempDir()
+		: ScratchDir(std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) + "_" +
+					 ::testing::UnitTest::GetInstance()->current_test_info()->name())
 	{
-		const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-		path_ = fs::temp_directory_path() / ("auvnav_" + std::string(info->test_suite_name()) + "_" +
-		                                     info->name() + "_" + std::to_string(::getpid()));
-		fs::remove_all(path_);
-		fs::create_directories(path_);
 	}
-	~TempDir()
-	{
-		std::error_code ignored;
-		fs::remove_all(path_, ignored);
-	}
-	std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-	fs::path path_;
+	std::string file(const std::string& name) const { return (*this / name).string(); }
 };
 
 std::vector<char> readBytes(const std::string& path)

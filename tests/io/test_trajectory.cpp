@@ -2,6 +2,7 @@
 // both formats, the interpolation rule (linear position, slerp attitude),
 // gaps, the span's ends and the refusals.
 #include <auvnav/io/trajectory.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,12 +16,8 @@ using namespace auvnav;
 
 namespace
 {
-fs::path scratch(const std::string& name)
-{
-	const fs::path p = fs::temp_directory_path() / ("auvnav_trajectory_" + std::to_string(::getpid()) + "_" + name);
-	fs::remove(p);
-	return p;
-}
+/** A file path `name` in a folder of this process's, removed at exit. */
+fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("trajectory", "files") / name; }
 
 double yawOf(const Eigen::Quaterniond& q)
 {

@@ -1,5 +1,6 @@
 // auvnav-view's scene: contents, the saved scene read back with MRPT's reader
 // (what SceneViewer3D does), and an off-screen render that shows the trajectory.
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/img/CImage.h>
@@ -108,8 +109,8 @@ TEST(View, OffscreenScreenshotShowsTheTrajectory)
 
 TEST(View, BadRunFolderIsRefusedNamingTheFile)
 {
-	const fs::path dir = fs::temp_directory_path() / ("auvnav_view_bad_" + std::to_string(::getpid()));
-	fs::create_directories(dir);
+	const auvnav::testing::ScratchDir scratch("view_bad");
+	const fs::path& dir = scratch.path();
 	EXPECT_THROW(loadRun((dir / "missing").string()), std::runtime_error);
 	std::ofstream(dir / "states.csv") << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d\n"
 									  << "1,1,0,0,0,abc,0,0,1,1,1\n";
