@@ -224,6 +224,95 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 		for (Eigen::Index i = from; i < to; ++i) y[i] = 0.0;
 }
 
+// Triangular solves for the small shapes of the update and the smoother
+// (m ≤ ~6 right-hand sides, k ≤ 43 unknowns), where Eigen's blocked solvers
+// spend more on packing than on arithmetic. L is lower triangular, read
+// through `L(i, j)` (i ≥ j) or, for the dot-product forms, as a column-major
+// array with its stride. Each form fixes its order of operations: callers
+// that must stay bit for bit with an earlier build use the same form.
+
+/** X ← X L⁻ᵀ in place, i.e. solves X Lᵀ = Y for X (Y given in X): rows
+ *  [0, rows) of m columns (stride xs), L m × m. Forward over X's columns,
+ *  column c less Σ_{l<c} L(c, l) X_l as column axpys, then divided by
+ *  L(c, c). */
+template <typename Lower>
+void solveRightLowerTransposed(double* X, Eigen::Index rows, Eigen::Index xs, Eigen::Index m, const Lower& L)
+{
+	for (Eigen::Index c = 0; c < m; ++c)
+	{
+		double* Xc = X + c * xs;
+		subtractAllColumns(Xc, 0, rows, X, xs, c, [&](Eigen::Index l) { return L(c, l); });
+		const double d = L(c, c);
+		for (Eigen::Index r = 0; r < rows; ++r) Xc[r] /= d;
+	}
+}
+
+/** X ← X L⁻¹ in place, i.e. solves X L = Y (Y given in X): rows [0, rows)
+ *  of k columns (stride xs), L k × k. Backward over X's columns, column c
+ *  less Σ_{l>c} X_l L(l, c) as column axpys, then divided by L(c, c). */
+template <typename Lower>
+void solveRightLower(double* X, Eigen::Index rows, Eigen::Index xs, Eigen::Index k, const Lower& L)
+{
+	for (Eigen::Index c = k - 1; c >= 0; --c)
+	{
+		double* Xc = X + c * xs;
+		subtractAllColumns(Xc, 0, rows, X + (c + 1) * xs, xs, k - 1 - c,
+						   [&](Eigen::Index l) { return L(c + 1 + l, c); });
+		const double d = L(c, c);
+		for (Eigen::Index r = 0; r < rows; ++r) Xc[r] /= d;
+	}
+}
+
+/** B ← L⁻¹ B in place (forward substitution): k rows of m columns (stride
+ *  bs), L k × k column-major with stride ls. Per column of L, an axpy of
+ *  its part below the diagonal into every column of B. */
+inline void solveLeftLower(double* B, Eigen::Index k, Eigen::Index bs, Eigen::Index m, const double* L,
+						   Eigen::Index ls)
+{
+	for (Eigen::Index i = 0; i < k; ++i)
+	{
+		const double* Li = L + i * ls;
+		for (Eigen::Index j = 0; j < m; ++j)
+		{
+			double* b = B + j * bs;
+			b[i] /= Li[i];
+			const double bi = b[i];
+			for (Eigen::Index r = i + 1; r < k; ++r) b[r] -= Li[r] * bi;
+		}
+	}
+}
+
+/** B ← L⁻ᵀ B in place (back substitution): k rows of m columns (stride bs),
+ *  L k × k column-major with stride ls. B(i, j) less the dot of L's column
+ *  i below the diagonal with B's rows below i, then divided by L(i, i). The
+ *  m columns side by side and four partial sums per dot: the entries of a
+ *  column depend on each other in turn, and one running sum made each step
+ *  wait for the one before. */
+inline void solveLeftLowerTransposed(double* B, Eigen::Index k, Eigen::Index bs, Eigen::Index m, const double* L,
+									 Eigen::Index ls)
+{
+	for (Eigen::Index i = k - 1; i >= 0; --i)
+	{
+		const double* Li = L + i * ls + i + 1;
+		const Eigen::Index len = k - 1 - i;
+		for (Eigen::Index j = 0; j < m; ++j)
+		{
+			const double* b = B + j * bs + i + 1;
+			double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+			Eigen::Index l = 0;
+			for (; l + 4 <= len; l += 4)
+			{
+				s0 += Li[l] * b[l];
+				s1 += Li[l + 1] * b[l + 1];
+				s2 += Li[l + 2] * b[l + 2];
+				s3 += Li[l + 3] * b[l + 3];
+			}
+			for (; l < len; ++l) s0 += Li[l] * b[l];
+			B[j * bs + i] = (B[j * bs + i] - ((s0 + s1) + (s2 + s3))) / L[i * ls + i];
+		}
+	}
+}
+
 /** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
  *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
  *  j + 1… of column j + 1, each new entry also stored at its mirror. Both

@@ -794,11 +794,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// W Lᵀ = Pxz column by column (forward substitution as axpys: the
 	// blocked triangular solver packs its operands, costly for m ≤ 6).
 	const auto& L_S = llt.matrixLLT();	// L in its lower triangle
-	for (int c = 0; c < m; ++c)
-	{
-		subtractAllColumns(&W(0, c), 0, n, W.data(), W.outerStride(), c, [&](Eigen::Index l) { return L_S(c, l); });
-		W.col(c) /= L_S(c, c);
-	}
+	solveRightLowerTransposed(W.data(), n, W.outerStride(), m, L_S);
 	MapV u = takeV(m);
 	u = nu;
 	llt.matrixL().solveInPlace(u);
@@ -816,41 +812,13 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// process noise added at this tick (it leaves the cross covariance
 		// with past states as it is), and with P, Pxz and S widened together
 		// the update's P⁻¹ W is the same expression.
-		// From the update's arena, by the same column axpys as W (B L_Sᵀ =
-		// Dᵀ), then L11ᵀ B = that by back substitution, one dot product of
-		// L11's column below the diagonal per entry (Eigen's vector solves
-		// spent ~4.7 k instructions an update here, and allocated).
+		// From the update's arena, by the same solve as W (B L_Sᵀ = Dᵀ), then
+		// L11ᵀ B = that by back substitution (column_kernels.h; Eigen's vector
+		// solves spent ~4.7 k instructions an update here, and allocated).
 		MapM B = takeM(k, m);
 		B = D.transpose();
-		for (int c = 0; c < m; ++c)
-		{
-			subtractAllColumns(&B(0, c), 0, k, B.data(), B.outerStride(), c, [&](Eigen::Index l) { return L_S(c, l); });
-			B.col(c) /= L_S(c, c);
-		}
-		// The m columns side by side and four partial sums per dot: the
-		// entries of a column depend on each other in turn, and one running
-		// sum made each step wait for the one before (~2/3 of the update's
-		// own time with a smoother, perf on the square mission).
-		for (int i = k - 1; i >= 0; --i)
-		{
-			const double* Li = &L_(i + 1, i);
-			const int len = k - 1 - i;
-			for (int j = 0; j < m; ++j)
-			{
-				double* b = &B(0, j) + i + 1;
-				double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-				int l = 0;
-				for (; l + 4 <= len; l += 4)
-				{
-					s0 += Li[l] * b[l];
-					s1 += Li[l + 1] * b[l + 1];
-					s2 += Li[l + 2] * b[l + 2];
-					s3 += Li[l + 3] * b[l + 3];
-				}
-				for (; l < len; ++l) s0 += Li[l] * b[l];
-				B(i, j) = (B(i, j) - ((s0 + s1) + (s2 + s3))) / L_(i, i);
-			}
-		}
+		solveRightLowerTransposed(B.data(), k, B.outerStride(), m, L_S);
+		solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, L_.data(), L_.outerStride());
 		observer_->onUpdate(B, u, W);
 	}
 	applySigmaLimits();

@@ -81,3 +81,89 @@ TEST(FilterKernels, InPlaceRightProductEqualsTheColumnAxpysBitForBit)
 }
 }  // namespace
 }  // namespace auvnav
+
+namespace auvnav
+{
+namespace
+{
+/** A well-conditioned lower-triangular k × k (a Cholesky factor's shape:
+ *  positive diagonal), in a matrix with a larger stride. */
+Eigen::MatrixXd lowerFactor(int k, unsigned seed)
+{
+	std::mt19937 rng(seed);
+	std::normal_distribution<double> normal;
+	std::uniform_real_distribution<double> diag(0.5, 2.0);
+	Eigen::MatrixXd L = Eigen::MatrixXd::Zero(k + 3, k);  // stride k + 3
+	for (int j = 0; j < k; ++j)
+	{
+		L(j, j) = diag(rng);
+		for (int i = j + 1; i < k; ++i) L(i, j) = 0.3 * normal(rng);
+	}
+	return L;
+}
+
+Eigen::MatrixXd randomMatrix(int rows, int cols, unsigned seed)
+{
+	std::mt19937 rng(seed);
+	std::normal_distribution<double> normal;
+	Eigen::MatrixXd X(rows, cols);
+	for (Eigen::Index i = 0; i < X.size(); ++i) X.data()[i] = normal(rng);
+	return X;
+}
+}  // namespace
+
+TEST(FilterKernels, TriangularSolvesAgreeWithEigen)
+{
+	// Every solve form on the shapes the update (k ≤ 43 unknowns, m ≤ 6
+	// right-hand sides) and the smoother (F: 23 × 23; the transport: n × 6)
+	// use, against Eigen's triangular solvers.
+	for (int k : {1, 2, 3, 5, 8, 23, 43})
+		for (int m : {1, 3, 4, 6})
+		{
+			const unsigned seed = static_cast<unsigned>(100 * k + m);
+			const Eigen::MatrixXd Lf = lowerFactor(k, seed);
+			const Eigen::MatrixXd L = Lf.topRows(k);
+			const auto Ll = L.triangularView<Eigen::Lower>();
+			auto at = [&](Eigen::Index i, Eigen::Index j) { return Lf(i, j); };
+			const std::string where = "k " + std::to_string(k) + ", m " + std::to_string(m);
+
+			// Left solves: B is k × m (stride k + 2).
+			const Eigen::MatrixXd B0 = randomMatrix(k + 2, m, seed + 1);
+			Eigen::MatrixXd B = B0;
+			solveLeftLower(B.data(), k, B.outerStride(), m, Lf.data(), Lf.outerStride());
+			const Eigen::MatrixXd fwd = Ll.solve(B0.topRows(k));
+			EXPECT_LT((B.topRows(k) - fwd).cwiseAbs().maxCoeff(), 1e-12 * (1 + fwd.cwiseAbs().maxCoeff())) << where;
+			EXPECT_TRUE(B.bottomRows(2) == B0.bottomRows(2)) << where << ": rows past k written";
+			B = B0;
+			solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, Lf.data(), Lf.outerStride());
+			const Eigen::MatrixXd back = Ll.transpose().solve(B0.topRows(k));
+			EXPECT_LT((B.topRows(k) - back).cwiseAbs().maxCoeff(), 1e-12 * (1 + back.cwiseAbs().maxCoeff())) << where;
+
+			// Right solves: X is rows × k (stride rows + 1), rows past an
+			// eight-row panel.
+			const int rows = 2 * k + 11;
+			const Eigen::MatrixXd X0 = randomMatrix(rows + 1, k, seed + 2);
+			Eigen::MatrixXd X = X0;
+			solveRightLowerTransposed(X.data(), rows, X.outerStride(), k, at);
+			const Eigen::MatrixXd xlt = Ll.transpose().solve<Eigen::OnTheRight>(X0.topRows(rows));
+			EXPECT_LT((X.topRows(rows) - xlt).cwiseAbs().maxCoeff(), 1e-12 * (1 + xlt.cwiseAbs().maxCoeff())) << where;
+			EXPECT_TRUE(X.bottomRows(1) == X0.bottomRows(1)) << where << ": rows past `rows` written";
+			X = X0;
+			solveRightLower(X.data(), rows, X.outerStride(), k, at);
+			const Eigen::MatrixXd xl = Ll.solve<Eigen::OnTheRight>(X0.topRows(rows));
+			EXPECT_LT((X.topRows(rows) - xl).cwiseAbs().maxCoeff(), 1e-12 * (1 + xl.cwiseAbs().maxCoeff())) << where;
+		}
+}
+
+TEST(FilterKernels, TriangularSolvesCanFail)
+{
+	// The comparison above sees a wrong solve: the lower solve applied
+	// where the transposed one is meant differs by far more than its bound.
+	const Eigen::MatrixXd Lf = lowerFactor(8, 7);
+	const Eigen::MatrixXd B0 = randomMatrix(8, 3, 8);
+	Eigen::MatrixXd B = B0;
+	solveLeftLower(B.data(), 8, B.outerStride(), 3, Lf.data(), Lf.outerStride());
+	const Eigen::MatrixXd back = Lf.topRows(8).triangularView<Eigen::Lower>().transpose().solve(B0);
+	EXPECT_GT((B - back).cwiseAbs().maxCoeff(), 1e-3);
+}
+}  // namespace auvnav
