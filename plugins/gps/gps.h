@@ -24,8 +24,9 @@
  *  (wild fixes at the interval's phase must not be the only ones used).
  *
  *  Bias (`states: {bias: {sigma: …, process: gauss_markov, …}}`,
- *  state_block_config.h): the slowly varying error as a plugin-owned state
- *  b = (b_n, b_e) instead of an inflated R, h = … + b. The filter then knows
+ *  state_block_config.h; without `process` it is a random constant): the
+ *  slowly varying error as a plugin-owned state b = (b_n, b_e) instead of
+ *  an inflated R, h = … + b. The filter then knows
  *  that fixes a few seconds apart share their error (every 1 Hz fix can be
  *  used, min_interval_s 0) and how much of its position σ is that shared
  *  error, which is what a smoother needs to weigh the fixes before a dive

@@ -372,6 +372,45 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	};
 	EXPECT_EQ(offered(12.0), 1);  // inside the gate: the second fix is within min_interval_s
 	EXPECT_EQ(offered(0.0), 2);	  // an outlier: the interval is not spent
+
+	// ... and its covariance, with the cross term, at the bias's tangent
+	// index (43 + the bound index). The same fix 12 m off, the bias's mean 0:
+	auto offeredWith = [&](double var_p, double var_b, double cov_pb) {
+		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"), "GPS");
+		limited.bindStates(1);	// after another plugin's one state
+		NavState mean = at::RandomNavState(9, 3);
+		mean.extra.setZero();
+		Covariance P = Covariance::Identity(46, 46) * 1e-4;
+		for (int i = 0; i < 2; ++i)
+		{
+			const int ip = idx::pos + i, ib = idx::extra + 1 + i;
+			P(ip, ip) = var_p;
+			P(ib, ib) = var_b;
+			P(ip, ib) = P(ib, ip) = cov_pb;
+		}
+		FilterContext ctx = tc.ctx();
+		ctx.mean = &mean;
+		ctx.covariance = &P;
+		const Eigen::Vector3d fix = antennaPosition(mean, kImuPos) + Eigen::Vector3d(12, 0, 0);
+		int used = 0;
+		for (int k = 0; k < 2; ++k)
+		{
+			auto o = ggaObs(tc.frame(), fix);
+			o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
+			std::vector<Measurement> out;
+			std::string why;
+			used += limited.prepare(*o, ctx, out, why) == PrepareStatus::Ok;
+		}
+		return used;
+	};
+	// A bias σ of 10 m explains 12 m (NIS 144/101); without it, it would not.
+	EXPECT_EQ(offeredWith(0.01, 100, 0), 1);
+	EXPECT_EQ(offeredWith(0.01, 1, 0), 2);
+	// Position and bias σ 10 m each but anti-correlated (their sum's variance
+	// 0.2 m²): 12 m is an outlier (NIS 144/1.2); without the cross term
+	// (S = 201 m²) it would not be.
+	EXPECT_EQ(offeredWith(100, 100, -99.9), 2);
+	EXPECT_EQ(offeredWith(100, 100, 0), 1);
 }
 
 TEST(Gps, BiasStateAndCorrelatedSigmaAreExclusive)

@@ -7,6 +7,7 @@
 #include <auvnav/import/record.h>
 #include <auvnav/import/time_format.h>
 #include <auvnav/io/rawlog.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include "bag_writers.h"
@@ -39,13 +40,7 @@ constexpr TimeNs kNs = 1000000000;
 
 fs::path scratchDir()
 {
-	static const fs::path dir = []
-	{
-		const fs::path d = fs::temp_directory_path() / ("auvnav_bags_test_" + std::to_string(::getpid()));
-		fs::remove_all(d);
-		fs::create_directories(d);
-		return d;
-	}();
+	static const fs::path dir = auvnav::testing::scratchFolder("bags_test", "files");
 	return dir;
 }
 

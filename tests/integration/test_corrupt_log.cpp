@@ -35,7 +35,8 @@ const fs::path kSample = fs::path(AUVNAV_SOURCE_DIR) / "share/sample";
 
 fs::path scratch(const std::string& name)
 {
-	return fs::temp_directory_path() / ("auvnav_corrupt_" + std::to_string(::getpid()) + "_" + name);
+	// A file `name` in a folder of its own, removed at exit (scratch_dir.h).
+	return auvnav::testing::scratchFolder("corrupt", name) / name;
 }
 
 std::vector<char> readBytes(const fs::path& p)

@@ -16,8 +16,9 @@ using namespace auvnav;
 
 namespace
 {
-/** A file path `name` in a folder of this process's, removed at exit. */
-fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("trajectory", "files") / name; }
+/** A file path `name` in a folder of its own (emptied here: the file is
+ *  new), removed at exit (scratch_dir.h). */
+fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("trajectory", name) / name; }
 
 double yawOf(const Eigen::Quaterniond& q)
 {

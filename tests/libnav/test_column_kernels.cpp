@@ -138,6 +138,7 @@ TEST(FilterKernels, TriangularSolvesAgreeWithEigen)
 			solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, Lf.data(), Lf.outerStride());
 			const Eigen::MatrixXd back = Ll.transpose().solve(B0.topRows(k));
 			EXPECT_LT((B.topRows(k) - back).cwiseAbs().maxCoeff(), 1e-12 * (1 + back.cwiseAbs().maxCoeff())) << where;
+			EXPECT_TRUE(B.bottomRows(2) == B0.bottomRows(2)) << where << ": rows past k written";
 
 			// Right solves: X is rows × k (stride rows + 1), rows past an
 			// eight-row panel.
@@ -152,18 +153,36 @@ TEST(FilterKernels, TriangularSolvesAgreeWithEigen)
 			solveRightLower(X.data(), rows, X.outerStride(), k, at);
 			const Eigen::MatrixXd xl = Ll.solve<Eigen::OnTheRight>(X0.topRows(rows));
 			EXPECT_LT((X.topRows(rows) - xl).cwiseAbs().maxCoeff(), 1e-12 * (1 + xl.cwiseAbs().maxCoeff())) << where;
+			EXPECT_TRUE(X.bottomRows(1) == X0.bottomRows(1)) << where << ": rows past `rows` written";
 		}
 }
 
 TEST(FilterKernels, TriangularSolvesCanFail)
 {
-	// The comparison above sees a wrong solve: the lower solve applied
-	// where the transposed one is meant differs by far more than its bound.
-	const Eigen::MatrixXd Lf = lowerFactor(8, 7);
-	const Eigen::MatrixXd B0 = randomMatrix(8, 3, 8);
+	// The bound above is sharp: each solve with one entry of L moved by
+	// 1e-8 (relative) is caught by it.
+	const int k = 23, m = 3;
+	const Eigen::MatrixXd Lf = lowerFactor(k, 7);
+	Eigen::MatrixXd Lp = Lf;
+	Lp(k - 1, 3) *= 1 + 1e-8;
+	const auto Ll = Lf.topRows(k).triangularView<Eigen::Lower>();
+	auto beyond = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+		return (a - b).cwiseAbs().maxCoeff() > 1e-12 * (1 + b.cwiseAbs().maxCoeff());
+	};
+	const Eigen::MatrixXd B0 = randomMatrix(k, m, 8);
 	Eigen::MatrixXd B = B0;
-	solveLeftLower(B.data(), 8, B.outerStride(), 3, Lf.data(), Lf.outerStride());
-	const Eigen::MatrixXd back = Lf.topRows(8).triangularView<Eigen::Lower>().transpose().solve(B0);
-	EXPECT_GT((B - back).cwiseAbs().maxCoeff(), 1e-3);
+	solveLeftLower(B.data(), k, B.outerStride(), m, Lp.data(), Lp.outerStride());
+	EXPECT_TRUE(beyond(B, Ll.solve(B0)));
+	B = B0;
+	solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, Lp.data(), Lp.outerStride());
+	EXPECT_TRUE(beyond(B, Ll.transpose().solve(B0)));
+	auto at = [&](Eigen::Index i, Eigen::Index j) { return Lp(i, j); };
+	const Eigen::MatrixXd X0 = randomMatrix(40, k, 9);
+	Eigen::MatrixXd X = X0;
+	solveRightLowerTransposed(X.data(), 40, X.outerStride(), k, at);
+	EXPECT_TRUE(beyond(X, Ll.transpose().solve<Eigen::OnTheRight>(X0)));
+	X = X0;
+	solveRightLower(X.data(), 40, X.outerStride(), k, at);
+	EXPECT_TRUE(beyond(X, Ll.solve<Eigen::OnTheRight>(X0)));
 }
 }  // namespace auvnav

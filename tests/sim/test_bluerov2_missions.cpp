@@ -3,6 +3,7 @@
 // its header promises, the logger's stamp jitter as configured and the start
 // recorded in the ground truth; bad new mission keys are refused by name.
 #include <auvnav/io/rawlog.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 
@@ -33,10 +34,8 @@ std::string missionFile(const std::string& name)
 
 fs::path scratch(const std::string& name)
 {
-	const fs::path d =
-	    fs::temp_directory_path() / ("auvnav_test_brov_" + name + "_" + std::to_string(::getpid()));
-	fs::remove_all(d);
-	return d;
+	// Emptied here; the group's folder goes at exit (scratch_dir.h).
+	return auvnav::testing::scratchFolder("sim_brov", name);
 }
 
 std::string slurp(const fs::path& p)

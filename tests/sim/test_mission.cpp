@@ -1,6 +1,7 @@
 // Whole missions: determinism per seed, readable outputs, bad configs refused.
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationDVL.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -26,9 +27,8 @@ std::string slurp(const fs::path& p)
 
 fs::path scratch(const std::string& name)
 {
-	const fs::path d = fs::temp_directory_path() / ("auvnav_test_" + name + "_" + std::to_string(::getpid()));
-	fs::remove_all(d);
-	return d;
+	// Emptied here; the group's folder goes at exit (scratch_dir.h).
+	return auvnav::testing::scratchFolder("sim_test", name);
 }
 
 const char* kOutputs[] = {"short_test.rawlog", "ground_truth.tum", "ground_truth.csv"};

@@ -14,8 +14,8 @@
  *  on stderr.
  *
  *  Move-only: the last owner removes the folder. There is no implicit
- *  conversion to a path, because `fs::path p = makeScratch();` would remove
- *  the folder before p is used.
+ *  conversion to a path, and no path from a temporary, because
+ *  `fs::path p = makeScratch();` would remove the folder before p is used.
  */
 #include <sys/types.h>
 #include <unistd.h>
@@ -56,9 +56,13 @@ class ScratchDir
 	ScratchDir(const ScratchDir&) = delete;
 	ScratchDir& operator=(const ScratchDir&) = delete;
 
-	const std::filesystem::path& path() const { return path_; }
-	std::filesystem::path operator/(const std::filesystem::path& rel) const { return path_ / rel; }
-	std::string string() const { return path_.string(); }
+	const std::filesystem::path& path() const& { return path_; }
+	std::filesystem::path operator/(const std::filesystem::path& rel) const& { return path_ / rel; }
+	std::string string() const& { return path_.string(); }
+	// Not from a temporary: `simulate(…).path()` would name a removed folder.
+	const std::filesystem::path& path() const&& = delete;
+	std::filesystem::path operator/(const std::filesystem::path& rel) const&& = delete;
+	std::string string() const&& = delete;
 
    private:
 	void release() noexcept
