@@ -5,11 +5,14 @@
  *  self-contained MODULE.
  */
 #include <auvnav/config.h>
+#include <auvnav/state.h>
+#include <auvnav/state_block_config.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include <Eigen/Core>
 #include <cmath>
 #include <string>
+#include <vector>
 
 namespace auvnav::plugins
 {
@@ -32,4 +35,29 @@ inline Eigen::Matrix3d rotationFromYprDeg(const Eigen::Vector3d& ypr_deg)
 	return p.getRotationMatrix().asEigen();
 }
 
+/** The optional `states: {bias: …}` of a position-fix plugin (GPS, USBL):
+ *  a north/east offset of every fix (state_block_config.h), appended to
+ *  `blocks`. True if it is configured; any other key under `states` is
+ *  refused. */
+inline bool horizontalFixBias(const config::Node& cfg, std::vector<StateBlockSpec>& blocks)
+{
+	if (!cfg.has("states")) return false;
+	const auto st = cfg.child("states");
+	st.allowOnly({"bias"});
+	if (!st.has("bias")) return false;
+	blocks.push_back(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
+	return true;
+}
+
+/** Adds the bias state at NavState::extra[at], [at + 1] to a fix's north,
+ *  east; false for a state built without it. at < 0: no bias. */
+template <typename Vec>
+bool addFixBias(const NavState& x, int at, Vec&& z_ne)
+{
+	if (at < 0) return true;
+	if (x.extra.size() < at + 2) return false;
+	z_ne[0] += x.extra[at];
+	z_ne[1] += x.extra[at + 1];
+	return true;
+}
 }  // namespace auvnav::plugins

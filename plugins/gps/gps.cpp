@@ -1,7 +1,6 @@
 #include "gps.h"
 
 #include <auvnav/earth.h>
-#include <auvnav/state_block_config.h>
 #include <mrpt/obs/CObservationGPS.h>
 
 #include <Eigen/Cholesky>
@@ -23,19 +22,9 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	  correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	if (cfg.has("states"))
-	{
-		const auto st = cfg.child("states");
-		st.allowOnly({"bias"});
-		if (st.has("bias"))
-		{
-			blocks_.push_back(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
-			has_bias_ = true;
-			if (correlated_sigma_m_ > 0)
-				cfg.fail("correlated_sigma_m",
-						 "the correlated error is modelled by states.bias already (give one of them, not both)");
-		}
-	}
+	has_bias_ = horizontalFixBias(cfg, blocks_);
+	if (has_bias_ && correlated_sigma_m_ > 0)
+		cfg.fail("correlated_sigma_m", "the correlated error is modelled by states.bias already (give one of them, not both)");
 }
 
 PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
@@ -177,12 +166,7 @@ bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const Filt
 {
 	if (z_pred.size() != 2) return false;
 	z_pred = (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
-	if (bias_at_ >= 0)
-	{
-		if (x.extra.size() < bias_at_ + 2) return false;  // a state built without the bias block
-		z_pred += x.extra.segment<2>(bias_at_);
-	}
-	return true;
+	return addFixBias(x, bias_at_, z_pred);
 }
 
 }  // namespace auvnav::plugins

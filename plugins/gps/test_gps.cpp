@@ -345,41 +345,17 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	// A state without the bias coordinates cannot be evaluated.
 	EXPECT_TRUE(at::Predict(model, m, tc.ctx(), at::RandomNavState(7, 2)).array().isNaN().all());
 
-	// The rate limiter's outlier test counts the bias: a fix 12 m off, with a
-	// 12 m bias in the mean, is not an outlier (it does start the interval),
-	// and the same fix without that bias is (the next fix is tried at once).
-	auto offered = [&](double bias_n) {
+	// The rate limiter's outlier test counts the bias: its mean, and its
+	// covariance with the cross term at the bias's tangent index (43 + the
+	// bound index, here after another plugin's one state). A fix 12 m north
+	// is tried twice, 1 s apart: one used if it is inside the gate (the
+	// second falls within min_interval_s), two if an outlier (the interval
+	// is not spent on it).
+	auto offeredWith = [&](double bias_n, double var_p, double var_b, double cov_pb) {
 		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"), "GPS");
-		limited.bindStates(0);
-		NavState mean = at::RandomNavState(9, 2);
-		mean.extra << bias_n, 0;
-		Covariance P = Covariance::Identity(45, 45) * 0.01;
-		P(idx::extra, idx::extra) = P(idx::extra + 1, idx::extra + 1) = 1.0;
-		FilterContext ctx = tc.ctx();
-		ctx.mean = &mean;
-		ctx.covariance = &P;
-		const Eigen::Vector3d fix = antennaPosition(mean, kImuPos) + Eigen::Vector3d(12, 0, 0);
-		int used = 0;
-		for (int k = 0; k < 2; ++k)
-		{
-			auto o = ggaObs(tc.frame(), fix);
-			o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
-			std::vector<Measurement> out;
-			std::string why;
-			used += limited.prepare(*o, ctx, out, why) == PrepareStatus::Ok;
-		}
-		return used;
-	};
-	EXPECT_EQ(offered(12.0), 1);  // inside the gate: the second fix is within min_interval_s
-	EXPECT_EQ(offered(0.0), 2);	  // an outlier: the interval is not spent
-
-	// ... and its covariance, with the cross term, at the bias's tangent
-	// index (43 + the bound index). The same fix 12 m off, the bias's mean 0:
-	auto offeredWith = [&](double var_p, double var_b, double cov_pb) {
-		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"), "GPS");
-		limited.bindStates(1);	// after another plugin's one state
+		limited.bindStates(1);
 		NavState mean = at::RandomNavState(9, 3);
-		mean.extra.setZero();
+		mean.extra << 0, bias_n, 0;
 		Covariance P = Covariance::Identity(46, 46) * 1e-4;
 		for (int i = 0; i < 2; ++i)
 		{
@@ -403,14 +379,16 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 		}
 		return used;
 	};
-	// A bias σ of 10 m explains 12 m (NIS 144/101); without it, it would not.
-	EXPECT_EQ(offeredWith(0.01, 100, 0), 1);
-	EXPECT_EQ(offeredWith(0.01, 1, 0), 2);
+	// The bias's mean: 12 m in it, the fix agrees; without it, an outlier.
+	EXPECT_EQ(offeredWith(12.0, 0.01, 1, 0), 1);
+	EXPECT_EQ(offeredWith(0.0, 0.01, 1, 0), 2);
+	// A bias σ of 10 m explains 12 m (NIS 144/101); σ 1 m did not (above).
+	EXPECT_EQ(offeredWith(0.0, 0.01, 100, 0), 1);
 	// Position and bias σ 10 m each but anti-correlated (their sum's variance
 	// 0.2 m²): 12 m is an outlier (NIS 144/1.2); without the cross term
 	// (S = 201 m²) it would not be.
-	EXPECT_EQ(offeredWith(100, 100, -99.9), 2);
-	EXPECT_EQ(offeredWith(100, 100, 0), 1);
+	EXPECT_EQ(offeredWith(0.0, 100, 100, -99.9), 2);
+	EXPECT_EQ(offeredWith(0.0, 100, 100, 0), 1);
 }
 
 TEST(Gps, BiasStateAndCorrelatedSigmaAreExclusive)

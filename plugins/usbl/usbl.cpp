@@ -2,7 +2,6 @@
 
 #include <auvnav/earth.h>
 #include <auvnav/obs/CObservationUSBL.h>
-#include <auvnav/state_block_config.h>
 
 #include <cmath>
 
@@ -21,16 +20,7 @@ UsblModel::UsblModel(const config::Node& cfg, const std::string& label)
 	  gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	if (cfg.has("states"))
-	{
-		const auto st = cfg.child("states");
-		st.allowOnly({"bias"});
-		if (st.has("bias"))
-		{
-			blocks_.push_back(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
-			has_bias_ = true;
-		}
-	}
+	has_bias_ = horizontalFixBias(cfg, blocks_);
 }
 
 double UsblModel::measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept
@@ -139,12 +129,7 @@ bool UsblModel::doPredict(const NavState& x, const Measurement& /*m*/, const Fil
 	const int dim = use_depth_ ? 3 : 2;
 	if (z_pred.size() != dim) return false;
 	Eigen::Vector3d p = x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b);
-	if (bias_at_ >= 0)
-	{
-		if (x.extra.size() < bias_at_ + 2) return false;  // a state built without the bias block
-		p.x() += x.extra[bias_at_];
-		p.y() += x.extra[bias_at_ + 1];
-	}
+	if (!addFixBias(x, bias_at_, p)) return false;
 	z_pred = p.head(dim);
 	return true;
 }
