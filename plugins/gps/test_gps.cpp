@@ -328,7 +328,7 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPosition | kPluginStates));
 	EXPECT_EQ(model.affineIn(), uint32_t(kPosition | kPluginStates));
 	ASSERT_EQ(model.stateBlocks().size(), 1u);
-	const StateBlockSpec& b = model.stateBlocks()[0];
+	const StateBlockSpec b = model.stateBlocks()[0];  // a copy: stateBlocks() returns by value
 	EXPECT_EQ(b.dimension(), 2);
 	EXPECT_EQ(b.process, StateProcess::GaussMarkov);
 	EXPECT_DOUBLE_EQ(b.tau_s, 60);
