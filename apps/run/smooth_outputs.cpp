@@ -1,10 +1,10 @@
 #include "smooth_outputs.h"
 
+#include <auvnav/io/c_file.h>
 #include <auvnav/io/json.h>
 #include <auvnav/io/line_file.h>
 #include <auvnav/smoother_stream.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -27,14 +27,13 @@ namespace
 class ReversedRows
 {
    public:
-	ReversedRows(const std::string& path, int n) : path_(path), n_(n), row_(2 + 9 + 2 * n + 6)
+	ReversedRows(const std::string& path, int n)
+		: path_(path), n_(n), f_(io::openCFile(path, "w+b", "cannot create")), row_(2 + 9 + 2 * n + 6)
 	{
-		f_ = std::fopen(path.c_str(), "w+b");
-		if (!f_) throw std::runtime_error(path + ": cannot create (" + std::strerror(errno) + ")");
 	}
 	~ReversedRows()
 	{
-		if (f_) std::fclose(f_);
+		f_.reset();
 		std::error_code ec;
 		fs::remove(path_, ec);
 	}
@@ -49,7 +48,7 @@ class ReversedRows
 		std::memcpy(p, e.data(), n_ * sizeof(double));
 		p += n_;
 		sigmaAndOffDiagonals(P, p, p + n_);
-		if (std::fwrite(row_.data(), sizeof(double), row_.size(), f_) != row_.size())
+		if (std::fwrite(row_.data(), sizeof(double), row_.size(), f_.get()) != row_.size())
 			throw std::runtime_error(path_ + ": write failed");
 		++rows_;
 	}
@@ -58,7 +57,7 @@ class ReversedRows
 	void get(std::size_t i, double& t, NavState& x, SmoothedKind& kind, const double*& sigma, const double*& cov)
 	{
 		const off_t at = static_cast<off_t>((rows_ - 1 - i) * row_.size() * sizeof(double));
-		if (fseeko(f_, at, SEEK_SET) != 0 || std::fread(row_.data(), sizeof(double), row_.size(), f_) != row_.size())
+		if (fseeko(f_.get(), at, SEEK_SET) != 0 || std::fread(row_.data(), sizeof(double), row_.size(), f_.get()) != row_.size())
 			throw std::runtime_error(path_ + ": read failed");
 		const double* p = row_.data();
 		t = *p++;
@@ -74,7 +73,7 @@ class ReversedRows
    private:
 	std::string path_;
 	int n_;
-	std::FILE* f_ = nullptr;
+	io::CFile f_;
 	std::vector<double> row_;
 	std::size_t rows_ = 0;
 };

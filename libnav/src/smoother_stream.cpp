@@ -82,45 +82,29 @@ std::uint64_t stretchRecordBytes(int n) { return sizeof(double) * recordDoubles(
 StretchWriter::StretchWriter(const std::string& path, const StretchFileHeader& h) : path_(path), n_(h.n)
 {
 	if (h.n < idx::core_dim || h.n > idx::max_dim) throw std::invalid_argument(path + ": bad state dimension");
-	errno = 0;
-	f_ = std::fopen(path.c_str(), "wb");
-	if (!f_) throw ioError(path, "cannot create the smoother's stretch file");
-	try
-	{
-		writeHeader(h);
-	}
-	catch (...)
-	{
-		std::fclose(f_);  // no destructor runs for an object whose constructor throws
-		f_ = nullptr;
-		throw;
-	}
+	f_ = io::openCFile(path, "wb", "cannot create the smoother's stretch file");
+	writeHeader(h);	 // a throw closes f_ (c_file.h)
 }
 
 void StretchWriter::writeHeader(const StretchFileHeader& h)
 {
-	writeAll(f_, kMagic, sizeof kMagic, path_);
+	writeAll(f_.get(), kMagic, sizeof kMagic, path_);
 	const std::uint32_t v[2] = {kVersion, static_cast<std::uint32_t>(h.n)};
-	writeAll(f_, v, sizeof v, path_);
-	writeAll(f_, h.imu_position_b.data(), 3 * sizeof(double), path_);
+	writeAll(f_.get(), v, sizeof v, path_);
+	writeAll(f_.get(), h.imu_position_b.data(), 3 * sizeof(double), path_);
 	const std::uint32_t counts[2] = {static_cast<std::uint32_t>(h.tangent_names.size()),
 									 static_cast<std::uint32_t>(h.stored_names.size())};
-	writeAll(f_, counts, sizeof counts, path_);
-	for (const auto& s : h.tangent_names) writeString(f_, s, path_);
-	for (const auto& s : h.stored_names) writeString(f_, s, path_);
+	writeAll(f_.get(), counts, sizeof counts, path_);
+	for (const auto& s : h.tangent_names) writeString(f_.get(), s, path_);
+	for (const auto& s : h.stored_names) writeString(f_.get(), s, path_);
 	// Records start at a multiple of 8 bytes after the header's end.
-	const long at = std::ftell(f_);
+	const long at = std::ftell(f_.get());
 	const std::uint64_t data_offset = (static_cast<std::uint64_t>(at) + sizeof(std::uint64_t) + 7) / 8 * 8;
-	writeAll(f_, &data_offset, sizeof data_offset, path_);
+	writeAll(f_.get(), &data_offset, sizeof data_offset, path_);
 	static const char zeros[8] = {};
-	writeAll(f_, zeros, data_offset - (at + sizeof data_offset), path_);
+	writeAll(f_.get(), zeros, data_offset - (at + sizeof data_offset), path_);
 	buf_.resize(recordDoubles(n_));
 	flush();
-}
-
-StretchWriter::~StretchWriter()
-{
-	if (f_) std::fclose(f_);
 }
 
 void StretchWriter::write(const StretchRecord& r)
@@ -152,62 +136,48 @@ void StretchWriter::write(const StretchRecord& r)
 	else
 		std::fill(p, buf_.data() + buf_.size(), 0.0), p = buf_.data() + buf_.size();
 	errno = 0;
-	writeAll(f_, buf_.data(), buf_.size() * sizeof(double), path_);
+	writeAll(f_.get(), buf_.data(), buf_.size() * sizeof(double), path_);
 	++records_;
 }
 
 void StretchWriter::flush()
 {
 	errno = 0;
-	if (std::fflush(f_) != 0) throw ioError(path_, "write failed");
+	if (std::fflush(f_.get()) != 0) throw ioError(path_, "write failed");
 }
 
 std::uint64_t StretchWriter::bytes() const { return records_ * stretchRecordBytes(n_); }
 
 StretchReader::StretchReader(const std::string& path) : path_(path)
 {
-	errno = 0;
-	f_ = std::fopen(path.c_str(), "rb");
-	if (!f_) throw ioError(path, "cannot open the smoother's stretch file");
-	try
-	{
-		readHeader();
-	}
-	catch (...)
-	{
-		// A refused file is closed here: no destructor runs for an object
-		// whose constructor throws (found by fuzz_stretch: a handle per
-		// refused file).
-		std::fclose(f_);
-		f_ = nullptr;
-		throw;
-	}
+	f_ = io::openCFile(path, "rb", "cannot open the smoother's stretch file");
+	readHeader();  // a refused file is closed by f_'s destructor (fuzz_stretch once found a handle left per refused file)
 }
 
 void StretchReader::readHeader()
 {
 	const std::string& path = path_;
 	char magic[8];
-	readAll(f_, magic, sizeof magic, path_);
+	readAll(f_.get(), magic, sizeof magic, path_);
 	if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw std::runtime_error(path + ": not an auvnav stretch file");
 	std::uint32_t v[2];
-	readAll(f_, v, sizeof v, path_);
+	readAll(f_.get(), v, sizeof v, path_);
 	if (v[0] != kVersion)
 		throw std::runtime_error(path + ": stretch file format " + std::to_string(v[0]) + ", this build reads " +
 								 std::to_string(kVersion));
 	header_.n = static_cast<int>(v[1]);
 	if (header_.n < idx::core_dim || header_.n > idx::max_dim)
 		throw std::runtime_error(path + ": state dimension " + std::to_string(v[1]) + " out of range");
-	readAll(f_, header_.imu_position_b.data(), 3 * sizeof(double), path_);
+	readAll(f_.get(), header_.imu_position_b.data(), 3 * sizeof(double), path_);
 	std::uint32_t counts[2];
-	readAll(f_, counts, sizeof counts, path_);
+	readAll(f_.get(), counts, sizeof counts, path_);
 	if (counts[0] != v[1] || counts[1] != v[1]) throw std::runtime_error(path + ": name lists do not match the dimension");
-	for (std::uint32_t i = 0; i < counts[0]; ++i) header_.tangent_names.push_back(readString(f_, path_));
-	for (std::uint32_t i = 0; i < counts[1]; ++i) header_.stored_names.push_back(readString(f_, path_));
-	readAll(f_, &data_offset_, sizeof data_offset_, path_);
+	for (std::uint32_t i = 0; i < counts[0]; ++i) header_.tangent_names.push_back(readString(f_.get(), path_));
+	for (std::uint32_t i = 0; i < counts[1]; ++i) header_.stored_names.push_back(readString(f_.get(), path_));
+	readAll(f_.get(), &data_offset_, sizeof data_offset_, path_);
 	record_bytes_ = stretchRecordBytes(header_.n);
-	if (fseeko(f_, 0, SEEK_END) != 0) throw ioError(path, "cannot seek");
-	const off_t end = ftello(f_);
+	if (fseeko(f_.get(), 0, SEEK_END) != 0) throw ioError(path, "cannot seek");
+	const off_t end = ftello(f_.get());
 	if (end < 0 || static_cast<std::uint64_t>(end) < data_offset_) throw std::runtime_error(path + ": truncated header");
 	const std::uint64_t body = static_cast<std::uint64_t>(end) - data_offset_;
 	records_ = static_cast<std::size_t>(body / record_bytes_);
@@ -215,17 +185,12 @@ void StretchReader::readHeader()
 	buf_.resize(recordDoubles(header_.n));
 }
 
-StretchReader::~StretchReader()
-{
-	if (f_) std::fclose(f_);
-}
-
 StretchRecord StretchReader::read(std::size_t i)
 {
 	if (i >= records_) throw std::out_of_range(path_ + ": record " + std::to_string(i) + " of " + std::to_string(records_));
 	errno = 0;
-	if (fseeko(f_, static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
-	readAll(f_, buf_.data(), buf_.size() * sizeof(double), path_);
+	if (fseeko(f_.get(), static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
+	readAll(f_.get(), buf_.data(), buf_.size() * sizeof(double), path_);
 	const int n = header_.n;
 	// A damaged file is refused here, naming the record, never converted:
 	// a double out of an integer's range is undefined behaviour to cast.

@@ -22,8 +22,7 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
 	  correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	has_bias_ = horizontalFixBias(cfg, blocks_);
-	if (has_bias_ && correlated_sigma_m_ > 0)
+	if (horizontalFixBias(cfg, blocks_) && correlated_sigma_m_ > 0)
 		cfg.fail("correlated_sigma_m", "the correlated error is modelled by states.bias already (give one of them, not both)");
 }
 

@@ -46,11 +46,11 @@ class GpsModel final : public SafeMeasurementModel
    public:
 	GpsModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kPosition | (has_bias_ ? kPluginStates : 0u); }
+	uint32_t uses() const noexcept override { return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates); }
 	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
-	uint32_t affineIn() const noexcept override { return kPosition | (has_bias_ ? kPluginStates : 0u); }
+	uint32_t affineIn() const noexcept override { return kPosition | (blocks_.empty() ? 0u : kPluginStates); }
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override { bias_at_ = has_bias_ ? first_extra_index : -1; }
+	void bindStates(int first_extra_index) noexcept override { bias_at_ = blocks_.empty() ? -1 : first_extra_index; }
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 
@@ -84,7 +84,6 @@ class GpsModel final : public SafeMeasurementModel
 	double correlated_sigma_m_ = 0;	  // Gauss-Markov part of the error, per axis [m]
 	double correlation_time_s_ = 60;  // its time constant [s]
 	double last_used_s_ = -1e300;
-	bool has_bias_ = false;
 	int bias_at_ = -1;	// NavState::extra index of b_n (b_e follows); -1: unbound
 	std::vector<StateBlockSpec> blocks_;
 };

@@ -20,7 +20,7 @@ UsblModel::UsblModel(const config::Node& cfg, const std::string& label)
 	  gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	has_bias_ = horizontalFixBias(cfg, blocks_);
+	horizontalFixBias(cfg, blocks_);
 }
 
 double UsblModel::measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept

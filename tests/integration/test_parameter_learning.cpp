@@ -27,7 +27,8 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 	const auto at = text.find(key);
 	ASSERT_NE(at, std::string::npos);
 	text.replace(at, key.size(), "linear_damping_diag: [" + std::to_string(prior) + ", ");
-	const fs::path prior_file = fs::temp_directory_path() / ("auvnav_prior20_" + std::to_string(::getpid()) + ".yaml");
+	const test::ScratchDir scratch("prior20");
+	const fs::path prior_file = scratch / "flatfish_model_aiding_prior20.yaml";
 	std::ofstream(prior_file) << text;
 
 	int closer = 0;
@@ -53,6 +54,5 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 					seed, prior, estimate, truth, 100 * sigma0, 100 * sigma, ok ? "pass" : "FAIL");
 		closer += ok;
 	}
-	fs::remove(prior_file);
 	EXPECT_GE(closer, 4);
 }

@@ -14,7 +14,6 @@
 #include <auvnav/rawlog_run.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -37,14 +36,14 @@ const fs::path kSample = fs::path(AUVNAV_SOURCE_DIR) / "share/sample";
  *  and its time from the first one [s]. */
 using FixEdit = std::function<Eigen::Vector2d(int index, double t_from_first_s)>;
 
-/** The sample rawlog with every valid GGA fix moved by `edit`. */
-fs::path editedSample(const std::string& tag, const FixEdit& edit)
+/** The sample rawlog with every valid GGA fix moved by `edit`, in `dir`. */
+fs::path editedSample(const ScratchDir& dir, const FixEdit& edit)
 {
 	const auto cfg = config::Node::load(kConfig);
 	const auto o = cfg.child("navigation_frame").child("origin");
 	const earth::TangentFrame frame(
 		earth::Geodetic{o.number("latitude_deg") * kDeg, o.number("longitude_deg") * kDeg, o.number("height_m")});
-	const fs::path out = fs::temp_directory_path() / ("auvnav_wild_" + tag + "_" + std::to_string(::getpid()) + ".rawlog");
+	const fs::path out = dir / "edited.rawlog";
 	io::RawlogReader in((kSample / "sample.rawlog").string());
 	io::RawlogWriter w(out.string(), 1);
 	int index = 0;
@@ -126,9 +125,8 @@ void print(const char* what, const Figures& f)
 Figures wild(const std::string& tag, const FixEdit& edit,
 			 const std::vector<std::pair<std::string, std::string>>& overrides = {})
 {
-	const fs::path log = editedSample(tag, edit);
-	const Figures f = run(log, overrides);
-	fs::remove(log);
+	const ScratchDir dir("wild_" + tag);  // removed also when run() throws
+	const Figures f = run(editedSample(dir, edit), overrides);
 	print("clean", clean());
 	print(tag.c_str(), f);
 	return f;

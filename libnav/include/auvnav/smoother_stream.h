@@ -31,6 +31,7 @@
  *  smoothed through: in a prediction as process noise, in an update as a
  *  change of the filtered covariance (RtsStretchRecorder).
  */
+#include <auvnav/io/c_file.h>
 #include <auvnav/smoother.h>
 
 #include <cstdint>
@@ -65,9 +66,6 @@ class StretchWriter
 {
    public:
 	StretchWriter(const std::string& path, const StretchFileHeader& header);
-	~StretchWriter();
-	StretchWriter(const StretchWriter&) = delete;
-	StretchWriter& operator=(const StretchWriter&) = delete;
 	void write(const StretchRecord& r);
 	void flush();
 	std::size_t records() const { return records_; }
@@ -76,7 +74,7 @@ class StretchWriter
    private:
 	void writeHeader(const StretchFileHeader& h);
 	std::string path_;
-	std::FILE* f_ = nullptr;
+	io::CFile f_;
 	int n_ = 0;
 	std::size_t records_ = 0;
 	std::vector<double> buf_;
@@ -88,9 +86,6 @@ class StretchReader
 {
    public:
 	explicit StretchReader(const std::string& path);
-	~StretchReader();
-	StretchReader(const StretchReader&) = delete;
-	StretchReader& operator=(const StretchReader&) = delete;
 	const StretchFileHeader& header() const { return header_; }
 	std::size_t records() const { return records_; }	//!< whole ones
 	bool partialTail() const { return partial_tail_; }	//!< bytes of an unfinished record after them
@@ -99,7 +94,7 @@ class StretchReader
    private:
 	void readHeader();
 	std::string path_;
-	std::FILE* f_ = nullptr;
+	io::CFile f_;
 	StretchFileHeader header_;
 	std::uint64_t data_offset_ = 0, record_bytes_ = 0;
 	std::size_t records_ = 0;

@@ -25,6 +25,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -83,10 +84,13 @@ class ScratchDir
 };
 /** A fresh, empty folder `name` inside this process's ScratchDir for
  *  `group`, for tests that hand paths around. The group's folder is
- *  created on first use and removed, with everything in it, at exit. */
+ *  created on first use and removed, with everything in it, at exit.
+ *  Safe to call from several threads (one lock around the group map). */
 inline std::filesystem::path scratchFolder(const std::string& group, const std::string& name)
 {
+	static std::mutex lock;
 	static std::map<std::string, ScratchDir> groups;  // destroyed at exit: the folders go with them
+	const std::lock_guard<std::mutex> hold(lock);
 	auto it = groups.find(group);
 	if (it == groups.end()) it = groups.emplace(group, ScratchDir(group)).first;
 	const std::filesystem::path p = it->second / name;
