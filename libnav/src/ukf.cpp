@@ -565,11 +565,6 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	const uint32_t affine = model.affineIn() & model.uses() & ~static_cast<uint32_t>(kAttitude);
 	const int kn = affine ? tangentPrefix(model.uses() & ~affine, n) : k;
 	leadingCholeskyColumns(kn);
-	// A smoother needs the update's B over all k columns: the rest of them,
-	// without a repair (the filter must not change because it is observed),
-	// over the first k rows only (B reads L11, the affine pairs L's rows kn…k).
-	const bool observed_factor = observer_ && (kn == k || choleskyColumns(P_, kn, k, L_, k));
-	if (observer_ && !observed_factor) P_before_ = P_;	// reported whole below
 	const double g = w_.gamma;
 	const int count = 2 * kn + 1;
 	// Temporaries as Maps into one grow-only buffer (sizes below).
@@ -668,13 +663,15 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	MapM S = takeM(m, m);
 	S = meas.R;
 	S.noalias() += EW.lazyProduct(E.transpose());
-	MapM D = takeM(m, k);
+	MapM D = takeM(m, kn);
 	for (int j = 0; j < kn; ++j) D.col(j) = (w_.wi * g) * (E.col(1 + 2 * j) - E.col(2 + 2 * j));
 	// Pxz = L_{:,0:kn} Mᵀ (+ the affine pairs' P_{:,kn:k} part below), with M
 	// the sigma points' D less, for affine pairs, their share through L_{:,0:kn}.
 	MapM M = takeM(m, kn);
-	M = D.leftCols(kn);
+	M = D;
 	MapM Pxz = takeM(n, m);
+	const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
+	const double* At_data = nullptr;		 // Aᵀ below (k − kn × m), for a smoother's B
 	if (kn < k)
 	{
 		// The affine pairs (j ≥ kn): e± = e₀ ± γ A L_{kn:k,j}, so they add
@@ -684,10 +681,10 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// difference: exact for an affine h), at the sigma points' own step.
 		const int nk = k - kn;
 		MapM At = takeM(nk, m);	 // Aᵀ: columns contiguous for the dot products
+		At_data = At.data();
 		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count), takeV(m), At,
 						  res.why))
 			return res;
-		const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
 		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
 		// products per entry cost more in set-up than in arithmetic).
 		// Runs of coordinates h reads, up to four of P's columns per pass.
@@ -717,8 +714,6 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			GAt.noalias() -= c_lin * L_.block(kn, 0, nk, kn).lazyProduct(AL.transpose());
 		}
 		S.noalias() += At.transpose().lazyProduct(GAt);
-		if (observed_factor)
-			D.rightCols(nk).noalias() = c_lin * At.transpose() * L_.block(kn, kn, nk, nk).triangularView<Eigen::Lower>();
 	}
 	else
 		Pxz.setZero();
@@ -803,22 +798,24 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
 	downdateSymmetric(P_, W);
-	if (observer_ && !observed_factor)
-		observer_->onOtherChange(P_before_, P_, dx);  // P past column kn not PD: no factored form
-	else if (observer_)
+	if (observer_)
 	{
-		// P⁻¹ W = P⁻¹ L_{:,1:k} Dᵀ L_S⁻ᵀ = [L11⁻ᵀ (L_S⁻¹ D)ᵀ; 0]. A recovery's
-		// widening P += β dx dxᵀ is reported as nothing: to a smoother it is
-		// process noise added at this tick (it leaves the cross covariance
-		// with past states as it is), and with P, Pxz and S widened together
-		// the update's P⁻¹ W is the same expression.
-		// From the update's arena, by the same solve as W (B L_Sᵀ = Dᵀ), then
-		// L11ᵀ B = that by back substitution (column_kernels.h; Eigen's vector
-		// solves spent ~4.7 k instructions an update here, and allocated).
+		// P⁻¹ W = P⁻¹ Pxz L_S⁻ᵀ with Pxz = L_{:,0:kn} Mᵀ + c P_{:,kn:k} Aᵀ
+		// (above) and P_{:,0:kn} = L_{:,0:kn} L11ᵀ (L11: L's leading kn × kn
+		// block), so P⁻¹ Pxz = [L11⁻ᵀ Mᵀ; c Aᵀ; 0]. That needs only the
+		// columns the filter factored anyway: none past kn, and P B = W holds
+		// even where P is not positive definite past them.
+		// A recovery's widening P += β dx dxᵀ is reported as nothing: to a
+		// smoother it is process noise added at this tick (it leaves the
+		// cross covariance with past states as it is), and with P, Pxz and S
+		// widened together P⁻¹ Pxz is unchanged.
+		// In the update's arena, by the same solve as W (B L_Sᵀ = that), then
+		// L11ᵀ B_top = that by back substitution (column_kernels.h).
 		MapM B = takeM(k, m);
-		B = D.transpose();
+		B.topRows(kn) = M.transpose();
+		if (kn < k) B.bottomRows(k - kn) = c_lin * Eigen::Map<const Eigen::MatrixXd>(At_data, k - kn, m);
 		solveRightLowerTransposed(B.data(), k, B.outerStride(), m, L_S);
-		solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, L_.data(), L_.outerStride());
+		solveLeftLowerTransposed(B.data(), kn, B.outerStride(), m, L_.data(), L_.outerStride());
 		observer_->onUpdate(B, u, W);
 	}
 	applySigmaLimits();
