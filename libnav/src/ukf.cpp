@@ -807,8 +807,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// even where P is not positive definite past them.
 		// A recovery's widening P += β dx dxᵀ is reported as nothing: to a
 		// smoother it is process noise added at this tick (it leaves the
-		// cross covariance with past states as it is), and with P, Pxz and S
-		// widened together P⁻¹ Pxz is unchanged.
+		// cross covariance with past states as it is). With P, Pxz and S
+		// widened together, B is the same expression: exactly so for an h
+		// linear over the spread (u = H dx then), else to first order.
 		// In the update's arena, by the same solve as W (B L_Sᵀ = that), then
 		// L11ᵀ B_top = that by back substitution (column_kernels.h).
 		MapM B = takeM(k, m);

@@ -770,13 +770,15 @@ struct StretchComparison
  *  (RtsStretchRecorder): the estimates at the kept ticks, and each against
  *  the truth. */
 StretchComparison compareStretches(unsigned seed, int update_every = 5, int updates_per_step = 1,
-                                   std::vector<std::unique_ptr<TestModel>> models = allModels())
+                                   std::vector<std::unique_ptr<TestModel>> models = allModels(),
+                                   bool plugin_states = false)
 {
 	Recorded rec;
 	rec.keep_every = 10;
 	Case c{Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, seed};
 	c.update_every = update_every;
 	c.updates_per_step = updates_per_step;
+	c.plugin_states = plugin_states;
 	runSideBySide(c, models, {}, {}, &rec);
 	const auto per_tick = smoothRts(rec.fast, rec.fast_end, rec.fast_end_P, rec.t_end);
 	EXPECT_EQ(rec.stretches.size(), 20u);
@@ -883,6 +885,24 @@ TEST(SmootherStretches, AnUpdateWiderThanTheDeferredOnesGivesThePerTickCovarianc
 	EXPECT_EQ(c.kept, 20u);
 	EXPECT_LT(c.cov, kTol);
 	EXPECT_LT(c.pos_mean, 5e-3);
+}
+
+TEST(SmootherStretches, DeclaredAffineUpdatesGiveThePerTickCovariance)
+{
+	// Updates declared affine (affineModels): their B comes from the filter's
+	// own kn Cholesky columns and the slopes A (ukf.cpp, the end of update),
+	// with kn < k for the DVL and the accelerometer and kn = 0 for the fix
+	// with a plugin bias (no sigma point at all). The covariance must still
+	// telescope exactly, as for the undeclared models.
+	for (const bool plugin_states : {false, true})
+	{
+		const StretchComparison c = compareStretches(11, 5, 2, affineModels(plugin_states), plugin_states);
+		std::printf("declared affine%s, stretches vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
+					plugin_states ? " with plugin states" : "", c.cov, c.mean, c.pos_mean);
+		EXPECT_EQ(c.kept, 20u);
+		EXPECT_LT(c.cov, kTol) << (plugin_states ? "with plugin states" : "");
+		EXPECT_LT(c.pos_mean, 5e-3) << (plugin_states ? "with plugin states" : "");
+	}
 }
 
 TEST(SmootherStretches, StretchesAreConsistentOverTwentySeeds)

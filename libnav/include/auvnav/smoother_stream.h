@@ -66,6 +66,8 @@ class StretchWriter
 {
    public:
 	StretchWriter(const std::string& path, const StretchFileHeader& header);
+	StretchWriter(const StretchWriter&) = delete;  // and no move: a moved-from writer has no file
+	StretchWriter& operator=(const StretchWriter&) = delete;
 	void write(const StretchRecord& r);
 	void flush();
 	std::size_t records() const { return records_; }
@@ -86,6 +88,8 @@ class StretchReader
 {
    public:
 	explicit StretchReader(const std::string& path);
+	StretchReader(const StretchReader&) = delete;
+	StretchReader& operator=(const StretchReader&) = delete;
 	const StretchFileHeader& header() const { return header_; }
 	std::size_t records() const { return records_; }	//!< whole ones
 	bool partialTail() const { return partial_tail_; }	//!< bytes of an unfinished record after them

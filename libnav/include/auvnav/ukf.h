@@ -156,7 +156,9 @@ class StepObserver
 	virtual void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
 						   const ProcessModel& model, const StepDecay& step) = 0;
 	/** update(): the correction dx = W u and P ← P − W Wᵀ, with
-	 *  P⁻¹ W = [B; 0] (B: k × m, P the covariance before the update). */
+	 *  P [B; 0] = W (B: k × m, P the covariance before the update; so
+	 *  P⁻¹ W = [B; 0] where P is invertible). B is formed from the Cholesky
+	 *  columns the filter factored for its sigma points only. */
 	virtual void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
 						  const Eigen::Ref<const Eigen::MatrixXd>& W) = 0;
 	/** Any other change of P (sigma limits) and of the mean by dx (tangent
