@@ -571,7 +571,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	using MapM = Eigen::Map<Eigen::MatrixXd>;
 	using MapV = Eigen::Map<Eigen::VectorXd>;
 	const std::size_t scratch_size =
-		static_cast<std::size_t>(m) * (16 + 3 * count + 2 * m + 2 * k + kn + 2 * n + 2 * (k - kn) + kn);
+		static_cast<std::size_t>(m) * (16 + 3 * count + 2 * m + k + 2 * kn + 2 * n + 2 * (k - kn) + kn);
 	if (update_scratch_.size() < scratch_size) update_scratch_.resize(scratch_size);
 	double* cursor = update_scratch_.data();
 	auto takeM = [&](int rows, int cols) {
