@@ -28,7 +28,7 @@ class ReversedRows
 {
    public:
 	ReversedRows(const std::string& path, int n)
-		: path_(path), n_(n), f_(io::openCFile(path, "w+b", "cannot create")), row_(2 + 9 + 2 * n + 6)
+		: path_(path), n_(n), row_(2 + 9 + 2 * n + 6), f_(io::openCFile(path, "w+b", "cannot create"))
 	{
 	}
 	~ReversedRows()
@@ -73,8 +73,8 @@ class ReversedRows
    private:
 	std::string path_;
 	int n_;
+	std::vector<double> row_;  // before f_: no file is created if it cannot be allocated
 	io::CFile f_;
-	std::vector<double> row_;
 	std::size_t rows_ = 0;
 };
 }  // namespace
