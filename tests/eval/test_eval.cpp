@@ -125,7 +125,8 @@ TEST(Eval, PlotDrawsItsSeries)
 {
 	Plot p("test", "x", "y", 400, 300);
 	p.line({0, 1, 2, 3}, {0, 1, 0, 1}, cv::Scalar(0, 0, 255), "red line");
-	const fs::path png = fs::temp_directory_path() / "auvnav_eval_plot.png";
+	const auvnav::testing::ScratchDir dir("eval_plot");
+	const fs::path png = dir / "plot.png";
 	p.save(png.string());
 	const cv::Mat img = cv::imread(png.string());
 	ASSERT_FALSE(img.empty());
@@ -146,7 +147,8 @@ TEST(Eval, BandBeyondAFixedRangeStaysInsideTheFrame)
 	Plot p("test", "x", "y", 400, 300);
 	p.band({0, 1, 2}, {-10, -10, -10}, {10, 10, 10}, cv::Scalar(255, 0, 0), "band");
 	p.yRange(-1, 1);
-	const fs::path png = fs::temp_directory_path() / "auvnav_eval_band.png";
+	const auvnav::testing::ScratchDir dir("eval_band");
+	const fs::path png = dir / "band.png";
 	p.save(png.string());
 	const cv::Mat img = cv::imread(png.string());
 	ASSERT_FALSE(img.empty());

@@ -9,13 +9,20 @@
 # seeds and regressions, so the repository is never written to. Stops at the
 # first harness that finds something (crash, sanitizer report, leak,
 # timeout, out-of-memory): the input is left as crash-*/leak-*/timeout-*/oom-*
-# in ARTIFACTS (default: a temporary folder, printed), to be minimised and
-# committed under tests/fuzz/regressions/<name>/ with the fix.
+# in ARTIFACTS (default: a temporary folder, printed, and removed again when
+# every harness ran without a finding), to be minimised and committed under
+# tests/fuzz/regressions/<name>/ with the fix.
 set -euo pipefail
 seconds="${1:-30}"
 here="$(cd "$(dirname "$0")" && pwd)"
 build="${2:-$here/../../build-fuzz}"
-artifacts="${ARTIFACTS:-$(mktemp -d /tmp/auvnav-fuzz-artifacts.XXXXXX)}"
+own_artifacts=0
+if [ -z "${ARTIFACTS:-}" ]; then
+	artifacts="$(mktemp -d /tmp/auvnav-fuzz-artifacts.XXXXXX)"
+	own_artifacts=1  # a folder of our own: removed again when nothing was found
+else
+	artifacts="$ARTIFACTS"
+fi
 mkdir -p "$artifacts"
 # Largest input per harness: room for a few records, small enough to keep
 # executions fast (rawlogs of several objects, YAML files of a few KB).
@@ -49,5 +56,8 @@ for bin in "$build"/bin/fuzz_*; do
 	grep -E "^(#[0-9]+\s+DONE|stat::number_of_executed_units|stat::peak_rss_mb)" "$artifacts/fuzz_$name.log" || true
 	rm -rf "$corpus"
 done
-[ "$status" -eq 0 ] && echo "all harnesses ran ${seconds}s without a finding"
+if [ "$status" -eq 0 ]; then
+	echo "all harnesses ran ${seconds}s without a finding"
+	[ "$own_artifacts" -eq 1 ] && rm -rf "$artifacts"
+fi
 exit "$status"

@@ -2,6 +2,7 @@
 // default configuration: callbacks, early stop, and a bad file reported
 // (not thrown) with the navigator finished.
 #include <auvnav/config.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/rawlog_run.h>
@@ -65,7 +66,8 @@ TEST(RawlogRun, AnEmptyLogIsAnErrorNotASilentRun)
 	const auto cfg = defaultConfig();
 	PluginHost host;
 	Navigator nav(cfg, host);
-	const std::string path = ::testing::TempDir() + "/auvnav_empty.rawlog";
+	const auvnav::testing::ScratchDir dir("empty_rawlog");
+	const std::string path = (dir / "empty.rawlog").string();
 	{
 		io::RawlogWriter w(path);  // a valid gzip stream without one object
 	}

@@ -74,7 +74,8 @@ TEST(View, SceneHoldsTrajectoryTruthEllipsoidsVehicleGpsAndSeabed)
 TEST(View, SavedSceneReadsBackWithMrptsReader)
 {
 	const auto scene = buildScene(squareRun());
-	const fs::path file = fs::temp_directory_path() / "auvnav_view_test.3Dscene";
+	const auvnav::testing::ScratchDir dir("view_scene");
+	const fs::path file = dir / "scene.3Dscene";
 	ASSERT_TRUE(scene->saveToFile(file.string()));
 	mrpt::opengl::COpenGLScene back;
 	ASSERT_TRUE(back.loadFromFile(file.string()));
@@ -85,8 +86,8 @@ TEST(View, SavedSceneReadsBackWithMrptsReader)
 
 TEST(View, OffscreenScreenshotShowsTheTrajectory)
 {
-	const fs::path png = fs::temp_directory_path() / "auvnav_view_test.png";
-	fs::remove(png);
+	const auvnav::testing::ScratchDir dir("view_png");
+	const fs::path png = dir / "screenshot.png";
 	renderToPng(*buildScene(squareRun()), png.string(), 640, 400);
 	mrpt::img::CImage img;
 	ASSERT_TRUE(img.loadFromFile(png.string()));
