@@ -266,6 +266,29 @@ void repairCovariance(Covariance& P, const TangentVector& variance_floor)
 	symmetrize(P);
 }
 
+namespace
+{
+/** The variance a positive, finite `var` is limited to by σ bounds [lo, hi]
+ *  (var itself when inside them). */
+double limitedVariance(double var, double lo, double hi)
+{
+	if (var < lo * lo) return lo * lo;
+	if (var > hi * hi) return hi * hi;
+	return var;
+}
+/** Whether limitSigmas would move any variance of P (a diagonal entry that
+ *  is not positive and finite is repairCovariance's case, not a limit's). */
+bool anySigmaLimitHit(const Covariance& P, const TangentVector& min_sigma, const TangentVector& max_sigma)
+{
+	for (int i = 0; i < P.rows(); ++i)
+	{
+		const double var = P(i, i);
+		if (var > 0 && std::isfinite(var) && limitedVariance(var, min_sigma[i], max_sigma[i]) != var) return true;
+	}
+	return false;
+}
+}  // namespace
+
 int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVector& max_sigma)
 {
 	int moved = 0;
@@ -273,10 +296,7 @@ int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVect
 	{
 		const double var = P(i, i);
 		if (!(var > 0) || !std::isfinite(var)) continue;  // repairCovariance's case
-		const double lo = min_sigma[i], hi = max_sigma[i];
-		double target = var;
-		if (var < lo * lo) target = lo * lo;
-		else if (var > hi * hi) target = hi * hi;
+		const double target = limitedVariance(var, min_sigma[i], max_sigma[i]);
 		if (target == var) continue;
 		const double s = std::sqrt(target / var);
 		P.row(i) *= s;
@@ -310,7 +330,13 @@ void ManifoldUkf::setSigmaLimits(const TangentVector& min_sigma, const TangentVe
 void ManifoldUkf::applySigmaLimits(bool report)
 {
 	if (min_sigma_.size() != n_) return;
-	if (observer_ && report) P_before_ = P_;
+	if (observer_ && report)
+	{
+		// The observer needs P before a change, and there is almost never
+		// one: no copy of P (n² doubles) after every update for nothing.
+		if (!anySigmaLimitHit(P_, min_sigma_, max_sigma_)) return;
+		P_before_ = P_;
+	}
 	const int hits = limitSigmas(P_, min_sigma_, max_sigma_);
 	sigma_limit_hits_ += static_cast<std::size_t>(hits);
 	if (observer_ && report && hits) observer_->onOtherChange(P_before_, P_, TangentVector::Zero(n_));
