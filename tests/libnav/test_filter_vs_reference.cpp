@@ -1234,3 +1234,66 @@ TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
 	// The run moved the state at all (the comparison is not of two initial states).
 	EXPECT_GT(base.state().boxminus(x0).norm(), 1e-3);
 }
+
+// Sigma limits under an observer (a smoother): an update after which a limit
+// moves a σ is reported as a whole change, with P before and after the
+// limit; updates after which none moves report nothing more (ukf.cpp
+// applySigmaLimits copies P for the observer only when a limit will move).
+TEST(SigmaLimitsObserved, AHitIsReportedWholeAndNoHitIsNot)
+{
+	struct Calls : StepObserver
+	{
+		int updates = 0, whole = 0;
+		double vel_before = 0, vel_after = 0;  // the last whole change's P(vel, vel)
+		void onPredict(const Covariance&, bool, const Eigen::Ref<const Eigen::MatrixXd>&, const ProcessModel&,
+					   const StepDecay&) override
+		{
+		}
+		void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+					  const Eigen::Ref<const Eigen::MatrixXd>&) override
+		{
+			++updates;
+		}
+		void onOtherChange(const Covariance& before, const Covariance& after, const TangentVector&) override
+		{
+			++whole;
+			vel_before = before(idx::vel, idx::vel);
+			vel_after = after(idx::vel, idx::vel);
+		}
+	};
+	const NavState x0 = test::makeState(0.7);
+	const Covariance P0 = test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
+	const DvlModel dvl;
+	FilterContext ctx;
+	ctx.omega_ie_n = earthRate();
+	ctx.omega_ib_b << 0.02, -0.01, 0.05;
+	const NavState truth = x0.boxplus(0.5 * P0.diagonal().cwiseSqrt());
+	auto run = [&](double vel_floor, Calls& calls) {
+		ManifoldUkf ukf(test::makeProcessModel(), UtParams{});
+		ukf.initialize(x0, P0);
+		const int n = x0.dim();
+		TangentVector lo = TangentVector::Zero(n), hi = TangentVector::Constant(n, INFINITY);
+		lo.segment<3>(idx::vel).setConstant(vel_floor);
+		ukf.setSigmaLimits(lo, hi);
+		ukf.setStepObserver(&calls);
+		std::mt19937 rng(11);
+		for (int step = 0; step < 20; ++step)
+		{
+			ukf.predict(ctx.omega_ib_b, ctx.omega_ie_n, 0.01);
+			EXPECT_NE(ukf.update(dvl, makeMeasurement(dvl, truth, ctx, rng), ctx).status, UpdateStatus::Invalid);
+		}
+		return ukf.sigmaLimitHits();
+	};
+	// The DVL (1 cm/s) takes the velocity σ from 0.3 m/s to ~1 cm/s: a 5 cm/s
+	// floor is hit, a 1 µm/s one never.
+	Calls hit, none;
+	const std::size_t hits = run(0.05, hit), no_hits = run(1e-6, none);
+	EXPECT_EQ(hit.updates, 20);
+	EXPECT_GT(hit.whole, 0);
+	EXPECT_LE(static_cast<std::size_t>(hit.whole), hits);
+	EXPECT_LT(hit.vel_before, 0.05 * 0.05);
+	EXPECT_DOUBLE_EQ(hit.vel_after, 0.05 * 0.05);
+	EXPECT_EQ(none.updates, 20);
+	EXPECT_EQ(none.whole, 0);
+	EXPECT_EQ(no_hits, 0u);
+}
