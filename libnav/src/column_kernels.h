@@ -27,6 +27,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <cstdint>
 #include <type_traits>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -223,6 +225,98 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 	if (kAssign && m == 0)
 		for (Eigen::Index i = from; i < to; ++i) y[i] = 0.0;
 }
+
+#if AUVNAV_AVX_KERNELS
+/** Rows [r, r + 4) of Cholesky column j before its scaling: P's column
+ *  less Σ_{l<j} L_l L(j, l), the columns in passes of four summed as
+ *  subtractColumns sums them, so each entry takes exactly the operations
+ *  of subtractAllColumns (bit for bit). kPartial: only the lanes in `mask`
+ *  are loaded (the column's last rows; nothing past them is read). */
+/** Four rows at p, or (kPartial) only the lanes in `mask`, the others 0. */
+template <bool kPartial>
+__attribute__((target("avx"))) inline __m256d loadRowsAvx(const double* p, __m256i mask)
+{
+	if constexpr (kPartial)
+		return _mm256_maskload_pd(p, mask);
+	else
+		return _mm256_loadu_pd(p);
+}
+
+template <bool kPartial>
+__attribute__((target("avx"))) inline __m256d choleskyBlockAvx(const double* Pj, const double* L, Eigen::Index ls,
+																Eigen::Index j, Eigen::Index r, __m256i mask)
+{
+	auto load = [mask](const double* p) __attribute__((target("avx"))) { return loadRowsAvx<kPartial>(p, mask); };
+	__m256d acc = load(Pj + r);
+	const double* Lr = L + r;	// rows r… of column 0
+	const double* Lrow = L + j;	// row j of column 0
+	Eigen::Index l = 0;
+	for (; l + 4 <= j; l += 4)
+	{
+		__m256d s = _mm256_mul_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls));
+		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 1) * ls), _mm256_broadcast_sd(Lrow + (l + 1) * ls)));
+		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 2) * ls), _mm256_broadcast_sd(Lrow + (l + 2) * ls)));
+		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 3) * ls), _mm256_broadcast_sd(Lrow + (l + 3) * ls)));
+		acc = _mm256_sub_pd(acc, s);
+	}
+	if (l < j)
+	{
+		__m256d s = _mm256_mul_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls));
+		if (l + 1 < j)
+			s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 1) * ls), _mm256_broadcast_sd(Lrow + (l + 1) * ls)));
+		if (l + 2 < j)
+			s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 2) * ls), _mm256_broadcast_sd(Lrow + (l + 2) * ls)));
+		acc = _mm256_sub_pd(acc, s);
+	}
+	return acc;
+}
+
+/** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
+ *  ls), rows j… up to `rows` (the columns before `from` already in L over
+ *  those rows; rows above the diagonal zeroed), four rows per packet with
+ *  each packet's sum kept in a register over all earlier columns (the
+ *  column-pass form reloaded and stored it once per pass of four), the
+ *  last rows by masked loads and stores. The same operations per entry as
+ *  the column-pass form (ukf.cpp's choleskyColumns), so the same bits;
+ *  false where P is not positive definite (columns partly written). */
+__attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, Eigen::Index ps, Eigen::Index from,
+															   Eigen::Index to, double* L, Eigen::Index ls,
+															   Eigen::Index rows)
+{
+	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
+	for (Eigen::Index j = from; j < to; ++j)
+	{
+		double* Lj = L + j * ls;
+		const double* Pj = P + j * ps;
+		for (Eigen::Index i = 0; i < j; ++i) Lj[i] = 0.0;
+		const Eigen::Index whole_end = j + (rows - j) / 4 * 4;
+		const Eigen::Index left = rows - whole_end;	 // 0..3 rows in a last, partial packet
+		const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - left));
+		// The packet holding the diagonal first: its root scales the rest.
+		const __m256d first = whole_end > j ? choleskyBlockAvx<false>(Pj, L, ls, j, j, mask)
+											: choleskyBlockAvx<true>(Pj, L, ls, j, j, mask);
+		const double d = _mm256_cvtsd_f64(first);
+		if (!(d > 0) || !std::isfinite(d)) return false;
+		const double root = std::sqrt(d);
+		const __m256d div = _mm256_set1_pd(root);
+		// Lane 0 is the root itself, the others divided by it.
+		const __m256d scaled = _mm256_blend_pd(_mm256_div_pd(first, div), div, 0x1);
+		if (whole_end > j)
+			_mm256_storeu_pd(Lj + j, scaled);
+		else
+		{
+			_mm256_maskstore_pd(Lj + j, mask, scaled);
+			continue;
+		}
+		for (Eigen::Index r = j + 4; r < whole_end; r += 4)
+			_mm256_storeu_pd(Lj + r, _mm256_div_pd(choleskyBlockAvx<false>(Pj, L, ls, j, r, mask), div));
+		if (left > 0)
+			_mm256_maskstore_pd(Lj + whole_end, mask,
+								_mm256_div_pd(choleskyBlockAvx<true>(Pj, L, ls, j, whole_end, mask), div));
+	}
+	return true;
+}
+#endif
 
 // Triangular solves for the small shapes of the update and the smoother
 // (m ≤ ~6 right-hand sides, k ≤ 43 unknowns), where Eigen's blocked solvers

@@ -52,6 +52,10 @@ void symmetrize(Covariance& P)
 bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int rows = -1)
 {
 	const Eigen::Index n = rows < 0 ? P.rows() : rows;
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		return choleskyColumnsAvx(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
+#endif
 	for (Eigen::Index j = from; j < to; ++j)
 	{
 		L.col(j).head(j).setZero();
