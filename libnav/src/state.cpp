@@ -98,14 +98,52 @@ void NavState::setEuclidean(const Eigen::Ref<const TangentVector>& t)
 	extra = t.tail(t.size() - idx::core_dim);
 }
 
+namespace
+{
+void checkTangentSize(Eigen::Index size, int dim)
+{
+	if (size != dim)
+		throw std::invalid_argument("NavState::boxplus: a " + std::to_string(size) + "-vector on a " +
+									std::to_string(dim) + "-state");
+}
+}  // namespace
+
 NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 {
-	if (delta.size() != dim())
-		throw std::invalid_argument("NavState::boxplus: a " + std::to_string(delta.size()) + "-vector on a " +
-									std::to_string(dim()) + "-state");
-	// Member by member (no flat round trip through euclidean(): this runs per
-	// sigma point).
+	checkTangentSize(delta.size(), dim());
 	NavState y;
+	if (delta.segment<3>(idx::att).isZero(0))
+		boxplusInto(delta, nullptr, y);
+	else
+	{
+		const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
+		boxplusInto(delta, &dR, y);
+	}
+	return y;
+}
+
+void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const
+{
+	checkTangentSize(delta.size(), dim());
+	const TangentVector negated = -delta;
+	if (delta.segment<3>(idx::att).isZero(0))
+	{
+		boxplusInto(delta, nullptr, plus);
+		boxplusInto(negated, nullptr, minus);
+		return;
+	}
+	// Exp(−φ) = Exp(φ)ᵀ, bit for bit as so3::Exp forms them.
+	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
+	const Eigen::Matrix3d dR_back = dR.transpose();
+	boxplusInto(delta, &dR, plus);
+	boxplusInto(negated, &dR_back, minus);
+}
+
+void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR_turn,
+						   NavState& y) const
+{
+	// Member by member (no flat round trip through euclidean(): this runs per
+	// sigma point), every member of y written.
 	// The additive members.
 	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
 	y.g = g + delta[idx::gravity];
@@ -115,7 +153,7 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
 	add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
 	y.extra = extra + delta.tail(extra.size());
-	if (delta.segment<3>(idx::att).isZero(0))
+	if (!dR_turn)
 	{
 		// No turn (every sigma point along a Cholesky column past the
 		// attitude's): Exp(0) is exactly I, so this is the turned case's
@@ -126,9 +164,9 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 		y.current_vehicle_ne = current_vehicle_ne + delta.segment<2>(idx::current_vehicle);
 		y.current_far_ne = current_far_ne + delta.segment<2>(idx::current_far);
 		y.b_a = b_a + R_nb.transpose() * delta.segment<3>(idx::acc_bias);
-		return y;
+		return;
 	}
-	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
+	const Eigen::Matrix3d& dR = *dR_turn;
 	y.R_nb = dR * R_nb;
 	// Velocity and acceleration turn with the attitude (SE_2(3)-like
 	// retraction): a heading perturbation moves the whole body-fixed motion.
@@ -142,7 +180,6 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 					   delta.segment<2>(idx::current_far);
 	// The accelerometer bias is stored in IMU axes but perturbed in NED axes.
 	y.b_a = b_a + y.R_nb.transpose() * delta.segment<3>(idx::acc_bias);
-	return y;
 }
 
 NavState NavState::boxplusCoordinate(int i, double h) const

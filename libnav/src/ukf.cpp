@@ -401,8 +401,9 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	{
 		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const TangentVector c = (g * scale[j]) * L_.col(j);
-		X[1 + 2 * j] = propagate(x_.boxplus(c));
-		X[2 + 2 * j] = propagate(x_.boxplus(-c));
+		x_.boxplusPair(c, pair_scratch_[0], pair_scratch_[1]);
+		X[1 + 2 * j] = propagate(pair_scratch_[0]);
+		X[2 + 2 * j] = propagate(pair_scratch_[1]);
 	}
 	// The pairs along columns ks… (2(n − ks) points): X± ⊟ X₀ = ±γ J L_j +
 	// γ² q(L_j), so the centre's weight carries their d₀ and their sums enter
@@ -627,15 +628,15 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	{
 		if (j < 3) scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const double step = j < 3 ? g * scale[j] : g;
+		// (−step)·L_j is −(step·L_j) exactly: the pair is x ⊞ ±c.
+		const TangentVector c = step * L_.col(j);
+		x_.boxplusPair(c, pair_scratch_[0], pair_scratch_[1]);
 		for (int s = 0; s < 2; ++s)
-		{
-			const TangentVector c = (s == 0 ? step : -step) * L_.col(j);
-			if (!model.predict(x_.boxplus(c), meas, ctx, z_sigma.col(1 + 2 * j + s)))
+			if (!model.predict(pair_scratch_[s], meas, ctx, z_sigma.col(1 + 2 * j + s)))
 			{
 				res.why = "model could not evaluate h";
 				return res;
 			}
-		}
 	}
 	if (!z_sigma.leftCols(count).allFinite())
 	{

@@ -186,3 +186,87 @@ TEST(FilterKernels, TriangularSolvesCanFail)
 	EXPECT_TRUE(beyond(X, Ll.solve<Eigen::OnTheRight>(X0)));
 }
 }  // namespace auvnav
+
+namespace auvnav
+{
+namespace
+{
+/** Cholesky columns [from, to) over `rows` rows as ukf.cpp's baseline path
+ *  forms them: a pass of subtractAllColumns per four earlier columns over
+ *  the whole column, then the root and the division. */
+bool columnPassCholesky(const Eigen::MatrixXd& P, int from, int to, Eigen::MatrixXd& L, int rows)
+{
+	for (int j = from; j < to; ++j)
+	{
+		L.col(j).head(j).setZero();
+		auto Lj = L.col(j).segment(j, rows - j);
+		Lj = P.col(j).segment(j, rows - j);
+		if (j > 0)
+			subtractAllColumns(Lj.data(), 0, rows - j, L.data() + j, L.outerStride(), j,
+							   [&](Eigen::Index l) { return L(j, l); });
+		const double d = Lj[0];
+		if (!(d > 0) || !std::isfinite(d)) return false;
+		const double root = std::sqrt(d);
+		Lj[0] = root;
+		Lj.tail(rows - j - 1) /= root;
+	}
+	return true;
+}
+}  // namespace
+
+#if AUVNAV_AVX_KERNELS
+// The register-held packets (choleskyColumnsAvx) take the column passes'
+// operations entry by entry: equal bit for bit, for every remainder of the
+// rows below the diagonal (masked last packets) and of the groups of four
+// earlier columns, for the filter's split (leading columns over all rows,
+// the next over the first k only) and a start past column 0.
+TEST(FilterKernels, PacketCholeskyEqualsTheColumnPassesBitForBit)
+{
+	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
+	for (int n : {1, 2, 3, 4, 5, 7, 9, 23, 43, 50})
+	{
+		const Eigen::MatrixXd A = randomMatrix(n, n + 2, static_cast<unsigned>(31 + n));
+		const Eigen::MatrixXd P = A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+		for (int k : {n, std::max(1, n / 2 + 1)})
+			for (int whole : {0, std::min(k, 3), k})
+			{
+				SCOPED_TRACE(testing::Message() << "n = " << n << ", k = " << k << ", whole columns " << whole);
+				Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(n, n, 7.0), got = expected;
+				ASSERT_TRUE(columnPassCholesky(P, 0, whole, expected, n));
+				ASSERT_TRUE(columnPassCholesky(P, whole, k, expected, k));
+				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), 0, whole, got.data(), got.outerStride(), n));
+				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), whole, k, got.data(), got.outerStride(), k));
+				// Every entry, the untouched ones (7) included: nothing is written past the rows asked for.
+				EXPECT_TRUE((got.array() == expected.array()).all())
+					<< "largest difference " << (got - expected).cwiseAbs().maxCoeff();
+				// And it is the factor: L11 L11ᵀ = P11 over the first k.
+				const Eigen::MatrixXd L11 = got.topLeftCorner(k, k).triangularView<Eigen::Lower>();
+				EXPECT_LT((L11 * L11.transpose() - P.topLeftCorner(k, k)).cwiseAbs().maxCoeff(),
+						  1e-12 * P.cwiseAbs().maxCoeff());
+				// The rest of a full factor, started past column 0.
+				if (k < n && whole == k)
+				{
+					Eigen::MatrixXd rest_expected = expected, rest_got = got;
+					ASSERT_TRUE(columnPassCholesky(P, k, n, rest_expected, n));
+					ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), k, n, rest_got.data(),
+												   rest_got.outerStride(), n));
+					EXPECT_TRUE((rest_got.array() == rest_expected.array()).all());
+				}
+			}
+	}
+}
+
+TEST(FilterKernels, PacketCholeskyFailsWhereNotPositiveDefinite)
+{
+	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
+	Eigen::MatrixXd P = Eigen::MatrixXd::Identity(9, 9);
+	P(6, 5) = P(5, 6) = 1.0;	 // columns 5 and 6 equal there: singular at column 6
+	Eigen::MatrixXd L = Eigen::MatrixXd::Zero(9, 9);
+	EXPECT_TRUE(choleskyColumnsAvx(P.data(), 9, 0, 6, L.data(), 9, 9));
+	EXPECT_FALSE(choleskyColumnsAvx(P.data(), 9, 6, 9, L.data(), 9, 9));
+	P(6, 5) = P(5, 6) = 0.0;
+	P(8, 8) = std::nan("");
+	EXPECT_FALSE(choleskyColumnsAvx(P.data(), 9, 0, 9, L.data(), 9, 9));
+}
+#endif
+}  // namespace auvnav

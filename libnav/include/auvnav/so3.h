@@ -47,16 +47,34 @@ inline double asinOverS(double x)  // asin(s) / s, x = s²: Σ C(2n,n) xⁿ / (4
 }
 }  // namespace detail
 
-/** Rotation matrix of the rotation vector `phi` (Rodrigues). */
+/** Rotation matrix of the rotation vector `phi` (Rodrigues):
+ *  I + a K + b K² with K = skew(φ), a = sin θ / θ, b = (1 − cos θ) / θ², and
+ *  K² = φφᵀ − θ² I written out entry by entry (no 3 × 3 product). Each
+ *  entry pairs the same symmetric part b φᵢφⱼ with ± a φₖ, so Exp(−φ) is
+ *  Exp(φ)ᵀ bit for bit (a sigma-point pair shares one Exp: state.cpp). */
 inline Eigen::Matrix3d Exp(const Eigen::Vector3d& phi)
 {
+	const double x = phi.x(), y = phi.y(), z = phi.z();
 	const double theta2 = phi.squaredNorm();
-	const Eigen::Matrix3d K = skew(phi);
+	double a, b;
 	if (theta2 < detail::kSeriesMaxX)
-		return Eigen::Matrix3d::Identity() + detail::sinc(theta2) * K + detail::versinOver2(theta2) * (K * K);
-	const double theta = std::sqrt(theta2);
-	return Eigen::Matrix3d::Identity() + (std::sin(theta) / theta) * K +
-		   ((1 - std::cos(theta)) / theta2) * K * K;
+	{
+		a = detail::sinc(theta2);
+		b = detail::versinOver2(theta2);
+	}
+	else
+	{
+		const double theta = std::sqrt(theta2);
+		a = std::sin(theta) / theta;
+		b = (1 - std::cos(theta)) / theta2;
+	}
+	const double bxy = b * (x * y), bxz = b * (x * z), byz = b * (y * z);
+	const double ax = a * x, ay = a * y, az = a * z;
+	Eigen::Matrix3d R;
+	R << 1 - b * (y * y + z * z), bxy - az, bxz + ay,	 //
+		bxy + az, 1 - b * (x * x + z * z), byz - ax,	 //
+		bxz - ay, byz + ax, 1 - b * (x * x + y * y);
+	return R;
 }
 
 /** Rotation vector of `R` (angle in [0, π]). */

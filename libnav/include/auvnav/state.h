@@ -123,6 +123,10 @@ struct NavState
 	 *  changing heading estimate looked like such a turn, so roll and bias
 	 *  separated spuriously while the heading converged. */
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
+	/** x ⊞ δ into `plus` and x ⊞ (−δ) into `minus` (a sigma-point pair),
+	 *  the same values bit for bit as two boxplus calls, with one Exp for
+	 *  both turns and no new states: every member of both is overwritten. */
+	void boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const;
 	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
 	 *  that vector, without forming it or touching the other members
 	 *  (affine slopes by differences, ukf.cpp). */
@@ -143,6 +147,10 @@ struct NavState
 	void setEuclidean(const Eigen::Ref<const TangentVector>& e);
 
 	bool allFinite() const;
+
+   private:
+	/** boxplus into y, the turn's Exp(δ_att) given (nullptr: δ_att is 0). */
+	void boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR, NavState& y) const;
 };
 
 /** How a plugin-owned state evolves between updates (exact for any dt). */

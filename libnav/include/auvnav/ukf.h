@@ -241,6 +241,7 @@ class ManifoldUkf
 	// measurement has been seen), carved into Eigen::Maps per update.
 	std::vector<double> update_scratch_;
 	std::array<NavState, 2 * idx::acc + 1> sigma_scratch_;	// prediction sigma points (along attitude and gyro bias)
+	std::array<NavState, 2> pair_scratch_;	// a sigma-point pair before propagation / h (boxplusPair)
 	std::size_t repairs_ = 0;
 	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
 	std::size_t sigma_limit_hits_ = 0;
