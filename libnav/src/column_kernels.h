@@ -271,6 +271,66 @@ __attribute__((target("avx"))) inline __m256d choleskyBlockAvx(const double* Pj,
 	return acc;
 }
 
+/** Y_c ← (Y_c + Σ_{j<J} coef[c + j·cs] X_j) · scale[c] for the columns
+ *  c < cols of Y (rows × cols, stride ys; X rows × J, stride xs): the
+ *  prediction's cross block, a J-column axpy per column then its decay.
+ *  Each four-row packet of Y_c is held in a register over the J terms,
+ *  added in j order, then scaled: the operations of the column axpys, bit
+ *  for bit. The last rows by masked loads and stores. */
+__attribute__((target("avx"))) inline void addColumnCombinationsAvx(double* Y, Eigen::Index rows, Eigen::Index ys,
+																	 Eigen::Index cols, const double* X,
+																	 Eigen::Index xs, Eigen::Index J,
+																	 const double* coef, Eigen::Index cs,
+																	 const double* scale)
+{
+	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
+	const Eigen::Index whole = rows / 4 * 4;
+	const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - (rows - whole)));
+	for (Eigen::Index c = 0; c < cols; ++c)
+	{
+		double* y = Y + c * ys;
+		const double* cf = coef + c;
+		const __m256d sc = _mm256_broadcast_sd(scale + c);
+		for (Eigen::Index r = 0; r < whole; r += 4)
+		{
+			__m256d acc = _mm256_loadu_pd(y + r);
+			for (Eigen::Index j = 0; j < J; ++j)
+				acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(cf + j * cs), _mm256_loadu_pd(X + j * xs + r)));
+			_mm256_storeu_pd(y + r, _mm256_mul_pd(acc, sc));
+		}
+		if (whole < rows)
+		{
+			__m256d acc = _mm256_maskload_pd(y + whole, mask);
+			for (Eigen::Index j = 0; j < J; ++j)
+				acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(cf + j * cs),
+													   _mm256_maskload_pd(X + j * xs + whole, mask)));
+			_mm256_maskstore_pd(y + whole, mask, _mm256_mul_pd(acc, sc));
+		}
+	}
+}
+
+/** B(i, j) ← B(i, j) · (a[i] · a[j]) over a square n × n block (stride
+ *  bs): A B Aᵀ for a diagonal A, four rows per packet (the scalar loop's
+ *  operations, bit for bit), the last rows masked. */
+__attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eigen::Index bs, Eigen::Index n,
+																   const double* a)
+{
+	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
+	const Eigen::Index whole = n / 4 * 4;
+	const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - (n - whole)));
+	for (Eigen::Index j = 0; j < n; ++j)
+	{
+		double* col = B + j * bs;
+		const __m256d aj = _mm256_broadcast_sd(a + j);
+		for (Eigen::Index i = 0; i < whole; i += 4)
+			_mm256_storeu_pd(col + i, _mm256_mul_pd(_mm256_loadu_pd(col + i), _mm256_mul_pd(_mm256_loadu_pd(a + i), aj)));
+		if (whole < n)
+			_mm256_maskstore_pd(col + whole, mask,
+								_mm256_mul_pd(_mm256_maskload_pd(col + whole, mask),
+											  _mm256_mul_pd(_mm256_maskload_pd(a + whole, mask), aj)));
+	}
+}
+
 /** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
  *  ls), rows j… up to `rows` (the columns before `from` already in L over
  *  those rows; rows above the diagonal zeroed), four rows per packet with

@@ -503,9 +503,17 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim - k> P_NL = P_.topRightCorner(k, nl);
 	step_map.apply(P_NL);
 	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
-	for (int c = 0; c < nl; ++c)  // fixed-size axpys (a blocked product's set-up costs more here)
-		for (int j = 0; j < ks; ++j) P_NL.col(c) += L_(k + c, j) * D_less_JL.col(j);
-	for (int j = 0; j < nl; ++j) P_NL.col(j) *= a[j];
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		addColumnCombinationsAvx(P_NL.data(), k, P_NL.outerStride(), nl, D_less_JL.data(), k, ks, &L_(k, 0),
+								 L_.outerStride(), a.data());
+	else
+#endif
+	{
+		for (int c = 0; c < nl; ++c)  // fixed-size axpys (a blocked product's set-up costs more here)
+			for (int j = 0; j < ks; ++j) P_NL.col(c) += L_(k + c, j) * D_less_JL.col(j);
+		for (int j = 0; j < nl; ++j) P_NL.col(j) *= a[j];
+	}
 	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
 	if (observer_ || P_cross)
 	{
@@ -527,12 +535,17 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// symmetrise it; every step writes both triangles alike), and a_i a_j =
 	// a_j a_i, so it stays so.
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
-	for (int j = 0; j < nl; ++j)
-	{
-		double* col = &P_(k, k + j);
-		const double aj = a[j];
-		for (int i = 0; i < nl; ++i) col[i] *= a[i] * aj;
-	}
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		scaleByOuterProductAvx(&P_(k, k), P_.outerStride(), nl, a.data());
+	else
+#endif
+		for (int j = 0; j < nl; ++j)
+		{
+			double* col = &P_(k, k + j);
+			const double aj = a[j];
+			for (int i = 0; i < nl; ++i) col[i] *= a[i] * aj;
+		}
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i) P_(i, j) = P_(j, i) = P_NN(i, j);
 	P_.topRightCorner(k, nl) = P_NL;

@@ -256,6 +256,40 @@ TEST(FilterKernels, PacketCholeskyEqualsTheColumnPassesBitForBit)
 	}
 }
 
+// The prediction's cross block and affine block on the AVX path against the
+// scalar loops they replace, bit for bit, for row counts with every
+// remainder of four.
+TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
+{
+	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
+	for (int rows : {1, 2, 3, 4, 5, 23, 24})
+		for (int cols : {1, 6, 20})
+		{
+			SCOPED_TRACE(testing::Message() << rows << " rows, " << cols << " columns");
+			const int J = 6;
+			const Eigen::MatrixXd Y0 = randomMatrix(rows, cols, 5u + rows), X = randomMatrix(rows, J, 7u + rows);
+			const Eigen::MatrixXd coef = randomMatrix(cols + 3, J, 11u + cols);	 // coef(c, j), stride cols + 3
+			const Eigen::VectorXd scale = Eigen::VectorXd::Random(cols);
+			Eigen::MatrixXd expected = Y0, got = Y0;
+			for (int c = 0; c < cols; ++c)
+			{
+				for (int j = 0; j < J; ++j) expected.col(c) += coef(c, j) * X.col(j);
+				expected.col(c) *= scale[c];
+			}
+			addColumnCombinationsAvx(got.data(), rows, got.outerStride(), cols, X.data(), X.outerStride(), J,
+									 coef.data(), coef.outerStride(), scale.data());
+			EXPECT_TRUE((got.array() == expected.array()).all());
+
+			const int n = rows;
+			Eigen::MatrixXd B = randomMatrix(n + 2, n, 13u + n), B_loop = B;	// an n × n block of a taller matrix
+			const Eigen::VectorXd a = Eigen::VectorXd::Random(n);
+			for (int j = 0; j < n; ++j)
+				for (int i = 0; i < n; ++i) B_loop(i, j) *= a[i] * a[j];
+			scaleByOuterProductAvx(B.data(), B.outerStride(), n, a.data());
+			EXPECT_TRUE((B.array() == B_loop.array()).all()) << "rows past the block must stay as they were too";
+		}
+}
+
 TEST(FilterKernels, PacketCholeskyFailsWhereNotPositiveDefinite)
 {
 	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
