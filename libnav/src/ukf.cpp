@@ -500,7 +500,9 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// factors): head × tail = Σ_j D_j (a ∘ L_{k:,j})ᵀ = J P_{:k,k:} +
 	// (D_turn − J L_{:k,<ks}) L_{k:,<ks}ᵀ, columns scaled by a.
 	const TangentVector a = model_.diagonalTailFactors(step);
-	Eigen::Matrix<double, k, Eigen::Dynamic, 0, k, idx::max_dim - k> P_NL = P_.topRightCorner(k, nl);
+	// In place in P's top-right block (nothing below reads its old values;
+	// the bottom-left mirror is written last).
+	auto P_NL = P_.block<k, Eigen::Dynamic>(0, k, k, nl);
 	step_map.apply(P_NL);
 	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
 #if AUVNAV_AVX_KERNELS
@@ -548,8 +550,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		}
 	for (int j = 0; j < k; ++j)
 		for (int i = j; i < k; ++i) P_(i, j) = P_(j, i) = P_NN(i, j);
-	P_.topRightCorner(k, nl) = P_NL;
-	P_.bottomLeftCorner(nl, k) = P_NL.transpose();
+	for (int i = 0; i < k; ++i)	 // the mirror, column by column of the bottom-left block (contiguous stores)
+		for (int c = 0; c < nl; ++c) P_(k + c, i) = P_(i, k + c);
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer
