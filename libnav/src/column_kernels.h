@@ -713,39 +713,75 @@ void lowerBlockGram(const double* __restrict X, const double* __restrict Y, doub
 }
 
 #if AUVNAV_AVX_KERNELS
-/** lowerBlockGram with a 4 × 4 block per pass in AVX registers. */
+/** Blocks (ib, jb) and, with kTwo, (ib + 4, jb) of lowerBlockGramAvx: eight
+ *  accumulators sharing Y's four broadcasts per r. Y's columns [skip_from,
+ *  skip_to) are skipped: the caller's zeros in these rows of Y (a term
+ *  x · 0 added to a sum leaves it as it is). */
+template <int kp, int R, bool kTwo>
+__attribute__((target("avx"))) inline void gramBlocksAvx(const double* __restrict X, const double* __restrict Y,
+														  double* __restrict G, int ib, int jb, int skip_from,
+														  int skip_to)
+{
+	__m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
+	auto step = [&](int r) __attribute__((target("avx"))) {
+		const double* y = Y + r * kp + jb;
+		const __m256d y0 = _mm256_broadcast_sd(y), y1 = _mm256_broadcast_sd(y + 1), y2 = _mm256_broadcast_sd(y + 2),
+					  y3 = _mm256_broadcast_sd(y + 3);
+		const __m256d x = _mm256_loadu_pd(X + r * kp + ib);
+		a0 = _mm256_add_pd(a0, _mm256_mul_pd(x, y0));
+		a1 = _mm256_add_pd(a1, _mm256_mul_pd(x, y1));
+		a2 = _mm256_add_pd(a2, _mm256_mul_pd(x, y2));
+		a3 = _mm256_add_pd(a3, _mm256_mul_pd(x, y3));
+		if constexpr (kTwo)
+		{
+			const __m256d x2 = _mm256_loadu_pd(X + r * kp + ib + 4);
+			b0 = _mm256_add_pd(b0, _mm256_mul_pd(x2, y0));
+			b1 = _mm256_add_pd(b1, _mm256_mul_pd(x2, y1));
+			b2 = _mm256_add_pd(b2, _mm256_mul_pd(x2, y2));
+			b3 = _mm256_add_pd(b3, _mm256_mul_pd(x2, y3));
+		}
+	};
+	for (int r = 0; r < skip_from; ++r) step(r);
+	for (int r = skip_to; r < R; ++r) step(r);
+	_mm256_storeu_pd(G + jb * kp + ib, a0);
+	_mm256_storeu_pd(G + (jb + 1) * kp + ib, a1);
+	_mm256_storeu_pd(G + (jb + 2) * kp + ib, a2);
+	_mm256_storeu_pd(G + (jb + 3) * kp + ib, a3);
+	if constexpr (kTwo)
+	{
+		_mm256_storeu_pd(G + jb * kp + ib + 4, b0);
+		_mm256_storeu_pd(G + (jb + 1) * kp + ib + 4, b1);
+		_mm256_storeu_pd(G + (jb + 2) * kp + ib + 4, b2);
+		_mm256_storeu_pd(G + (jb + 3) * kp + ib + 4, b3);
+	}
+}
+
+/** lowerBlockGram with 4 × 4 blocks in AVX registers, two row blocks at a
+ *  time where there are two (Y's broadcasts shared). `zero_from`,
+ *  `zero_to`: Y's columns in that range are zero in its rows 0..3, so the
+ *  first block column skips them (the sums are the same). */
 template <int kp, int R>
 __attribute__((target("avx"))) void lowerBlockGramAvx(const double* __restrict X, const double* __restrict Y,
-													   double* __restrict G)
+													   double* __restrict G, int zero_from = 0, int zero_to = 0)
 {
 	static_assert(kp % 4 == 0, "lowerBlockGram: kp must be a multiple of 4");
 	for (int jb = 0; jb < kp; jb += 4)
-		for (int ib = jb; ib < kp; ib += 4)
-		{
-			__m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0;
-			for (int r = 0; r < R; ++r)
-			{
-				const __m256d x = _mm256_loadu_pd(X + r * kp + ib);
-				const double* y = Y + r * kp + jb;
-				a0 = _mm256_add_pd(a0, _mm256_mul_pd(x, _mm256_broadcast_sd(y)));
-				a1 = _mm256_add_pd(a1, _mm256_mul_pd(x, _mm256_broadcast_sd(y + 1)));
-				a2 = _mm256_add_pd(a2, _mm256_mul_pd(x, _mm256_broadcast_sd(y + 2)));
-				a3 = _mm256_add_pd(a3, _mm256_mul_pd(x, _mm256_broadcast_sd(y + 3)));
-			}
-			_mm256_storeu_pd(G + jb * kp + ib, a0);
-			_mm256_storeu_pd(G + (jb + 1) * kp + ib, a1);
-			_mm256_storeu_pd(G + (jb + 2) * kp + ib, a2);
-			_mm256_storeu_pd(G + (jb + 3) * kp + ib, a3);
-		}
+	{
+		const int from = jb == 0 ? zero_from : 0, to = jb == 0 ? zero_to : 0;
+		int ib = jb;
+		for (; ib + 8 <= kp; ib += 8) gramBlocksAvx<kp, R, true>(X, Y, G, ib, jb, from, to);
+		if (ib < kp) gramBlocksAvx<kp, R, false>(X, Y, G, ib, jb, from, to);
+	}
 }
 #endif
 
 /** lowerBlockGram on the AVX path where the CPU has it. */
 template <int kp, int R>
-void lowerBlockGramDispatch(const double* X, const double* Y, double* G)
+void lowerBlockGramDispatch(const double* X, const double* Y, double* G, int zero_from = 0, int zero_to = 0)
 {
 #if AUVNAV_AVX_KERNELS
-	if (g_wide_kernels.load(std::memory_order_relaxed)) return lowerBlockGramAvx<kp, R>(X, Y, G);
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		return lowerBlockGramAvx<kp, R>(X, Y, G, zero_from, zero_to);
 #endif
 	lowerBlockGram<kp, R>(X, Y, G);
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -485,7 +486,11 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	DWc.col(rows - 2) = Dc.col(rows - 1);
 	DWc.col(rows - 1) = Dc.col(rows - 2);
 	Eigen::Matrix<double, kp, kp> P_NN;	 // its blocks on and below the diagonal; the first k rows and columns
-	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), P_NN.data());
+	// Dc's columns of the lumped pairs and q_cross are zero in the rows of
+	// attitude and gyro bias (InertialStepMap zeroes them; q lives in the
+	// currents): the first block column skips them.
+	assert((Dc.block<4, rows - 1 - points>(0, points).array() == 0).all());
+	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), P_NN.data(), points, rows - 1);
 	// The q q term of both currents (their lower triangle).
 	for (int r : {idx::current_vehicle, idx::current_far})
 		for (int c : {idx::current_vehicle, idx::current_far})

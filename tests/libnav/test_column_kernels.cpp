@@ -290,6 +290,37 @@ TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 		}
 }
 
+// The Gram kernel's AVX path (two row blocks sharing Y's broadcasts, and the
+// first block column skipping Y's columns the caller declares zero in rows
+// 0..3) against the baseline kernel, bit for bit.
+template <int kp, int R>
+void checkGram(int zero_from, int zero_to)
+{
+	SCOPED_TRACE(testing::Message() << "kp " << kp << ", R " << R << ", zeros in columns " << zero_from << ".."
+									<< zero_to);
+	Eigen::MatrixXd X = randomMatrix(kp, R, 3u + kp), Y = randomMatrix(kp, R, 5u + R);
+	Y.block(0, zero_from, 4, zero_to - zero_from).setZero();
+	Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(kp, kp, 3.0), got = expected;
+	lowerBlockGram<kp, R>(X.data(), Y.data(), expected.data());
+	lowerBlockGramAvx<kp, R>(X.data(), Y.data(), got.data(), zero_from, zero_to);
+	EXPECT_TRUE((got.array() == expected.array()).all()) << "largest difference "
+														  << (got - expected).cwiseAbs().maxCoeff();
+	const Eigen::MatrixXd G = X * Y.transpose();
+	for (int j = 0; j < kp; ++j)
+		for (int i = j / 4 * 4; i < kp; ++i) EXPECT_NEAR(got(i, j), G(i, j), 1e-12 * (1 + std::abs(G(i, j))));
+}
+
+TEST(FilterKernels, GramBlocksEqualTheBaselineBitForBit)
+{
+	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
+	checkGram<24, 32>(13, 31);	// the prediction's shape and zeros
+	checkGram<24, 32>(0, 0);
+	checkGram<4, 5>(0, 0);		// one row block
+	checkGram<8, 7>(2, 5);		// one pair
+	checkGram<12, 9>(0, 9);		// a pair and a single block
+	checkGram<20, 3>(1, 2);
+}
+
 TEST(FilterKernels, PacketCholeskyFailsWhereNotPositiveDefinite)
 {
 	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
