@@ -331,6 +331,51 @@ __attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eig
 	}
 }
 
+/** choleskyBlockAvx for two whole packets, rows [r, r + 8): the same
+ *  operations per entry, with each coefficient L(j, l) broadcast once for
+ *  both. */
+__attribute__((target("avx"))) inline void choleskyBlockPairAvx(const double* Pj, const double* L, Eigen::Index ls,
+																 Eigen::Index j, Eigen::Index r, __m256d& lo,
+																 __m256d& hi)
+{
+	lo = _mm256_loadu_pd(Pj + r);
+	hi = _mm256_loadu_pd(Pj + r + 4);
+	const double* Lr = L + r;	// rows r… of column 0
+	const double* Lrow = L + j;	// row j of column 0
+	Eigen::Index l = 0;
+	for (; l + 4 <= j; l += 4)
+	{
+		const __m256d c0 = _mm256_broadcast_sd(Lrow + l * ls), c1 = _mm256_broadcast_sd(Lrow + (l + 1) * ls),
+					  c2 = _mm256_broadcast_sd(Lrow + (l + 2) * ls), c3 = _mm256_broadcast_sd(Lrow + (l + 3) * ls);
+		const double* X0 = Lr + l * ls;
+		__m256d s = _mm256_mul_pd(_mm256_loadu_pd(X0), c0);
+		__m256d t = _mm256_mul_pd(_mm256_loadu_pd(X0 + 4), c0);
+		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + ls), c1));
+		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + ls + 4), c1));
+		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + 2 * ls), c2));
+		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + 2 * ls + 4), c2));
+		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + 3 * ls), c3));
+		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + 3 * ls + 4), c3));
+		lo = _mm256_sub_pd(lo, s);
+		hi = _mm256_sub_pd(hi, t);
+	}
+	if (l < j)
+	{
+		const double* X0 = Lr + l * ls;
+		const __m256d c0 = _mm256_broadcast_sd(Lrow + l * ls);
+		__m256d s = _mm256_mul_pd(_mm256_loadu_pd(X0), c0);
+		__m256d t = _mm256_mul_pd(_mm256_loadu_pd(X0 + 4), c0);
+		for (Eigen::Index e = 1; e < j - l; ++e)
+		{
+			const __m256d c = _mm256_broadcast_sd(Lrow + (l + e) * ls);
+			s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + e * ls), c));
+			t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + e * ls + 4), c));
+		}
+		lo = _mm256_sub_pd(lo, s);
+		hi = _mm256_sub_pd(hi, t);
+	}
+}
+
 /** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
  *  ls), rows j… up to `rows` (the columns before `from` already in L over
  *  those rows; rows above the diagonal zeroed), four rows per packet with
@@ -368,7 +413,15 @@ __attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, E
 			_mm256_maskstore_pd(Lj + j, mask, scaled);
 			continue;
 		}
-		for (Eigen::Index r = j + 4; r < whole_end; r += 4)
+		Eigen::Index r = j + 4;
+		for (; r + 8 <= whole_end; r += 8)
+		{
+			__m256d lo, hi;
+			choleskyBlockPairAvx(Pj, L, ls, j, r, lo, hi);
+			_mm256_storeu_pd(Lj + r, _mm256_div_pd(lo, div));
+			_mm256_storeu_pd(Lj + r + 4, _mm256_div_pd(hi, div));
+		}
+		if (r < whole_end)
 			_mm256_storeu_pd(Lj + r, _mm256_div_pd(choleskyBlockAvx<false>(Pj, L, ls, j, r, mask), div));
 		if (left > 0)
 			_mm256_maskstore_pd(Lj + whole_end, mask,
