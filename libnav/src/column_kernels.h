@@ -242,6 +242,14 @@ __attribute__((target("avx"))) inline __m256d loadRowsAvx(const double* p, __m25
 		return _mm256_loadu_pd(p);
 }
 
+/** The mask of a packet's first `lanes` rows (0..4), for masked loads and
+ *  stores of a column's last rows. */
+__attribute__((target("avx"))) inline __m256i firstLanesAvx(Eigen::Index lanes)
+{
+	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
+	return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - lanes));
+}
+
 template <bool kPartial>
 __attribute__((target("avx"))) inline __m256d choleskyBlockAvx(const double* Pj, const double* L, Eigen::Index ls,
 																Eigen::Index j, Eigen::Index r, __m256i mask)
@@ -283,9 +291,8 @@ __attribute__((target("avx"))) inline void addColumnCombinationsAvx(double* Y, E
 																	 const double* coef, Eigen::Index cs,
 																	 const double* scale)
 {
-	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
 	const Eigen::Index whole = rows / 4 * 4;
-	const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - (rows - whole)));
+	const __m256i mask = firstLanesAvx(rows - whole);
 	for (Eigen::Index c = 0; c < cols; ++c)
 	{
 		double* y = Y + c * ys;
@@ -315,9 +322,8 @@ __attribute__((target("avx"))) inline void addColumnCombinationsAvx(double* Y, E
 __attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eigen::Index bs, Eigen::Index n,
 																   const double* a)
 {
-	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
 	const Eigen::Index whole = n / 4 * 4;
-	const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - (n - whole)));
+	const __m256i mask = firstLanesAvx(n - whole);
 	for (Eigen::Index j = 0; j < n; ++j)
 	{
 		double* col = B + j * bs;
@@ -388,7 +394,6 @@ __attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, E
 															   Eigen::Index to, double* L, Eigen::Index ls,
 															   Eigen::Index rows)
 {
-	alignas(32) static constexpr int64_t kLanes[8] = {-1, -1, -1, -1, 0, 0, 0, 0};
 	for (Eigen::Index j = from; j < to; ++j)
 	{
 		double* Lj = L + j * ls;
@@ -396,7 +401,7 @@ __attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, E
 		for (Eigen::Index i = 0; i < j; ++i) Lj[i] = 0.0;
 		const Eigen::Index whole_end = j + (rows - j) / 4 * 4;
 		const Eigen::Index left = rows - whole_end;	 // 0..3 rows in a last, partial packet
-		const __m256i mask = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - left));
+		const __m256i mask = firstLanesAvx(left);
 		// The packet holding the diagonal first: its root scales the rest.
 		const __m256d first = whole_end > j ? choleskyBlockAvx<false>(Pj, L, ls, j, j, mask)
 											: choleskyBlockAvx<true>(Pj, L, ls, j, j, mask);
@@ -430,6 +435,32 @@ __attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, E
 	return true;
 }
 #endif
+
+/** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
+ *  ls) over rows j… up to `rows`, the columns before `from` already in L
+ *  over those rows; rows above the diagonal zeroed. Column j is P's column
+ *  less Σ_{l<j} L_l L(j, l) by subtractAllColumns (passes of four), then
+ *  its root and the division of the rest by it. False where P is not
+ *  positive definite (columns partly written). The baseline path;
+ *  choleskyColumnsAvx takes the same operations per entry. */
+inline bool choleskyColumnsByPasses(const double* P, Eigen::Index ps, Eigen::Index from, Eigen::Index to, double* L,
+									Eigen::Index ls, Eigen::Index rows)
+{
+	for (Eigen::Index j = from; j < to; ++j)
+	{
+		double* Lj = L + j * ls;
+		for (Eigen::Index i = 0; i < j; ++i) Lj[i] = 0.0;
+		for (Eigen::Index i = j; i < rows; ++i) Lj[i] = P[j * ps + i];
+		if (j > 0)
+			subtractAllColumns(Lj + j, 0, rows - j, L + j, ls, j, [&](Eigen::Index l) { return L[l * ls + j]; });
+		const double d = Lj[j];
+		if (!(d > 0) || !std::isfinite(d)) return false;
+		const double root = std::sqrt(d);
+		Lj[j] = root;
+		for (Eigen::Index i = j + 1; i < rows; ++i) Lj[i] /= root;
+	}
+	return true;
+}
 
 // Triangular solves for the small shapes of the update and the smoother
 // (m ≤ ~6 right-hand sides, k ≤ 43 unknowns), where Eigen's blocked solvers

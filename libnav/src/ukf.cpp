@@ -57,23 +57,7 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int r
 	if (g_wide_kernels.load(std::memory_order_relaxed))
 		return choleskyColumnsAvx(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
 #endif
-	for (Eigen::Index j = from; j < to; ++j)
-	{
-		L.col(j).head(j).setZero();
-		auto Lj = L.col(j).segment(j, n - j);
-		Lj = P.col(j).segment(j, n - j);
-		// Axpys of the earlier columns' rows j… (four per pass; AVX where the
-		// CPU has it: column_kernels.h).
-		if (j > 0)
-			subtractAllColumns(Lj.data(), 0, n - j, L.data() + j, L.outerStride(), j,
-							   [&](Eigen::Index l) { return L(j, l); });
-		const double d = Lj[0];
-		if (!(d > 0) || !std::isfinite(d)) return false;
-		const double root = std::sqrt(d);
-		Lj[0] = root;
-		Lj.tail(n - j - 1) /= root;
-	}
-	return true;
+	return choleskyColumnsByPasses(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
 }
 
 /** One prediction step of the first kNonlinear coordinates along departures

@@ -192,25 +192,10 @@ namespace auvnav
 namespace
 {
 /** Cholesky columns [from, to) over `rows` rows as ukf.cpp's baseline path
- *  forms them: a pass of subtractAllColumns per four earlier columns over
- *  the whole column, then the root and the division. */
+ *  forms them (column passes). */
 bool columnPassCholesky(const Eigen::MatrixXd& P, int from, int to, Eigen::MatrixXd& L, int rows)
 {
-	for (int j = from; j < to; ++j)
-	{
-		L.col(j).head(j).setZero();
-		auto Lj = L.col(j).segment(j, rows - j);
-		Lj = P.col(j).segment(j, rows - j);
-		if (j > 0)
-			subtractAllColumns(Lj.data(), 0, rows - j, L.data() + j, L.outerStride(), j,
-							   [&](Eigen::Index l) { return L(j, l); });
-		const double d = Lj[0];
-		if (!(d > 0) || !std::isfinite(d)) return false;
-		const double root = std::sqrt(d);
-		Lj[0] = root;
-		Lj.tail(rows - j - 1) /= root;
-	}
-	return true;
+	return choleskyColumnsByPasses(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), rows);
 }
 }  // namespace
 
