@@ -125,6 +125,8 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const
 {
 	checkTangentSize(delta.size(), dim());
+	if (&plus == this || &minus == this || &plus == &minus)
+		throw std::invalid_argument("NavState::boxplusPair: the pair must be two states other than x");
 	const TangentVector negated = -delta;
 	if (delta.segment<3>(idx::att).isZero(0))
 	{

@@ -268,6 +268,8 @@ TEST(NavStateManifold, BoxplusPairIsTwoBoxplusCallsBitForBit)
 		EXPECT_EQ(minus.euclidean(), b.euclidean()) << k;
 	}
 	EXPECT_THROW(NavState().boxplusPair(TangentVector::Zero(idx::core_dim + 1), plus, minus), std::invalid_argument);
+	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), plus, minus), std::invalid_argument);
+	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), minus, minus), std::invalid_argument);
 }
 
 TEST(NavStateManifold, BoxminusHeadIsTheHeadOfBoxminus)

@@ -125,7 +125,9 @@ struct NavState
 	NavState boxplus(const Eigen::Ref<const TangentVector>& delta) const;
 	/** x ⊞ δ into `plus` and x ⊞ (−δ) into `minus` (a sigma-point pair),
 	 *  the same values bit for bit as two boxplus calls, with one Exp for
-	 *  both turns and no new states: every member of both is overwritten. */
+	 *  both turns and no new states: every member of both is overwritten.
+	 *  plus and minus are two states other than x (std::invalid_argument
+	 *  otherwise, as for a δ of the wrong size). */
 	void boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const;
 	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
 	 *  that vector, without forming it or touching the other members
