@@ -401,7 +401,7 @@ TEST(LoggerClock, DuplicateAndOutOfOrderStampsAtTheConfiguredRates)
 		if (k > 0 && s.recorded < prev) ++ooo;
 		prev = s.recorded;
 	}
-	auto binomial4sigma = [n](double q) { return 4 * std::sqrt(n * q * (1 - q)); };
+	auto binomial4sigma = [](double q) { return 4 * std::sqrt(n * q * (1 - q)); };
 	EXPECT_NEAR(double(clk.duplicates()), 0.02 * n, binomial4sigma(0.02));
 	EXPECT_NEAR(double(clk.outOfOrder()), 0.01 * n, binomial4sigma(0.01));
 	// Every injected duplicate repeats its predecessor's stamp.
