@@ -92,22 +92,13 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	if (x.dim() != dim())
 		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
 									std::to_string(dim()) + " coordinates");
+	NavState y;
+	y.extra.resize(x.extra.size());
+	propagateInertialInto(x, R_earth_turn, R_body_turn, step, y);
 	// Member by member (this runs per sigma point), the same sums as
 	// applyLinearRows on the flat state followed by the prior-mean terms.
-	NavState y = x;
-	// Body rotation relative to inertial space, then undo the turn of the
-	// Earth-fixed navigation frame.
-	y.R_nb = R_earth_turn * x.R_nb * R_body_turn;
-	const double dt = step.dt_s;
-	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
-	y.p_n = x.p_n + (dt * x.v_n + (0.5 * dt * dt) * x.a_n);
-	y.v_n = x.v_n + dt * x.a_n;
 	// Gauss–Markov states relax to their prior mean: x' = φx + (1 − φ)μ.
-	const auto relax = [](const auto& v, double phi, const auto& mu) { return (v * phi + (1 - phi) * mu).eval(); };
-	y.b_a = relax(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
-	y.current_vehicle_ne = relax(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
-	y.current_far_ne = relax(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
-	y.b_adcp = relax(x.b_adcp, step.adcp_bias, prior_mean.segment<2>(idx::adcp_bias));
+	y.b_adcp = (x.b_adcp * step.adcp_bias + (1 - step.adcp_bias) * prior_mean.segment<2>(idx::adcp_bias)).eval();
 	const auto relax23 = [&](const Eigen::Matrix<double, 2, 3>& m, int at) {
 		Eigen::Matrix<double, 2, 3> out;
 		for (int r = 0; r < 2; ++r)
@@ -123,6 +114,26 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 		const double decayed = extra[i].kind == StateProcess::GaussMarkov ? x.extra[i] * step.extra[i] : x.extra[i];
 		y.extra[i] = decayed + (1 - step.extra[i]) * prior_mean[idx::extra + i];
 	}
+	return y;
+}
+
+void ProcessModel::propagateInertialInto(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
+										 const Eigen::Matrix3d& R_body_turn, const StepDecay& step, NavState& y) const
+{
+	// Body rotation relative to inertial space, then undo the turn of the
+	// Earth-fixed navigation frame.
+	y.R_nb = R_earth_turn * x.R_nb * R_body_turn;
+	const double dt = step.dt_s;
+	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
+	y.p_n = x.p_n + (dt * x.v_n + (0.5 * dt * dt) * x.a_n);
+	y.v_n = x.v_n + dt * x.a_n;
+	y.a_n = x.a_n;
+	y.g = x.g;
+	// Gauss–Markov states relax to their prior mean: x' = φx + (1 − φ)μ.
+	const auto relax = [](const auto& v, double phi, const auto& mu) { return (v * phi + (1 - phi) * mu).eval(); };
+	y.b_a = relax(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
+	y.current_vehicle_ne = relax(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
+	y.current_far_ne = relax(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
 	if (current_far_distance_m > 0)
 	{
 		// The vehicle (and the far point D below it) moved Δz along the linear
@@ -135,7 +146,6 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	}
 	const double phi_g = step.gyro_bias;
 	y.b_w = phi_g * x.b_w + (1 - phi_g) * prior_mean.segment<3>(idx::gyro_bias);
-	return y;
 }
 
 template <typename AddEntry>

@@ -28,12 +28,6 @@ void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
 	for (int r = 0; r < 2; ++r)
 		for (int c = 0; c < 3; ++c) t[at + 3 * r + c] = m(r, c);
 }
-void add23(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2, 3>& m,
-		   const Eigen::Ref<const TangentVector>& t, int at)
-{
-	for (int r = 0; r < 2; ++r)
-		for (int c = 0; c < 3; ++c) out(r, c) = m(r, c) + t[at + 3 * r + c];
-}
 void get23(const Eigen::Ref<const TangentVector>& t, int at, Eigen::Matrix<double, 2, 3>& m)
 {
 	for (int r = 0; r < 2; ++r)
@@ -113,75 +107,120 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	checkTangentSize(delta.size(), dim());
 	NavState y;
 	if (delta.segment<3>(idx::att).isZero(0))
-		boxplusInto(delta, nullptr, y);
+		boxplusInto<false>(delta, nullptr, kAllBlocks, y);
 	else
 	{
 		const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
-		boxplusInto(delta, &dR, y);
+		boxplusInto<false>(delta, &dR, kAllBlocks, y);
 	}
 	return y;
 }
 
 void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const
 {
+	boxplusPairBlocks(delta, kAllBlocks, plus, minus);
+}
+
+void NavState::boxplusPairBlocks(const Eigen::Ref<const TangentVector>& delta, uint32_t blocks, NavState& plus,
+								 NavState& minus) const
+{
 	checkTangentSize(delta.size(), dim());
 	if (&plus == this || &minus == this || &plus == &minus)
 		throw std::invalid_argument("NavState::boxplusPair: the pair must be two states other than x");
-	const TangentVector negated = -delta;
 	if (delta.segment<3>(idx::att).isZero(0))
 	{
-		boxplusInto(delta, nullptr, plus);
-		boxplusInto(negated, nullptr, minus);
+		boxplusInto<false>(delta, nullptr, blocks, plus);
+		boxplusInto<true>(delta, nullptr, blocks, minus);
 		return;
 	}
 	// Exp(−φ) = Exp(φ)ᵀ, bit for bit as so3::Exp forms them.
 	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
 	const Eigen::Matrix3d dR_back = dR.transpose();
-	boxplusInto(delta, &dR, plus);
-	boxplusInto(negated, &dR_back, minus);
+	boxplusInto<false>(delta, &dR, blocks, plus);
+	boxplusInto<true>(delta, &dR_back, blocks, minus);
 }
 
+namespace
+{
+// a + δ, or a − δ for the pair's minus point: a − δ is a + (−δ) bit for bit
+// (IEEE subtraction adds the negation), so no negated copy of δ is formed.
+template <bool kMinus, typename A, typename D>
+auto plusOrMinus(const A& a, const D& d)
+{
+	if constexpr (kMinus)
+		return (a - d).eval();
+	else
+		return (a + d).eval();
+}
+template <bool kMinus>
+void add23Signed(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2, 3>& m,
+				 const Eigen::Ref<const TangentVector>& t, int at)
+{
+	for (int r = 0; r < 2; ++r)
+		for (int c = 0; c < 3; ++c) out(r, c) = kMinus ? m(r, c) - t[at + 3 * r + c] : m(r, c) + t[at + 3 * r + c];
+}
+}  // namespace
+
+template <bool kMinus>
 void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR_turn,
-						   NavState& y) const
+						   uint32_t blocks, NavState& y) const
 {
 	// Member by member (no flat round trip through euclidean(): this runs per
-	// sigma point), every member of y written.
+	// sigma point); members of blocks not asked for are left as they are.
+	// (−δ)'s products are the negated products bit for bit, so the minus
+	// point subtracts them.
+	auto wants = [blocks](uint32_t bit) { return (blocks & bit) != 0; };
 	// The additive members.
-	y.b_w = b_w + delta.segment<3>(idx::gyro_bias);
-	y.g = g + delta[idx::gravity];
-	y.p_n = p_n + delta.segment<3>(idx::pos);
-	y.b_adcp = b_adcp + delta.segment<2>(idx::adcp_bias);
-	add23(y.M_sub, M_sub, delta, idx::inertia);
-	add23(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
-	add23(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
-	y.extra = extra + delta.tail(extra.size());
+	if (wants(kGyroBias)) y.b_w = plusOrMinus<kMinus>(b_w, delta.segment<3>(idx::gyro_bias));
+	if (wants(kGravity)) y.g = kMinus ? g - delta[idx::gravity] : g + delta[idx::gravity];
+	if (wants(kPosition)) y.p_n = plusOrMinus<kMinus>(p_n, delta.segment<3>(idx::pos));
+	if (wants(kAdcpBias)) y.b_adcp = plusOrMinus<kMinus>(b_adcp, delta.segment<2>(idx::adcp_bias));
+	if (wants(kInertia)) add23Signed<kMinus>(y.M_sub, M_sub, delta, idx::inertia);
+	if (wants(kDampingLinear)) add23Signed<kMinus>(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
+	if (wants(kDampingQuadratic)) add23Signed<kMinus>(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
+	if (wants(kPluginStates))
+	{
+		if constexpr (kMinus)
+			y.extra = extra - delta.tail(extra.size());
+		else
+			y.extra = extra + delta.tail(extra.size());
+	}
 	if (!dR_turn)
 	{
 		// No turn (every sigma point along a Cholesky column past the
 		// attitude's): Exp(0) is exactly I, so this is the turned case's
 		// result without its rotations.
 		y.R_nb = R_nb;
-		y.v_n = v_n + delta.segment<3>(idx::vel);
-		y.a_n = a_n + delta.segment<3>(idx::acc);
-		y.current_vehicle_ne = current_vehicle_ne + delta.segment<2>(idx::current_vehicle);
-		y.current_far_ne = current_far_ne + delta.segment<2>(idx::current_far);
-		y.b_a = b_a + R_nb.transpose() * delta.segment<3>(idx::acc_bias);
+		if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>(v_n, delta.segment<3>(idx::vel));
+		if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>(a_n, delta.segment<3>(idx::acc));
+		if (wants(kCurrentVehicle))
+			y.current_vehicle_ne = plusOrMinus<kMinus>(current_vehicle_ne, delta.segment<2>(idx::current_vehicle));
+		if (wants(kCurrentFar))
+			y.current_far_ne = plusOrMinus<kMinus>(current_far_ne, delta.segment<2>(idx::current_far));
+		if (wants(kAccelBias))
+			y.b_a = plusOrMinus<kMinus>(b_a, (R_nb.transpose() * delta.segment<3>(idx::acc_bias)).eval());
 		return;
 	}
 	const Eigen::Matrix3d& dR = *dR_turn;
+	// The attitude always: the accelerometer bias below reads it.
 	y.R_nb = dR * R_nb;
 	// Velocity and acceleration turn with the attitude (SE_2(3)-like
 	// retraction): a heading perturbation moves the whole body-fixed motion.
-	y.v_n = dR * v_n + delta.segment<3>(idx::vel);
-	y.a_n = dR * a_n + delta.segment<3>(idx::acc);
+	if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>((dR * v_n).eval(), delta.segment<3>(idx::vel));
+	if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>((dR * a_n).eval(), delta.segment<3>(idx::acc));
 	// The water currents too (horizontal part of the turned vector): they are
 	// inferred from body-frame measurements just like the velocity.
-	y.current_vehicle_ne = (dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>() +
-						   delta.segment<2>(idx::current_vehicle);
-	y.current_far_ne = (dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>() +
-					   delta.segment<2>(idx::current_far);
+	if (wants(kCurrentVehicle))
+		y.current_vehicle_ne =
+			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>().eval(),
+								delta.segment<2>(idx::current_vehicle));
+	if (wants(kCurrentFar))
+		y.current_far_ne =
+			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>().eval(),
+								delta.segment<2>(idx::current_far));
 	// The accelerometer bias is stored in IMU axes but perturbed in NED axes.
-	y.b_a = b_a + y.R_nb.transpose() * delta.segment<3>(idx::acc_bias);
+	if (wants(kAccelBias))
+		y.b_a = plusOrMinus<kMinus>(b_a, (y.R_nb.transpose() * delta.segment<3>(idx::acc_bias)).eval());
 }
 
 NavState NavState::boxplusCoordinate(int i, double h) const

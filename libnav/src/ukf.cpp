@@ -25,6 +25,9 @@ namespace
 // predict nonlinearly under the retraction of state.h; the ADCP bias and the
 // model parameters are affine and independent of them.
 constexpr int kNonlinear = idx::adcp_bias;
+// Their blocks (the first kNonlinear coordinates).
+constexpr uint32_t kInertialBlocks = kAttitude | kGyroBias | kAcceleration | kGravity | kAccelBias | kVelocity |
+									 kPosition | kCurrentVehicle | kCurrentFar;
 // Of those, attitude and gyro bias turn the attitude; along every other
 // direction the retraction is a plain difference (InertialStepMap).
 constexpr int kTurning = idx::acc;
@@ -376,19 +379,28 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	const Eigen::Matrix3d R_earth_turn = so3::Exp(-omega_ie_n * dt);
 	const Eigen::Matrix3d R_body_turn = so3::Exp((omega_ib_b - x_.b_w) * dt);
 	const StepDecay step = model_.decay(dt);  // the Gauss–Markov φ once, not per point
-	auto propagate = [&](const NavState& x) {
-		return x.b_w == x_.b_w ? model_.propagateTurned(x, R_earth_turn, R_body_turn, step)
-							   : model_.propagateTurned(x, omega_ib_b, R_earth_turn, step);
+	// The points' inertial members only, straight into X (their affine rest
+	// is never read: it comes from X[0]).
+	auto propagate = [&](const NavState& x, NavState& y) {
+		if (x.b_w == x_.b_w)
+			model_.propagateInertialInto(x, R_earth_turn, R_body_turn, step, y);
+		else
+			model_.propagateInertialInto(x, R_earth_turn, so3::Exp((omega_ib_b - x.b_w) * dt), step, y);
 	};
-	X[0] = propagate(x_);
+	X[0] = model_.propagateTurned(x_, R_earth_turn, R_body_turn, step);
 	std::array<double, ks> scale;
+	// The points' coordinates past the inertial block are never read (that
+	// part is affine: it comes from X[0] below), so only the inertial
+	// blocks are perturbed; the rest holds x's values.
+	pair_scratch_[0] = x_;
+	pair_scratch_[1] = x_;
 	for (int j = 0; j < ks; ++j)
 	{
 		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const TangentVector c = (g * scale[j]) * L_.col(j);
-		x_.boxplusPair(c, pair_scratch_[0], pair_scratch_[1]);
-		X[1 + 2 * j] = propagate(pair_scratch_[0]);
-		X[2 + 2 * j] = propagate(pair_scratch_[1]);
+		x_.boxplusPairBlocks(c, kInertialBlocks, pair_scratch_[0], pair_scratch_[1]);
+		propagate(pair_scratch_[0], X[1 + 2 * j]);
+		propagate(pair_scratch_[1], X[2 + 2 * j]);
 	}
 	// The pairs along columns ks… (2(n − ks) points): X± ⊟ X₀ = ±γ J L_j +
 	// γ² q(L_j), so the centre's weight carries their d₀ and their sums enter
@@ -628,13 +640,21 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	// Attitude-heavy columns are evaluated at a shorter step (ukf.h).
 	std::array<double, 3> scale{1.0, 1.0, 1.0};
+	// Only the blocks h reads are perturbed (its contract, measurement_model.h);
+	// the rest of both points holds x's values.
+	const uint32_t read_blocks = model.uses();
+	if (kn > 0)
+	{
+		pair_scratch_[0] = x_;
+		pair_scratch_[1] = x_;
+	}
 	for (int j = 0; j < kn; ++j)
 	{
 		if (j < 3) scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
 		const double step = j < 3 ? g * scale[j] : g;
 		// (−step)·L_j is −(step·L_j) exactly: the pair is x ⊞ ±c.
 		const TangentVector c = step * L_.col(j);
-		x_.boxplusPair(c, pair_scratch_[0], pair_scratch_[1]);
+		x_.boxplusPairBlocks(c, read_blocks, pair_scratch_[0], pair_scratch_[1]);
 		for (int s = 0; s < 2; ++s)
 			if (!model.predict(pair_scratch_[s], meas, ctx, z_sigma.col(1 + 2 * j + s)))
 			{

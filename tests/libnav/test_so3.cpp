@@ -272,6 +272,58 @@ TEST(NavStateManifold, BoxplusPairIsTwoBoxplusCallsBitForBit)
 	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), minus, minus), std::invalid_argument);
 }
 
+TEST(NavStateManifold, BoxplusPairBlocksWritesTheAskedBlocksBitForBitAndNothingElse)
+{
+	std::mt19937 rng(23);
+	std::normal_distribution<double> nd;
+	std::uniform_int_distribution<uint32_t> masks(0, kAllBlocks);
+	NavState full_plus, full_minus;
+	for (int k = 0; k < 300; ++k)
+	{
+		NavState x = randomState(rng, 3.0 * randomAxis(rng));
+		x.extra.resize(k % 3);
+		for (int i = 0; i < x.extra.size(); ++i) x.extra[i] = nd(rng);
+		TangentVector d(x.dim());
+		for (int i = 0; i < d.size(); ++i) d[i] = (k % 2 ? 0.01 : 0.4) * nd(rng);
+		if (k % 4 == 0) d.head<3>().setZero();	// the branch without a turn
+		const uint32_t blocks = k < 2 ? (k ? kAllBlocks : 0u) : masks(rng);
+		// Both points start as another state: what is not asked for must stay.
+		NavState before = randomState(rng, randomAxis(rng));
+		before.extra.resize(x.extra.size());
+		for (int i = 0; i < before.extra.size(); ++i) before.extra[i] = nd(rng);
+		NavState plus = before, minus = before;
+		x.boxplusPairBlocks(d, blocks, plus, minus);
+		x.boxplusPair(d, full_plus, full_minus);
+		EXPECT_EQ(plus.R_nb, full_plus.R_nb) << k;	// the attitude always
+		EXPECT_EQ(minus.R_nb, full_minus.R_nb) << k;
+		const TangentVector e_plus = plus.euclidean(), e_minus = minus.euclidean(), e_before = before.euclidean(),
+							e_full_plus = full_plus.euclidean(), e_full_minus = full_minus.euclidean();
+		int asked = 0, kept = 0;
+		for (int i = idx::gyro_bias; i < x.dim(); ++i)
+			if (blocks & blockOfCoordinate(i, x.dim()))
+			{
+				EXPECT_EQ(e_plus[i], e_full_plus[i]) << k << " coordinate " << i;
+				EXPECT_EQ(e_minus[i], e_full_minus[i]) << k << " coordinate " << i;
+				++asked;
+			}
+			else
+			{
+				EXPECT_EQ(e_plus[i], e_before[i]) << k << " coordinate " << i;
+				EXPECT_EQ(e_minus[i], e_before[i]) << k << " coordinate " << i;
+				++kept;
+			}
+		EXPECT_EQ(asked + kept, x.dim() - 3);
+		if (k == 0)
+		{
+			EXPECT_EQ(asked, 0);
+		}
+		if (k == 1)
+		{
+			EXPECT_EQ(kept, 0);
+		}
+	}
+}
+
 TEST(NavStateManifold, BoxminusHeadIsTheHeadOfBoxminus)
 {
 	std::mt19937 rng(10);

@@ -99,6 +99,13 @@ struct ProcessModel
 	 *  Exp((ω_ib_b − x.b_w) dt) (shared by sigma points with the centre's bias). */
 	NavState propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
 							 const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const;
+	/** The inertial members of propagateTurned (attitude … position and the
+	 *  two currents: the first idx::adcp_bias coordinates) into y, bit for
+	 *  bit; y's other members are left as they are. y is not x. For sigma
+	 *  points whose affine rest is never read (the prediction takes it from
+	 *  the centre's), with no state built or copied per point. */
+	void propagateInertialInto(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
+							   const Eigen::Matrix3d& R_body_turn, const StepDecay& step, NavState& y) const;
 	/** The decay factors of a step of `dt_s` (StepDecay). */
 	StepDecay decay(double dt_s) const;
 

@@ -129,6 +129,13 @@ struct NavState
 	 *  plus and minus are two states other than x (std::invalid_argument
 	 *  otherwise, as for a δ of the wrong size). */
 	void boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const;
+	/** boxplusPair for the members of `blocks` (StateBlock bits) and the
+	 *  attitude only: those are the values boxplusPair writes, bit for bit;
+	 *  every other member of plus and minus is left as it is. For sigma
+	 *  points fed to an h that reads only `blocks` (its uses()), with plus
+	 *  and minus set to x beforehand so that the rest holds x's values. */
+	void boxplusPairBlocks(const Eigen::Ref<const TangentVector>& delta, uint32_t blocks, NavState& plus,
+						   NavState& minus) const;
 	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
 	 *  that vector, without forming it or touching the other members
 	 *  (affine slopes by differences, ukf.cpp). */
@@ -151,8 +158,11 @@ struct NavState
 	bool allFinite() const;
 
    private:
-	/** boxplus into y, the turn's Exp(δ_att) given (nullptr: δ_att is 0). */
-	void boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR, NavState& y) const;
+	/** x ⊞ δ (kMinus: x ⊞ (−δ)) into y for the members of `blocks` and the
+	 *  attitude, the turn's Exp(±δ_att) given (nullptr: δ_att is 0). */
+	template <bool kMinus>
+	void boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR, uint32_t blocks,
+					 NavState& y) const;
 };
 
 /** How a plugin-owned state evolves between updates (exact for any dt). */
