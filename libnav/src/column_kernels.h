@@ -870,6 +870,82 @@ void lowerBlockGramDispatch(const double* X, const double* Y, double* G, int zer
 	lowerBlockGram<kp, R>(X, Y, G);
 }
 
+/** dst(j, i) = src(i, j) for i < rows, j < cols (column-major, leading
+ *  dimensions ss and ds; the two blocks do not overlap): a transposed copy,
+ *  one entry at a time. The baseline of copyTransposedAvx. */
+inline void copyTransposedByEntries(const double* __restrict src, Eigen::Index ss, Eigen::Index rows,
+									Eigen::Index cols, double* __restrict dst, Eigen::Index ds)
+{
+	for (Eigen::Index j = 0; j < cols; ++j)
+		for (Eigen::Index i = 0; i < rows; ++i) dst[i * ds + j] = src[j * ss + i];
+}
+
+#if AUVNAV_AVX_KERNELS
+/** One 4 × 4 tile of copyTransposedAvx: rows i.. of columns j..j+3 of src
+ *  (masked loads of the first `lanes` rows when kPartial, nothing read past
+ *  them) into columns i.. of dst, rows j..j+3 (`lanes` columns stored). */
+template <bool kPartial>
+__attribute__((target("avx"))) inline void transposedTileAvx(const double* s, Eigen::Index ss, double* d,
+															  Eigen::Index ds, Eigen::Index lanes)
+{
+	const __m256i mask = kPartial ? firstLanesAvx(lanes) : _mm256_setzero_si256();
+	const __m256d c0 = loadRowsAvx<kPartial>(s, mask), c1 = loadRowsAvx<kPartial>(s + ss, mask),
+				  c2 = loadRowsAvx<kPartial>(s + 2 * ss, mask), c3 = loadRowsAvx<kPartial>(s + 3 * ss, mask);
+	const __m256d lo01 = _mm256_unpacklo_pd(c0, c1), hi01 = _mm256_unpackhi_pd(c0, c1),
+				  lo23 = _mm256_unpacklo_pd(c2, c3), hi23 = _mm256_unpackhi_pd(c2, c3);
+	_mm256_storeu_pd(d, _mm256_permute2f128_pd(lo01, lo23, 0x20));  // row i of src
+	if (kPartial && lanes < 2) return;
+	_mm256_storeu_pd(d + ds, _mm256_permute2f128_pd(hi01, hi23, 0x20));
+	if (kPartial && lanes < 3) return;
+	_mm256_storeu_pd(d + 2 * ds, _mm256_permute2f128_pd(lo01, lo23, 0x31));
+	if (kPartial && lanes < 4) return;
+	_mm256_storeu_pd(d + 3 * ds, _mm256_permute2f128_pd(hi01, hi23, 0x31));
+}
+
+/** copyTransposedByEntries by 4 × 4 tiles through registers (four column
+ *  loads, two unpacks and two lane swaps each, four column stores) instead
+ *  of a strided access per entry; the last rows by a masked tile, the last
+ *  columns entry by entry. Copies only: the same bits. */
+__attribute__((target("avx"))) inline void copyTransposedAvx(const double* __restrict src, Eigen::Index ss,
+															  Eigen::Index rows, Eigen::Index cols,
+															  double* __restrict dst, Eigen::Index ds)
+{
+	Eigen::Index j = 0;
+	for (; j + 4 <= cols; j += 4)
+	{
+		Eigen::Index i = 0;
+		for (; i + 4 <= rows; i += 4) transposedTileAvx<false>(src + j * ss + i, ss, dst + i * ds + j, ds, 4);
+		if (i < rows) transposedTileAvx<true>(src + j * ss + i, ss, dst + i * ds + j, ds, rows - i);
+	}
+	copyTransposedByEntries(src + j * ss, ss, rows, cols - j, dst + j, ds);
+}
+#endif
+
+/** copyTransposedByEntries on the AVX path where the CPU has it. */
+inline void copyTransposed(const double* src, Eigen::Index ss, Eigen::Index rows, Eigen::Index cols, double* dst,
+						   Eigen::Index ds)
+{
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		return copyTransposedAvx(src, ss, rows, cols, dst, ds);
+#endif
+	copyTransposedByEntries(src, ss, rows, cols, dst, ds);
+}
+
+/** A(j, i) = A(i, j) for i > j < n (column-major, leading dimension as):
+ *  the strictly upper triangle from the lower one. Tiles of four columns:
+ *  inside a diagonal tile entry by entry, below it by copyTransposed. */
+inline void mirrorLowerToUpper(double* A, Eigen::Index as, Eigen::Index n)
+{
+	for (Eigen::Index jb = 0; jb < n; jb += 4)
+	{
+		const Eigen::Index w = std::min<Eigen::Index>(4, n - jb);
+		for (Eigen::Index j = jb; j < jb + w; ++j)
+			for (Eigen::Index i = j + 1; i < jb + w; ++i) A[i * as + j] = A[j * as + i];
+		if (jb + w < n) copyTransposed(A + jb * as + jb + w, as, n - jb - w, w, A + (jb + w) * as + jb, as);
+	}
+}
+
 /** P −= W Wᵀ for a symmetric P, exactly symmetric after: column j's rows
  *  j… are computed and each entry stored at its mirror too (one triangle's
  *  arithmetic with no separate mirroring pass, whose strided loads cost

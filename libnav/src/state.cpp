@@ -106,38 +106,40 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 {
 	checkTangentSize(delta.size(), dim());
 	NavState y;
+	// (1·δ is δ bit for bit.)
 	if (delta.segment<3>(idx::att).isZero(0))
-		boxplusInto<false>(delta, nullptr, kAllBlocks, y);
+		boxplusInto<false>(delta, 1.0, nullptr, kAllBlocks, y);
 	else
 	{
 		const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
-		boxplusInto<false>(delta, &dR, kAllBlocks, y);
+		boxplusInto<false>(delta, 1.0, &dR, kAllBlocks, y);
 	}
 	return y;
 }
 
 void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const
 {
-	boxplusPairBlocks(delta, kAllBlocks, plus, minus);
+	boxplusPairBlocks(delta, 1.0, kAllBlocks, plus, minus);
 }
 
-void NavState::boxplusPairBlocks(const Eigen::Ref<const TangentVector>& delta, uint32_t blocks, NavState& plus,
-								 NavState& minus) const
+void NavState::boxplusPairBlocks(const Eigen::Ref<const TangentVector>& direction, double step, uint32_t blocks,
+								 NavState& plus, NavState& minus) const
 {
-	checkTangentSize(delta.size(), dim());
+	checkTangentSize(direction.size(), dim());
 	if (&plus == this || &minus == this || &plus == &minus)
 		throw std::invalid_argument("NavState::boxplusPair: the pair must be two states other than x");
-	if (delta.segment<3>(idx::att).isZero(0))
+	if (direction.segment<3>(idx::att).isZero(0))
 	{
-		boxplusInto<false>(delta, nullptr, blocks, plus);
-		boxplusInto<true>(delta, nullptr, blocks, minus);
+		boxplusInto<false>(direction, step, nullptr, blocks, plus);
+		boxplusInto<true>(direction, step, nullptr, blocks, minus);
 		return;
 	}
 	// Exp(−φ) = Exp(φ)ᵀ, bit for bit as so3::Exp forms them.
-	const Eigen::Matrix3d dR = so3::Exp(delta.segment<3>(idx::att));
+	const Eigen::Vector3d phi = step * direction.segment<3>(idx::att);
+	const Eigen::Matrix3d dR = so3::Exp(phi);
 	const Eigen::Matrix3d dR_back = dR.transpose();
-	boxplusInto<false>(delta, &dR, blocks, plus);
-	boxplusInto<true>(delta, &dR_back, blocks, minus);
+	boxplusInto<false>(direction, step, &dR, blocks, plus);
+	boxplusInto<true>(direction, step, &dR_back, blocks, minus);
 }
 
 namespace
@@ -154,36 +156,50 @@ auto plusOrMinus(const A& a, const D& d)
 }
 template <bool kMinus>
 void add23Signed(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2, 3>& m,
-				 const Eigen::Ref<const TangentVector>& t, int at)
+				 const Eigen::Ref<const TangentVector>& dir, double step, int at)
 {
 	for (int r = 0; r < 2; ++r)
-		for (int c = 0; c < 3; ++c) out(r, c) = kMinus ? m(r, c) - t[at + 3 * r + c] : m(r, c) + t[at + 3 * r + c];
+		for (int c = 0; c < 3; ++c)
+		{
+			const double d = step * dir[at + 3 * r + c];
+			out(r, c) = kMinus ? m(r, c) - d : m(r, c) + d;
+		}
 }
 }  // namespace
 
 template <bool kMinus>
-void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR_turn,
+void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double step, const Eigen::Matrix3d* dR_turn,
 						   uint32_t blocks, NavState& y) const
 {
 	// Member by member (no flat round trip through euclidean(): this runs per
 	// sigma point); members of blocks not asked for are left as they are.
-	// (−δ)'s products are the negated products bit for bit, so the minus
-	// point subtracts them.
+	// δ = step·dir entry by entry, as a product formed first would round it
+	// (no δ vector is stored); (−δ)'s products are the negated products bit
+	// for bit, so the minus point subtracts them.
 	auto wants = [blocks](uint32_t bit) { return (blocks & bit) != 0; };
+	auto delta3 = [&](int at) { return (step * dir.segment<3>(at)).eval(); };
+	auto delta2 = [&](int at) { return (step * dir.segment<2>(at)).eval(); };
 	// The additive members.
-	if (wants(kGyroBias)) y.b_w = plusOrMinus<kMinus>(b_w, delta.segment<3>(idx::gyro_bias));
-	if (wants(kGravity)) y.g = kMinus ? g - delta[idx::gravity] : g + delta[idx::gravity];
-	if (wants(kPosition)) y.p_n = plusOrMinus<kMinus>(p_n, delta.segment<3>(idx::pos));
-	if (wants(kAdcpBias)) y.b_adcp = plusOrMinus<kMinus>(b_adcp, delta.segment<2>(idx::adcp_bias));
-	if (wants(kInertia)) add23Signed<kMinus>(y.M_sub, M_sub, delta, idx::inertia);
-	if (wants(kDampingLinear)) add23Signed<kMinus>(y.Dl_sub, Dl_sub, delta, idx::damping_lin);
-	if (wants(kDampingQuadratic)) add23Signed<kMinus>(y.Dq_sub, Dq_sub, delta, idx::damping_quad);
+	if (wants(kGyroBias)) y.b_w = plusOrMinus<kMinus>(b_w, delta3(idx::gyro_bias));
+	if (wants(kGravity))
+	{
+		const double d = step * dir[idx::gravity];
+		y.g = kMinus ? g - d : g + d;
+	}
+	if (wants(kPosition)) y.p_n = plusOrMinus<kMinus>(p_n, delta3(idx::pos));
+	if (wants(kAdcpBias)) y.b_adcp = plusOrMinus<kMinus>(b_adcp, delta2(idx::adcp_bias));
+	if (wants(kInertia)) add23Signed<kMinus>(y.M_sub, M_sub, dir, step, idx::inertia);
+	if (wants(kDampingLinear)) add23Signed<kMinus>(y.Dl_sub, Dl_sub, dir, step, idx::damping_lin);
+	if (wants(kDampingQuadratic)) add23Signed<kMinus>(y.Dq_sub, Dq_sub, dir, step, idx::damping_quad);
 	if (wants(kPluginStates))
 	{
-		if constexpr (kMinus)
-			y.extra = extra - delta.tail(extra.size());
-		else
-			y.extra = extra + delta.tail(extra.size());
+		const int e = static_cast<int>(extra.size());
+		y.extra.resize(e);
+		for (int i = 0; i < e; ++i)
+		{
+			const double d = step * dir[idx::extra + i];
+			y.extra[i] = kMinus ? extra[i] - d : extra[i] + d;
+		}
 	}
 	if (!dR_turn)
 	{
@@ -191,14 +207,12 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& delta, const E
 		// attitude's): Exp(0) is exactly I, so this is the turned case's
 		// result without its rotations.
 		y.R_nb = R_nb;
-		if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>(v_n, delta.segment<3>(idx::vel));
-		if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>(a_n, delta.segment<3>(idx::acc));
+		if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>(v_n, delta3(idx::vel));
+		if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>(a_n, delta3(idx::acc));
 		if (wants(kCurrentVehicle))
-			y.current_vehicle_ne = plusOrMinus<kMinus>(current_vehicle_ne, delta.segment<2>(idx::current_vehicle));
-		if (wants(kCurrentFar))
-			y.current_far_ne = plusOrMinus<kMinus>(current_far_ne, delta.segment<2>(idx::current_far));
-		if (wants(kAccelBias))
-			y.b_a = plusOrMinus<kMinus>(b_a, (R_nb.transpose() * delta.segment<3>(idx::acc_bias)).eval());
+			y.current_vehicle_ne = plusOrMinus<kMinus>(current_vehicle_ne, delta2(idx::current_vehicle));
+		if (wants(kCurrentFar)) y.current_far_ne = plusOrMinus<kMinus>(current_far_ne, delta2(idx::current_far));
+		if (wants(kAccelBias)) y.b_a = plusOrMinus<kMinus>(b_a, (R_nb.transpose() * delta3(idx::acc_bias)).eval());
 		return;
 	}
 	const Eigen::Matrix3d& dR = *dR_turn;
@@ -206,21 +220,21 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& delta, const E
 	y.R_nb = dR * R_nb;
 	// Velocity and acceleration turn with the attitude (SE_2(3)-like
 	// retraction): a heading perturbation moves the whole body-fixed motion.
-	if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>((dR * v_n).eval(), delta.segment<3>(idx::vel));
-	if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>((dR * a_n).eval(), delta.segment<3>(idx::acc));
+	if (wants(kVelocity)) y.v_n = plusOrMinus<kMinus>((dR * v_n).eval(), delta3(idx::vel));
+	if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>((dR * a_n).eval(), delta3(idx::acc));
 	// The water currents too (horizontal part of the turned vector): they are
 	// inferred from body-frame measurements just like the velocity.
 	if (wants(kCurrentVehicle))
 		y.current_vehicle_ne =
 			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>().eval(),
-								delta.segment<2>(idx::current_vehicle));
+								delta2(idx::current_vehicle));
 	if (wants(kCurrentFar))
 		y.current_far_ne =
 			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>().eval(),
-								delta.segment<2>(idx::current_far));
+								delta2(idx::current_far));
 	// The accelerometer bias is stored in IMU axes but perturbed in NED axes.
 	if (wants(kAccelBias))
-		y.b_a = plusOrMinus<kMinus>(b_a, (y.R_nb.transpose() * delta.segment<3>(idx::acc_bias)).eval());
+		y.b_a = plusOrMinus<kMinus>(b_a, (y.R_nb.transpose() * delta3(idx::acc_bias)).eval());
 }
 
 NavState NavState::boxplusCoordinate(int i, double h) const
@@ -264,6 +278,12 @@ TangentVector NavState::boxminus(const NavState& y) const
 Eigen::Matrix<double, idx::adcp_bias, 1> NavState::boxminusHead(const NavState& y) const
 {
 	Eigen::Matrix<double, idx::adcp_bias, 1> d;
+	boxminusHeadInto(y, d);
+	return d;
+}
+
+void NavState::boxminusHeadInto(const NavState& y, Eigen::Matrix<double, idx::adcp_bias, 1>& d) const
+{
 	// dR = Exp(Log(·)) is the relative rotation itself: taken as the product
 	// (no Exp per call: this runs per sigma point and mean iteration).
 	const Eigen::Matrix3d dR = R_nb * y.R_nb.transpose();
@@ -278,7 +298,6 @@ Eigen::Matrix<double, idx::adcp_bias, 1> NavState::boxminusHead(const NavState& 
 	d.segment<2>(idx::current_far) =
 		current_far_ne - (dR * Eigen::Vector3d(y.current_far_ne.x(), y.current_far_ne.y(), 0)).head<2>();
 	d.segment<3>(idx::acc_bias) = R_nb * (b_a - y.b_a);
-	return d;
 }
 
 bool NavState::allFinite() const { return R_nb.allFinite() && euclidean().allFinite(); }

@@ -175,7 +175,12 @@ bool setWideKernels(bool on)
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
 {
-	const double turn = c.head<3>().norm();
+	return attitudeTurnScale(c.head<3>(), max_rad);
+}
+
+double attitudeTurnScale(const Eigen::Vector3d& turn_rad, double max_rad)
+{
+	const double turn = turn_rad.norm();
 	return turn > max_rad ? max_rad / turn : 1.0;
 }
 
@@ -396,9 +401,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	pair_scratch_[1] = x_;
 	for (int j = 0; j < ks; ++j)
 	{
-		scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
-		const TangentVector c = (g * scale[j]) * L_.col(j);
-		x_.boxplusPairBlocks(c, kInertialBlocks, pair_scratch_[0], pair_scratch_[1]);
+		scale[j] = attitudeTurnScale(g * L_.col(j).head<3>(), ut_.max_attitude_spread_rad);
+		x_.boxplusPairBlocks(L_.col(j), g * scale[j], kInertialBlocks, pair_scratch_[0], pair_scratch_[1]);
 		propagate(pair_scratch_[0], X[1 + 2 * j]);
 		propagate(pair_scratch_[1], X[2 + 2 * j]);
 	}
@@ -408,7 +412,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// q_j q_jᵀ) and J (Σ L_j L_jᵀ) Jᵀ = J (P − L_{:,<ks} L_{:,<ks}ᵀ) Jᵀ.
 	const InertialStepMap step_map(model_, x_, X[0].R_nb, step);
 	const int lumped_pairs = n - ks;
-	Eigen::Matrix<double, k, k - ks> JL_rest = L_.block<k, k - ks>(0, ks);
+	Eigen::Matrix<double, k, k - ks> JL_rest;
+	for (int c = 0; c < k - ks; ++c) JL_rest.col(c) = L_.col(ks + c).head<k>();	 // fixed-size column copies
 	Eigen::Matrix<double, 2, k - ks> q_rest;
 	step_map.apply(JL_rest, &q_rest);
 	const Eigen::Vector2d q_each = (g * g) * q_rest.rowwise().sum();	 // Σ_j q(γ L_j), both currents
@@ -439,9 +444,12 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1>& d) {
 		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminusHead(X[0])
 														  : Eigen::Matrix<double, k, 1>::Zero().eval();
-		d[0] = X[0].boxminusHead(mean);
+		X[0].boxminusHeadInto(mean, d[0]);
 		for (int i = 1; i < 2 * ks + 1; ++i)
-			d[i] = scale[(i - 1) / 2] < 1.0 ? (y[i] - mu).eval() : X[i].boxminusHead(mean);
+			if (scale[(i - 1) / 2] < 1.0)
+				d[i] = y[i] - mu;
+			else
+				X[i].boxminusHeadInto(mean, d[i]);
 	};
 	// Iterated manifold mean of the inertial block (the affine rest of X[0] is
 	// already the exact mean: A x̄ + b).
@@ -451,9 +459,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	{
 		deviations(mean, d);  // at the mean that leaves the loop: the ones used below
 		if (iter == 10) break;
+		Eigen::Matrix<double, k, 1> step_head = (2 * w_.wi) * q_sum;	// fixed size: the sums in registers
+		for (int i = 0; i < 2 * ks + 1; ++i) step_head += wm[i] * d[i];
 		TangentVector mean_step = TangentVector::Zero(n);
-		mean_step.head<k>() = (2 * w_.wi) * q_sum;
-		for (int i = 0; i < 2 * ks + 1; ++i) mean_step.head<k>() += wm[i] * d[i];
+		mean_step.head<k>() = step_head;
 		if (mean_step.squaredNorm() < 1e-26) break;
 		mean = mean.boxplus(mean_step);
 	}
@@ -549,10 +558,12 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 			const double aj = a[j];
 			for (int i = 0; i < nl; ++i) col[i] *= a[i] * aj;
 		}
-	for (int j = 0; j < k; ++j)
-		for (int i = j; i < k; ++i) P_(i, j) = P_(j, i) = P_NN(i, j);
-	for (int i = 0; i < k; ++i)	 // the mirror, column by column of the bottom-left block (contiguous stores)
-		for (int c = 0; c < nl; ++c) P_(k + c, i) = P_(i, k + c);
+	// P_NN's lower triangle into P's, then both mirrors by transposed tiles
+	// (copies: the same values as entry by entry).
+	// (Whole fixed-size columns: the strictly upper part is then overwritten.)
+	for (int j = 0; j < k; ++j) P_.col(j).head<k>() = P_NN.col(j).head<k>();
+	mirrorLowerToUpper(P_.data(), P_.outerStride(), k);
+	copyTransposed(&P_(0, k), P_.outerStride(), k, nl, &P_(k, 0), P_.outerStride());
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer
@@ -650,11 +661,10 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	for (int j = 0; j < kn; ++j)
 	{
-		if (j < 3) scale[j] = attitudeSpreadScale(g * L_.col(j), ut_.max_attitude_spread_rad);
+		if (j < 3) scale[j] = attitudeTurnScale(g * L_.col(j).head<3>(), ut_.max_attitude_spread_rad);
 		const double step = j < 3 ? g * scale[j] : g;
-		// (−step)·L_j is −(step·L_j) exactly: the pair is x ⊞ ±c.
-		const TangentVector c = step * L_.col(j);
-		x_.boxplusPairBlocks(c, read_blocks, pair_scratch_[0], pair_scratch_[1]);
+		// (−step)·L_j is −(step·L_j) exactly: the pair is x ⊞ ±step·L_j.
+		x_.boxplusPairBlocks(L_.col(j), step, read_blocks, pair_scratch_[0], pair_scratch_[1]);
 		for (int s = 0; s < 2; ++s)
 			if (!model.predict(pair_scratch_[s], meas, ctx, z_sigma.col(1 + 2 * j + s)))
 			{
@@ -705,10 +715,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		if (isScaled(i))
 			E.col(i) = D_scaled.col(i - 1) - acc;
 		else
-		{
-			model.residual(z_sigma.col(i), z_mean, r);
-			E.col(i) = r;
-		}
+			model.residual(z_sigma.col(i), z_mean, E.col(i));	// straight into E (no copy through r)
 	}
 	// S = Σ W_i e_i e_iᵀ + R and Pxz = Σ_j W γ L_j (e₊ⱼ − e₋ⱼ)ᵀ, each as one
 	// product (not 2k+1 small outer products).

@@ -241,6 +241,46 @@ TEST(FilterKernels, PacketCholeskyEqualsTheColumnPassesBitForBit)
 	}
 }
 
+// The tiled transposed copy against the entry-by-entry one, bit for bit,
+// for every remainder of four in both directions, with room around the
+// blocks (strides larger than the blocks) that must stay untouched.
+TEST(FilterKernels, TransposedTilesEqualTheEntryCopyBitForBit)
+{
+	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
+	for (int rows : {0, 1, 3, 4, 5, 8, 20, 23})
+		for (int cols : {0, 1, 2, 4, 7, 20, 23})
+		{
+			SCOPED_TRACE(testing::Message() << rows << " rows, " << cols << " columns");
+			const Eigen::MatrixXd src = randomMatrix(rows + 3, cols + 1, 13u + rows * 31 + cols);
+			Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(cols + 2, rows + 2, 7.0), got = expected;
+			copyTransposedByEntries(src.data(), src.outerStride(), rows, cols, expected.data(), expected.outerStride());
+			copyTransposedAvx(src.data(), src.outerStride(), rows, cols, got.data(), got.outerStride());
+			EXPECT_TRUE((got.array() == expected.array()).all());
+			// And it is the transpose.
+			EXPECT_TRUE((got.topLeftCorner(cols, rows).array() == src.topLeftCorner(rows, cols).transpose().array()).all());
+		}
+}
+#endif
+
+// The mirror of a lower triangle: the upper one becomes its transpose, the
+// lower one and everything past n stays, on whichever path this CPU runs.
+TEST(FilterKernels, MirrorLowerToUpperMakesTheBlockSymmetric)
+{
+	for (int n : {1, 2, 3, 4, 5, 8, 9, 23, 24})
+	{
+		const Eigen::MatrixXd A0 = randomMatrix(n + 3, n + 1, 17u + n);
+		Eigen::MatrixXd A = A0;
+		mirrorLowerToUpper(A.data(), A.outerStride(), n);
+		for (int j = 0; j < n + 1; ++j)
+			for (int i = 0; i < n + 3; ++i)
+			{
+				const double want = (i < j && j < n) ? A0(j, i) : A0(i, j);
+				EXPECT_EQ(A(i, j), want) << "n = " << n << ", entry (" << i << ", " << j << ")";
+			}
+	}
+}
+
+#if AUVNAV_AVX_KERNELS
 // The prediction's cross block and affine block on the AVX path against the
 // scalar loops they replace, bit for bit, for row counts with every
 // remainder of four.

@@ -129,13 +129,15 @@ struct NavState
 	 *  plus and minus are two states other than x (std::invalid_argument
 	 *  otherwise, as for a δ of the wrong size). */
 	void boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const;
-	/** boxplusPair for the members of `blocks` (StateBlock bits) and the
-	 *  attitude only: those are the values boxplusPair writes, bit for bit;
-	 *  every other member of plus and minus is left as it is. For sigma
-	 *  points fed to an h that reads only `blocks` (its uses()), with plus
-	 *  and minus set to x beforehand so that the rest holds x's values. */
-	void boxplusPairBlocks(const Eigen::Ref<const TangentVector>& delta, uint32_t blocks, NavState& plus,
-						   NavState& minus) const;
+	/** boxplusPair of δ = step·direction (each entry that product, as a δ
+	 *  formed first would hold it) for the members of `blocks` (StateBlock
+	 *  bits) and the attitude only: those are the values boxplusPair writes,
+	 *  bit for bit; every other member of plus and minus is left as it is.
+	 *  For sigma points fed to an h that reads only `blocks` (its uses()),
+	 *  with plus and minus set to x beforehand so that the rest holds x's
+	 *  values; no δ vector is formed. */
+	void boxplusPairBlocks(const Eigen::Ref<const TangentVector>& direction, double step, uint32_t blocks,
+						   NavState& plus, NavState& minus) const;
 	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
 	 *  that vector, without forming it or touching the other members
 	 *  (affine slopes by differences, ukf.cpp). */
@@ -148,6 +150,9 @@ struct NavState
 	 *  bit for bit those of boxminus, without the parameters' and plugin
 	 *  states' differences. */
 	Eigen::Matrix<double, idx::adcp_bias, 1> boxminusHead(const NavState& y) const;
+	/** The same into d (no vector returned and copied: the prediction's
+	 *  mean iteration writes its deviations in place). */
+	void boxminusHeadInto(const NavState& y, Eigen::Matrix<double, idx::adcp_bias, 1>& d) const;
 
 	/** Flat copy of the Euclidean part (everything but the attitude), in
 	 *  tangent order (entries 0..2 are zero), dim() entries. */
@@ -158,11 +163,12 @@ struct NavState
 	bool allFinite() const;
 
    private:
-	/** x ⊞ δ (kMinus: x ⊞ (−δ)) into y for the members of `blocks` and the
-	 *  attitude, the turn's Exp(±δ_att) given (nullptr: δ_att is 0). */
+	/** x ⊞ δ (kMinus: x ⊞ (−δ)), δ = step·dir, into y for the members of
+	 *  `blocks` and the attitude, the turn's Exp(±δ_att) given (nullptr:
+	 *  δ_att is 0). */
 	template <bool kMinus>
-	void boxplusInto(const Eigen::Ref<const TangentVector>& delta, const Eigen::Matrix3d* dR, uint32_t blocks,
-					 NavState& y) const;
+	void boxplusInto(const Eigen::Ref<const TangentVector>& dir, double step, const Eigen::Matrix3d* dR,
+					 uint32_t blocks, NavState& y) const;
 };
 
 /** How a plugin-owned state evolves between updates (exact for any dt). */

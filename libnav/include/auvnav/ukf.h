@@ -65,6 +65,8 @@ struct UtParams
 /** Scale s ∈ (0, 1] of a sigma-point step `c` (tangent order of state.h) so
  *  that its attitude part turns by at most `max_rad`. */
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad);
+/** The same from the step's attitude part alone (no full step formed). */
+double attitudeTurnScale(const Eigen::Vector3d& turn_rad, double max_rad);
 
 /** Whether the covariance kernels (the update's downdate and column
  *  products) run 256-bit AVX packets: on when the CPU has AVX, checked at
