@@ -870,6 +870,59 @@ void lowerBlockGramDispatch(const double* X, const double* Y, double* G, int zer
 	lowerBlockGram<kp, R>(X, Y, G);
 }
 
+/** addColumnCombinationsAvx's baseline, column by column: Y_c ← (Y_c +
+ *  Σ_{j<J} coef[c + j·cs] X_j) · scale[c], an axpy per term in j order then
+ *  the scaling (entry by entry the same operations as the packets). */
+inline void addColumnCombinationsByColumns(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols,
+										   const double* X, Eigen::Index xs, Eigen::Index J, const double* coef,
+										   Eigen::Index cs, const double* scale)
+{
+	for (Eigen::Index c = 0; c < cols; ++c)
+	{
+		double* y = Y + c * ys;
+		for (Eigen::Index j = 0; j < J; ++j)
+		{
+			const double w = coef[c + j * cs];
+			const double* x = X + j * xs;
+			for (Eigen::Index i = 0; i < rows; ++i) y[i] += w * x[i];
+		}
+		for (Eigen::Index i = 0; i < rows; ++i) y[i] *= scale[c];
+	}
+}
+
+/** scaleByOuterProductAvx's baseline: B(i, j) ← B(i, j) · (a[i] · a[j]). */
+inline void scaleByOuterProductByEntries(double* B, Eigen::Index bs, Eigen::Index n, const double* a)
+{
+	for (Eigen::Index j = 0; j < n; ++j)
+	{
+		double* col = B + j * bs;
+		const double aj = a[j];
+		for (Eigen::Index i = 0; i < n; ++i) col[i] *= a[i] * aj;
+	}
+}
+
+/** addColumnCombinationsByColumns on the AVX path where the CPU has it. */
+inline void addColumnCombinations(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols, const double* X,
+								  Eigen::Index xs, Eigen::Index J, const double* coef, Eigen::Index cs,
+								  const double* scale)
+{
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		return addColumnCombinationsAvx(Y, rows, ys, cols, X, xs, J, coef, cs, scale);
+#endif
+	addColumnCombinationsByColumns(Y, rows, ys, cols, X, xs, J, coef, cs, scale);
+}
+
+/** scaleByOuterProductByEntries on the AVX path where the CPU has it. */
+inline void scaleByOuterProduct(double* B, Eigen::Index bs, Eigen::Index n, const double* a)
+{
+#if AUVNAV_AVX_KERNELS
+	if (g_wide_kernels.load(std::memory_order_relaxed))
+		return scaleByOuterProductAvx(B, bs, n, a);
+#endif
+	scaleByOuterProductByEntries(B, bs, n, a);
+}
+
 /** dst(j, i) = src(i, j) for i < rows, j < cols (column-major, leading
  *  dimensions ss and ds; the two blocks do not overlap): a transposed copy,
  *  one entry at a time. The baseline of copyTransposedAvx. */

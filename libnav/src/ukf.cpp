@@ -515,17 +515,9 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	auto P_NL = P_.block<k, Eigen::Dynamic>(0, k, k, nl);
 	step_map.apply(P_NL);
 	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
-#if AUVNAV_AVX_KERNELS
-	if (g_wide_kernels.load(std::memory_order_relaxed))
-		addColumnCombinationsAvx(P_NL.data(), k, P_NL.outerStride(), nl, D_less_JL.data(), k, ks, &L_(k, 0),
-								 L_.outerStride(), a.data());
-	else
-#endif
-	{
-		for (int c = 0; c < nl; ++c)  // fixed-size axpys (a blocked product's set-up costs more here)
-			for (int j = 0; j < ks; ++j) P_NL.col(c) += L_(k + c, j) * D_less_JL.col(j);
-		for (int j = 0; j < nl; ++j) P_NL.col(j) *= a[j];
-	}
+	// Column axpys (a blocked product's set-up costs more here).
+	addColumnCombinations(P_NL.data(), k, P_NL.outerStride(), nl, D_less_JL.data(), k, ks, &L_(k, 0),
+						  L_.outerStride(), a.data());
 	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
 	if (observer_ || P_cross)
 	{
@@ -547,17 +539,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// symmetrise it; every step writes both triangles alike), and a_i a_j =
 	// a_j a_i, so it stays so.
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
-#if AUVNAV_AVX_KERNELS
-	if (g_wide_kernels.load(std::memory_order_relaxed))
-		scaleByOuterProductAvx(&P_(k, k), P_.outerStride(), nl, a.data());
-	else
-#endif
-		for (int j = 0; j < nl; ++j)
-		{
-			double* col = &P_(k, k + j);
-			const double aj = a[j];
-			for (int i = 0; i < nl; ++i) col[i] *= a[i] * aj;
-		}
+	scaleByOuterProduct(&P_(k, k), P_.outerStride(), nl, a.data());
 	// P_NN's lower triangle into P's, then both mirrors by transposed tiles
 	// (copies: the same values as entry by entry).
 	// (Whole fixed-size columns: the strictly upper part is then overwritten.)

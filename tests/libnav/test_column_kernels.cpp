@@ -281,9 +281,9 @@ TEST(FilterKernels, MirrorLowerToUpperMakesTheBlockSymmetric)
 }
 
 #if AUVNAV_AVX_KERNELS
-// The prediction's cross block and affine block on the AVX path against the
-// scalar loops they replace, bit for bit, for row counts with every
-// remainder of four.
+// The prediction's cross block and affine block on the AVX path against
+// their baselines (the filter's own, column_kernels.h), bit for bit, for row
+// counts with every remainder of four.
 TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 {
 	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
@@ -296,11 +296,8 @@ TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 			const Eigen::MatrixXd coef = randomMatrix(cols + 3, J, 11u + cols);	 // coef(c, j), stride cols + 3
 			const Eigen::VectorXd scale = Eigen::VectorXd::Random(cols);
 			Eigen::MatrixXd expected = Y0, got = Y0;
-			for (int c = 0; c < cols; ++c)
-			{
-				for (int j = 0; j < J; ++j) expected.col(c) += coef(c, j) * X.col(j);
-				expected.col(c) *= scale[c];
-			}
+			addColumnCombinationsByColumns(expected.data(), rows, expected.outerStride(), cols, X.data(),
+										   X.outerStride(), J, coef.data(), coef.outerStride(), scale.data());
 			addColumnCombinationsAvx(got.data(), rows, got.outerStride(), cols, X.data(), X.outerStride(), J,
 									 coef.data(), coef.outerStride(), scale.data());
 			EXPECT_TRUE((got.array() == expected.array()).all());
@@ -308,8 +305,7 @@ TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 			const int n = rows;
 			Eigen::MatrixXd B = randomMatrix(n + 2, n, 13u + n), B_loop = B;	// an n × n block of a taller matrix
 			const Eigen::VectorXd a = Eigen::VectorXd::Random(n);
-			for (int j = 0; j < n; ++j)
-				for (int i = 0; i < n; ++i) B_loop(i, j) *= a[i] * a[j];
+			scaleByOuterProductByEntries(B_loop.data(), B_loop.outerStride(), n, a.data());
 			scaleByOuterProductAvx(B.data(), B.outerStride(), n, a.data());
 			EXPECT_TRUE((B.array() == B_loop.array()).all()) << "rows past the block must stay as they were too";
 		}
