@@ -122,6 +122,23 @@ std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog,
 	return a;
 }
 
+/** runNavigator with `args` (writing to dir/out) killed after kill_s; where
+ *  the whole run takes less than that here (the navigator runs the repeated
+ *  sample at several hundred times real time, and our machines differ ~3×),
+ *  again, dir/out emptied first, killed at half its time. */
+Outcome runKilledMidway(const std::vector<std::string>& args, const fs::path& dir, double kill_s)
+{
+	Outcome o = runNavigator(args, dir, kill_s);
+	if (o.signal == 0 && o.exit_code >= 0)
+	{
+		std::printf("the run ended in %.2f s, before the kill at %.2f s: again, killed at %.2f s\n", o.wall_s, kill_s,
+					0.5 * o.wall_s);
+		fs::remove_all(dir / "out");
+		o = runNavigator(args, dir, 0.5 * o.wall_s);
+	}
+	return o;
+}
+
 // Under AddressSanitizer (the sanitizer pass, .ci/sanitize) auvnav-run starts
 // and runs tens of times slower: at 2 s it has written nothing yet, so the
 // short kills come later there, still mid-run, and the limits on a run's wall
@@ -461,22 +478,9 @@ void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlo
 	SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
 	const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
 	fs::create_directories(dir);
-	auto run = [&](double after_s) {
-		return runNavigator(
-			runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}),
-			dir, after_s);
-	};
-	Outcome o = run(kill_s);
-	if (o.signal == 0 && o.exit_code >= 0)
-	{
-		// The whole run took less than kill_s here (the navigator runs the
-		// repeated sample at ~400× real time on our faster machines, and they
-		// differ ~3×): again, killed at half its time.
-		std::printf("the run ended in %.2f s, before the kill at %.2f s: again, killed at %.2f s\n", o.wall_s, kill_s,
-					0.5 * o.wall_s);
-		fs::remove_all(dir / "out");
-		o = run(0.5 * o.wall_s);
-	}
+	const Outcome o = runKilledMidway(
+		runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir,
+		kill_s);
 	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
 	const fs::path out = dir / "out";
 	const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
@@ -793,7 +797,9 @@ TEST(RunSmooth, AKilledRunSmoothsWhatWasRecorded)
 	const auto dir = workDir();
 	const fs::path twice = dir / "sample_twice.rawlog";
 	writeSampleRepeated(twice, 2);
-	const Outcome o = runNavigator(runArgs(dir, twice.string(), {"--smooth"}), dir, 4.0 * kKillDelayScale);
+	// (The sample twice with --smooth takes about 4 s here: a kill at 4 s can
+	// come after the end, so a run that ends first is killed at half its time.)
+	const Outcome o = runKilledMidway(runArgs(dir, twice.string(), {"--smooth"}), dir, 4.0 * kKillDelayScale);
 	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill; " << o.output;
 	const Outcome s = runProgram(AUVNAV_SMOOTH_EXE, {(dir / "out").string()}, dir);
 	ASSERT_EQ(s.exit_code, 0) << s.output;
