@@ -86,6 +86,18 @@ TangentVector ProcessModel::diagonalTailFactors(const StepDecay& step) const
 	return a;
 }
 
+namespace
+{
+/** A Gauss–Markov state relaxed to its prior mean over a step: φx + (1 − φ)μ.
+ *  (Always inlined: a call per member and sigma point cost 3.9 M on the
+ *  benchmark cut.) */
+template <typename V, typename M>
+[[gnu::always_inline]] inline auto relaxToPriorMean(const V& v, double phi, const M& mu)
+{
+	return (v * phi + (1 - phi) * mu).eval();
+}
+}  // namespace
+
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
 									   const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const
 {
@@ -97,8 +109,7 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	propagateInertialInto(x, R_earth_turn, R_body_turn, step, y);
 	// Member by member (this runs per sigma point), the same sums as
 	// applyLinearRows on the flat state followed by the prior-mean terms.
-	// Gauss–Markov states relax to their prior mean: x' = φx + (1 − φ)μ.
-	y.b_adcp = (x.b_adcp * step.adcp_bias + (1 - step.adcp_bias) * prior_mean.segment<2>(idx::adcp_bias)).eval();
+	y.b_adcp = relaxToPriorMean(x.b_adcp, step.adcp_bias, prior_mean.segment<2>(idx::adcp_bias));
 	const auto relax23 = [&](const Eigen::Matrix<double, 2, 3>& m, int at) {
 		Eigen::Matrix<double, 2, 3> out;
 		for (int r = 0; r < 2; ++r)
@@ -129,11 +140,10 @@ void ProcessModel::propagateInertialInto(const NavState& x, const Eigen::Matrix3
 	y.v_n = x.v_n + dt * x.a_n;
 	y.a_n = x.a_n;
 	y.g = x.g;
-	// Gauss–Markov states relax to their prior mean: x' = φx + (1 − φ)μ.
-	const auto relax = [](const auto& v, double phi, const auto& mu) { return (v * phi + (1 - phi) * mu).eval(); };
-	y.b_a = relax(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
-	y.current_vehicle_ne = relax(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
-	y.current_far_ne = relax(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
+	y.b_a = relaxToPriorMean(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
+	y.current_vehicle_ne =
+		relaxToPriorMean(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
+	y.current_far_ne = relaxToPriorMean(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
 	if (current_far_distance_m > 0)
 	{
 		// The vehicle (and the far point D below it) moved Δz along the linear

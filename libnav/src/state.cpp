@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 
 namespace auvnav
 {
@@ -146,10 +147,13 @@ namespace
 {
 // a + δ, or a − δ for the pair's minus point: a − δ is a + (−δ) bit for bit
 // (IEEE subtraction adds the negation), so no negated copy of δ is formed.
+// (Scalars or Eigen expressions alike.)
 template <bool kMinus, typename A, typename D>
 auto plusOrMinus(const A& a, const D& d)
 {
-	if constexpr (kMinus)
+	if constexpr (std::is_arithmetic_v<A>)
+		return kMinus ? a - d : a + d;
+	else if constexpr (kMinus)
 		return (a - d).eval();
 	else
 		return (a + d).eval();
@@ -159,11 +163,7 @@ void add23Signed(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2
 				 const Eigen::Ref<const TangentVector>& dir, double step, int at)
 {
 	for (int r = 0; r < 2; ++r)
-		for (int c = 0; c < 3; ++c)
-		{
-			const double d = step * dir[at + 3 * r + c];
-			out(r, c) = kMinus ? m(r, c) - d : m(r, c) + d;
-		}
+		for (int c = 0; c < 3; ++c) out(r, c) = plusOrMinus<kMinus>(m(r, c), step * dir[at + 3 * r + c]);
 }
 }  // namespace
 
@@ -181,11 +181,7 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double st
 	auto delta2 = [&](int at) { return (step * dir.segment<2>(at)).eval(); };
 	// The additive members.
 	if (wants(kGyroBias)) y.b_w = plusOrMinus<kMinus>(b_w, delta3(idx::gyro_bias));
-	if (wants(kGravity))
-	{
-		const double d = step * dir[idx::gravity];
-		y.g = kMinus ? g - d : g + d;
-	}
+	if (wants(kGravity)) y.g = plusOrMinus<kMinus>(g, step * dir[idx::gravity]);
 	if (wants(kPosition)) y.p_n = plusOrMinus<kMinus>(p_n, delta3(idx::pos));
 	if (wants(kAdcpBias)) y.b_adcp = plusOrMinus<kMinus>(b_adcp, delta2(idx::adcp_bias));
 	if (wants(kInertia)) add23Signed<kMinus>(y.M_sub, M_sub, dir, step, idx::inertia);
@@ -195,11 +191,7 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double st
 	{
 		const int e = static_cast<int>(extra.size());
 		y.extra.resize(e);
-		for (int i = 0; i < e; ++i)
-		{
-			const double d = step * dir[idx::extra + i];
-			y.extra[i] = kMinus ? extra[i] - d : extra[i] + d;
-		}
+		for (int i = 0; i < e; ++i) y.extra[i] = plusOrMinus<kMinus>(extra[i], step * dir[idx::extra + i]);
 	}
 	if (!dR_turn)
 	{

@@ -553,9 +553,9 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// a_j a_i, so it stays so.
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
 	scaleByOuterProduct(&P_(k, k), P_.outerStride(), nl, a.data());
-	// P_NN's lower triangle into P's, then both mirrors by transposed tiles
-	// (copies: the same values as entry by entry).
-	// (Whole fixed-size columns: the strictly upper part is then overwritten.)
+	// P_NN into P's top-left block as whole fixed-size columns, then its
+	// strictly upper part and the bottom-left block as mirrors, by transposed
+	// tiles (copies: the same values as entry by entry).
 	for (int j = 0; j < k; ++j) P_.col(j).head<k>() = P_NN.col(j).head<k>();
 	mirrorLowerToUpper(P_.data(), P_.outerStride(), k);
 	copyTransposed(&P_(0, k), P_.outerStride(), k, nl, &P_(k, 0), P_.outerStride());
