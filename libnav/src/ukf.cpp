@@ -140,13 +140,38 @@ bool allFiniteEntries(const Eigen::DenseBase<Derived>& a)
 	return s == 0;
 }
 
+/** r = a ⊟ b for an update's m-vectors: formed here when the model's
+ *  residual is the plain difference (residualIsDifference(): the same
+ *  subtractions, without a virtual call and three Refs per sigma point,
+ *  which cost more than the arithmetic at m ≤ 3), else the model's own. */
+class Residuals
+{
+   public:
+	Residuals(const MeasurementModel& model, int m) : model_(model), plain_(model.residualIsDifference()), m_(m) {}
+	void into(const double* a, const double* b, double* out) const
+	{
+		if (plain_)
+		{
+			for (int q = 0; q < m_; ++q) out[q] = a[q] - b[q];
+			return;
+		}
+		using ConstMapV = Eigen::Map<const Eigen::VectorXd>;
+		model_.residual(ConstMapV(a, m_), ConstMapV(b, m_), Eigen::Map<Eigen::VectorXd>(out, m_));
+	}
+
+   private:
+	const MeasurementModel& model_;
+	const bool plain_;
+	const int m_;
+};
+
 /** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, the
  *  model's own (MeasurementModel::affineSlopes) or else by a difference at
  *  the sigma points' step γσᵢ (exact for h affine there), zero for
  *  coordinates of blocks h does not read. z0 = h(x); z_scratch and dz are
  *  overwritten. False, with `why`, if h fails or is not finite. */
-bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
-				  const NavState& x, const Covariance& P, double gamma, int kn, int k,
+bool affineSlopes(const MeasurementModel& model, const Residuals& residuals, const Measurement& meas,
+				  const FilterContext& ctx, const NavState& x, const Covariance& P, double gamma, int kn, int k,
 				  const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
 				  Eigen::Ref<Eigen::VectorXd> dz, Eigen::Ref<Eigen::MatrixXd> At, const char*& why)
 {
@@ -170,7 +195,7 @@ bool affineSlopes(const MeasurementModel& model, const Measurement& meas, const 
 			why = ok ? "model returned a non-finite h" : "model could not evaluate h";
 			return false;
 		}
-		model.residual(z_scratch, z0, dz);
+		residuals.into(z_scratch.data(), z0.data(), dz.data());
 		At.row(i - kn) = dz.transpose() / h;
 	}
 	return true;
@@ -676,6 +701,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one. A
 	// scaled pair enters as deviations ±a/s + m from z₀ (no point of its own).
 	const double w_center_c = w_.wc0 + 2 * (n - kn) * w_.wi;
+	const Residuals residuals(model, m);
+	const double* z0 = z_sigma.col(0).data();
 	MapV r = takeV(m), z_mean = takeV(m), acc = takeV(m);
 	z_mean = z_sigma.col(0);
 	acc.setZero();
@@ -686,8 +713,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	for (int j = 0; j < std::min(kn, 3); ++j)
 		if (scale[j] < 1.0)
 		{
-			model.residual(z_sigma.col(1 + 2 * j), z_sigma.col(0), r);
-			model.residual(z_sigma.col(2 + 2 * j), z_sigma.col(0), rm);
+			residuals.into(z_sigma.col(1 + 2 * j).data(), z0, r.data());
+			residuals.into(z_sigma.col(2 + 2 * j).data(), z0, rm.data());
 			const double s = scale[j];
 			D_scaled.col(2 * j) = 0.5 * (r + rm) + 0.5 * (r - rm) / s;
 			D_scaled.col(2 * j + 1) = 0.5 * (r + rm) - 0.5 * (r - rm) / s;
@@ -699,8 +726,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			acc += w_.wi * D_scaled.col(i - 1);
 		else
 		{
-			model.residual(z_sigma.col(i), z_sigma.col(0), r);
-			acc += w_.wi * r;
+			residuals.into(z_sigma.col(i).data(), z0, r.data());
+			for (int q = 0; q < m; ++q) acc[q] += w_.wi * r[q];	 // acc += W r, entry by entry
 		}
 	}
 	z_mean += acc;	// centre residual is zero; its weight does not matter
@@ -710,7 +737,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		if (isScaled(i))
 			E.col(i) = D_scaled.col(i - 1) - acc;
 		else
-			model.residual(z_sigma.col(i), z_mean, E.col(i));	// straight into E (no copy through r)
+			residuals.into(z_sigma.col(i).data(), z_mean.data(), E.col(i).data());	 // straight into E
 	}
 	// S = Σ W_i e_i e_iᵀ + R and Pxz = Σ_j W γ L_j (e₊ⱼ − e₋ⱼ)ᵀ, each as one
 	// product (not 2k+1 small outer products).
@@ -739,7 +766,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		const int nk = k - kn;
 		MapM At = takeM(nk, m);	 // Aᵀ: columns contiguous for the dot products
 		At_data = At.data();
-		if (!affineSlopes(model, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count), takeV(m), At,
+		if (!affineSlopes(model, residuals, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count), takeV(m), At,
 						  res.why))
 			return res;
 		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
@@ -782,7 +809,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 							   [&](Eigen::Index j) { return -M(i, j); });
 
 	MapV nu = takeV(m);
-	model.residual(meas.z, z_mean, nu);
+	residuals.into(meas.z.data(), z_mean.data(), nu.data());
 	MapM S_factor = takeM(m, m);  // the LLT's storage (S itself is read again on a recovery)
 	S_factor = S;
 	Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(S_factor);

@@ -80,6 +80,8 @@ class AdcpModel final : public SafeMeasurementModel
 		return kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
 	}
 	double gateProbability() const noexcept override { return gate_probability_; }
+	//! The default residual, z − h: the filter may form it itself.
+	bool residualIsDifference() const noexcept override { return true; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }

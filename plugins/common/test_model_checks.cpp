@@ -26,7 +26,8 @@ enum class Flaw
 	NonDeterministic,
 	SkipWithMeasurements,
 	Invalid,
-	NotAffine	//!< declares affineIn() = position + velocity, but h is quadratic in the position
+	NotAffine,	//!< declares affineIn() = position + velocity, but h is quadratic in the position
+	WrapsButClaimsDifference  //!< residual wraps the second entry; residualIsDifference() says it does not
 };
 
 /** z = north position + 0.1·north velocity (2 numbers), with injectable flaws. */
@@ -45,7 +46,10 @@ class TestModel final : public SafeMeasurementModel
 	{
 		r = z - zp;
 		if (flaw_ == Flaw::ResidualOffset) r.array() += 1e-3;
+		if (flaw_ == Flaw::WrapsButClaimsDifference) r[1] = std::remainder(r[1], 2 * M_PI);
 	}
+	//! The residual above is z − zp (but for the flaws that change it).
+	bool residualIsDifference() const noexcept override { return true; }
 
    protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
@@ -137,6 +141,13 @@ TEST(ModelChecks, CatchesBadValuesAndResiduals)
 	EXPECT_NE(message(check(Flaw::PredictFails)).find("predict returned false"), std::string::npos);
 	EXPECT_NE(message(check(Flaw::ResidualOffset)).find("residual(z, z)"), std::string::npos);
 	EXPECT_NE(message(check(Flaw::NonDeterministic)).find("deterministic"), std::string::npos);
+}
+
+TEST(ModelChecks, CatchesAWrappingResidualDeclaredAsADifference)
+{
+	const auto r = check(Flaw::WrapsButClaimsDifference);
+	EXPECT_FALSE(r);
+	EXPECT_NE(message(r).find("residualIsDifference() but"), std::string::npos) << message(r);
 }
 
 TEST(ModelChecks, CatchesPrepareProblems)

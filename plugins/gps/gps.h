@@ -53,6 +53,8 @@ class GpsModel final : public SafeMeasurementModel
 	void bindStates(int first_extra_index) noexcept override { bias_at_ = blocks_.empty() ? -1 : first_extra_index; }
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
+	//! The default residual, z − h: the filter may form it itself.
+	bool residualIsDifference() const noexcept override { return true; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	/** The antenna's position from a valid GGA fix (no rate limit, no state). */

@@ -245,6 +245,13 @@ class MeasurementModel
 	{
 		return false;
 	}
+	/** True if residual(z, z_pred) is exactly z − z_pred, entry by entry
+	 *  (the default residual, not overridden): the filter then forms the
+	 *  update's residuals itself instead of calling residual once per sigma
+	 *  point (ABI 7). False (the default, always safe): residual is called.
+	 *  Declaring it for a residual that wraps angles gives wrong updates;
+	 *  auvnav/testing/model_checks.h checks the claim bit for bit. */
+	virtual bool residualIsDifference() const noexcept { return false; }
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

@@ -31,8 +31,9 @@
 // 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
 // state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix, config::Node's
 // access record (layout), Measurement's typed payload (layout); 5: MeasurementModel::affineIn
-// (a virtual at the end of the table); 6: MeasurementModel::affineSlopes (another)
-#define AUVNAV_PLUGIN_ABI_VERSION 6u
+// (a virtual at the end of the table); 6: MeasurementModel::affineSlopes (another);
+// 7: MeasurementModel::residualIsDifference (another)
+#define AUVNAV_PLUGIN_ABI_VERSION 7u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 

@@ -279,6 +279,8 @@ inline std::string vec(const Eigen::VectorXd& v)
  *    symmetric and positive definite;
  *  - h(x) succeeds, is finite, has the right size and is deterministic;
  *  - residual(z, z) = 0 and residual(h(x), h(x)) = 0;
+ *  - if residualIsDifference(): residual(a, h(x)) = a − h(x) bit for bit,
+ *    for a = z and for a far from h(x) (a residual that wraps differs there);
  *  - h is unchanged when every block NOT declared in uses() is perturbed by a
  *    large random tangent vector (a wrong uses() mask makes the filter skip
  *    sigma points that matter, silently);
@@ -359,6 +361,23 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 		model.residual(h, h, r);
 		if (!(r.cwiseAbs().array() <= opt.tol * (1 + h.cwiseAbs().array())).all())
 			return fail() << "residual(h, h) = " << detail::vec(r) << ", expected 0";
+		if (model.residualIsDifference())
+		{
+			// The filter then forms a − b itself: residual must be that
+			// subtraction bit for bit, also far apart (where a residual that
+			// wraps angles differs from it).
+			const Eigen::VectorXd far_up = h.array() + 4.0, far_down = h.array() - 7.5;
+			for (const Eigen::VectorXd* a : {&m.z, &far_up, &far_down})
+			{
+				r.setConstant(std::nan(""));
+				model.residual(*a, h, r);
+				const Eigen::VectorXd diff = *a - h;
+				for (Eigen::Index i = 0; i < dim; ++i)
+					if (!(r[i] == diff[i]))
+						return fail() << "residualIsDifference() but residual(a, h) = " << detail::vec(r)
+									  << " is not a − h = " << detail::vec(diff);
+			}
+		}
 
 		if (mask != kAllBlocks)
 		{
