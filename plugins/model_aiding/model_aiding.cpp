@@ -32,6 +32,22 @@ void place(Matrix6d& M, const Eigen::Matrix<double, 2, 3>& sub)
 		M(r, 5) = sub(r, 2);
 	}
 }
+/** physicalSub of the three parameter sub-matrices, their six logarithms
+ *  taken out as one Eigen exp (two or four lanes a step, against six calls
+ *  of the C library's exp: this runs once per sigma point, 87 of them an
+ *  update). The two differ by an ulp at most. */
+struct PhysicalSubs
+{
+	Eigen::Matrix<double, 2, 3> M, D_l, D_q;
+	explicit PhysicalSubs(const NavState& x) : M(x.M_sub), D_l(x.Dl_sub), D_q(x.Dq_sub)
+	{
+		Eigen::Array<double, 6, 1> e;
+		e << M(0, 0), M(1, 1), D_l(0, 0), D_l(1, 1), D_q(0, 0), D_q(1, 1);
+		e = e.exp();
+		M(0, 0) = e[0], M(1, 1) = e[1], D_l(0, 0) = e[2], D_l(1, 1) = e[3], D_q(0, 0) = e[4], D_q(1, 1) = e[5];
+	}
+};
+
 /** ν (velocity relative to the water, turn rate) and ν̇ at the body origin. */
 void bodyMotion(const NavState& x, const Eigen::Vector3d& omega_b, const Eigen::Vector3d& alpha_b,
 				const Eigen::Vector3d& r_imu_b, Vector6d& nu, Vector6d& nu_dot)
@@ -68,9 +84,10 @@ Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen:
 	Vector6d nu, nu_dot;
 	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
 	Matrix6d M = vm.M, D_l = vm.D_l, D_q = vm.D_q;
-	place(M, physicalSub(x.M_sub));
-	place(D_l, physicalSub(x.Dl_sub));
-	place(D_q, physicalSub(x.Dq_sub));
+	const PhysicalSubs subs(x);
+	place(M, subs.M);
+	place(D_l, subs.D_l);
+	place(D_q, subs.D_q);
 	Vector6d inertial = M * nu_dot;
 	if (vm.coriolis)
 	{
@@ -99,7 +116,8 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 {
 	Vector6d nu, nu_dot;
 	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
-	const Eigen::Matrix<double, 2, 3> M_sub = physicalSub(x.M_sub);
+	const PhysicalSubs subs(x);
+	const Eigen::Matrix<double, 2, 3>& M_sub = subs.M;
 	Vector6d inertial;
 	if (vm.coriolis)
 	{
@@ -120,8 +138,8 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 	}
 	else
 		inertial = applyPlaced(vm.M, M_sub, nu_dot);
-	return inertial + applyPlaced(vm.D_l, physicalSub(x.Dl_sub), nu) +
-		   applyPlaced(vm.D_q, physicalSub(x.Dq_sub), nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
+	return inertial + applyPlaced(vm.D_l, subs.D_l, nu) +
+		   applyPlaced(vm.D_q, subs.D_q, nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
 }
 
 ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
