@@ -841,20 +841,27 @@ __attribute__((target("avx"))) inline void gramBlocksAvx(const double* __restric
 }
 
 /** lowerBlockGram with 4 × 4 blocks in AVX registers, two row blocks at a
- *  time where there are two (Y's broadcasts shared). `zero_from`,
- *  `zero_to`: Y's columns in that range are zero in its rows 0..3, so the
- *  first block column skips them (the sums are the same). */
+ *  time where there are two (Y's broadcasts shared). Y's columns in
+ *  [zero_from, zero_to) are where the caller expects zeros: each block
+ *  column skips the longest run of them that ends at zero_to and is zero in
+ *  its four rows of Y (the sums are the same; a NaN is not zero). In the
+ *  prediction those are the lumped pairs' J L_j, zero above the rows J
+ *  reaches from L_j's diagonal on: the skips save a quarter of the terms. */
 template <int kp, int R>
 __attribute__((target("avx"))) void lowerBlockGramAvx(const double* __restrict X, const double* __restrict Y,
 													   double* __restrict G, int zero_from = 0, int zero_to = 0)
 {
 	static_assert(kp % 4 == 0, "lowerBlockGram: kp must be a multiple of 4");
+	const __m256d zero = _mm256_setzero_pd();
 	for (int jb = 0; jb < kp; jb += 4)
 	{
-		const int from = jb == 0 ? zero_from : 0, to = jb == 0 ? zero_to : 0;
+		int from = zero_to;
+		while (from > zero_from &&
+			   _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(Y + (from - 1) * kp + jb), zero, _CMP_NEQ_UQ)) == 0)
+			--from;
 		int ib = jb;
-		for (; ib + 8 <= kp; ib += 8) gramBlocksAvx<kp, R, true>(X, Y, G, ib, jb, from, to);
-		if (ib < kp) gramBlocksAvx<kp, R, false>(X, Y, G, ib, jb, from, to);
+		for (; ib + 8 <= kp; ib += 8) gramBlocksAvx<kp, R, true>(X, Y, G, ib, jb, from, zero_to);
+		if (ib < kp) gramBlocksAvx<kp, R, false>(X, Y, G, ib, jb, from, zero_to);
 	}
 }
 #endif

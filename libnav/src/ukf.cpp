@@ -553,7 +553,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	Eigen::Matrix<double, kp, kp> P_NN;	 // its blocks on and below the diagonal; the first k rows and columns
 	// Dc's columns of the lumped pairs and q_cross are zero in the rows of
 	// attitude and gyro bias (InertialStepMap zeroes them; q lives in the
-	// currents): the first block column skips them.
+	// currents), and J L_j above the rows J reaches from L_j's diagonal on:
+	// each block column skips the zeros it finds there.
 	assert((Dc.block<4, rows - 1 - points>(0, points).array() == 0).all());
 	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), P_NN.data(), points, rows - 1);
 	// The q q term of both currents (their lower triangle).
