@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -89,8 +90,18 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 	std::string& s = update_row_;
 	s.clear();
 	appendFixed(s, t_filter_s, 6);
+	const std::size_t t_len = s.size();
 	s.push_back(',');
-	appendFixed(s, t_measurement_s, 6);
+	// Most updates are made when measured: the same text, copied (no second
+	// formatting; a number's text is at most ~330 characters).
+	char t_text[400];
+	if (t_measurement_s == t_filter_s && t_len <= sizeof t_text)
+	{
+		std::memcpy(t_text, s.data(), t_len);
+		s.append(t_text, t_len);
+	}
+	else
+		appendFixed(s, t_measurement_s, 6);
 	s.push_back(',');
 	s += label;
 	s.push_back(',');

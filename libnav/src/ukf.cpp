@@ -165,18 +165,21 @@ class Residuals
 {
    public:
 	Residuals(const MeasurementModel& model, int m) : model_(model), plain_(model.residualIsDifference()), m_(m) {}
-	void into(const double* a, const double* b, double* out) const
+	__attribute__((always_inline)) void into(const double* a, const double* b, double* out) const
 	{
 		if (plain_)
-		{
 			for (int q = 0; q < m_; ++q) out[q] = a[q] - b[q];
-			return;
-		}
+		else
+			modelResidual(a, b, out);
+	}
+
+   private:
+	void modelResidual(const double* a, const double* b, double* out) const
+	{
 		using ConstMapV = Eigen::Map<const Eigen::VectorXd>;
 		model_.residual(ConstMapV(a, m_), ConstMapV(b, m_), Eigen::Map<Eigen::VectorXd>(out, m_));
 	}
 
-   private:
 	const MeasurementModel& model_;
 	const bool plain_;
 	const int m_;
