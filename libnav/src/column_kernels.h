@@ -45,12 +45,15 @@ namespace auvnav
 {
 namespace detail
 {
-/** Whether the CPU (and the OS, which must save the wide registers) has AVX. */
+/** Whether the CPU (and the OS, which must save the wide registers) has AVX
+ *  and FMA (fused multiply-add; every x86-64 CPU with AVX2 has it): the wide
+ *  path needs both, its kernels that fuse products and sums matching their
+ *  baselines' std::fma. */
 inline bool cpuHasAvx()
 {
 #if AUVNAV_AVX_KERNELS
 	__builtin_cpu_init();
-	return __builtin_cpu_supports("avx");
+	return __builtin_cpu_supports("avx") && __builtin_cpu_supports("fma");
 #else
 	return false;
 #endif
@@ -227,11 +230,6 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 }
 
 #if AUVNAV_AVX_KERNELS
-/** Rows [r, r + 4) of Cholesky column j before its scaling: P's column
- *  less Σ_{l<j} L_l L(j, l), the columns in passes of four summed as
- *  subtractColumns sums them, so each entry takes exactly the operations
- *  of subtractAllColumns (bit for bit). kPartial: only the lanes in `mask`
- *  are loaded (the column's last rows; nothing past them is read). */
 /** Four rows at p, or (kPartial) only the lanes in `mask`, the others 0. */
 template <bool kPartial>
 __attribute__((target("avx"))) inline __m256d loadRowsAvx(const double* p, __m256i mask)
@@ -250,32 +248,22 @@ __attribute__((target("avx"))) inline __m256i firstLanesAvx(Eigen::Index lanes)
 	return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(kLanes + 4 - lanes));
 }
 
+/** Rows [r, r + 4) of Cholesky column j before its scaling: P's column
+ *  less L_l L(j, l) for l = 0, 1, …, j − 1, each a fused multiply-subtract
+ *  (one rounding), so each entry takes exactly the operations of
+ *  choleskyColumnsFused (bit for bit). kPartial: only the lanes in `mask`
+ *  are loaded (the column's last rows; nothing past them is read). */
 template <bool kPartial>
-__attribute__((target("avx"))) inline __m256d choleskyBlockAvx(const double* Pj, const double* L, Eigen::Index ls,
-																Eigen::Index j, Eigen::Index r, __m256i mask)
+__attribute__((target("avx,fma"))) inline __m256d choleskyBlockAvx(const double* Pj, const double* L,
+																	Eigen::Index ls, Eigen::Index j, Eigen::Index r,
+																	__m256i mask)
 {
 	auto load = [mask](const double* p) __attribute__((target("avx"))) { return loadRowsAvx<kPartial>(p, mask); };
 	__m256d acc = load(Pj + r);
 	const double* Lr = L + r;	// rows r… of column 0
 	const double* Lrow = L + j;	// row j of column 0
-	Eigen::Index l = 0;
-	for (; l + 4 <= j; l += 4)
-	{
-		__m256d s = _mm256_mul_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls));
-		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 1) * ls), _mm256_broadcast_sd(Lrow + (l + 1) * ls)));
-		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 2) * ls), _mm256_broadcast_sd(Lrow + (l + 2) * ls)));
-		s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 3) * ls), _mm256_broadcast_sd(Lrow + (l + 3) * ls)));
-		acc = _mm256_sub_pd(acc, s);
-	}
-	if (l < j)
-	{
-		__m256d s = _mm256_mul_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls));
-		if (l + 1 < j)
-			s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 1) * ls), _mm256_broadcast_sd(Lrow + (l + 1) * ls)));
-		if (l + 2 < j)
-			s = _mm256_add_pd(s, _mm256_mul_pd(load(Lr + (l + 2) * ls), _mm256_broadcast_sd(Lrow + (l + 2) * ls)));
-		acc = _mm256_sub_pd(acc, s);
-	}
+	for (Eigen::Index l = 0; l < j; ++l)
+		acc = _mm256_fnmadd_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls), acc);
 	return acc;
 }
 
@@ -337,48 +325,21 @@ __attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eig
 	}
 }
 
-/** choleskyBlockAvx for two whole packets, rows [r, r + 8): the same
- *  operations per entry, with each coefficient L(j, l) broadcast once for
- *  both. */
-__attribute__((target("avx"))) inline void choleskyBlockPairAvx(const double* Pj, const double* L, Eigen::Index ls,
-																 Eigen::Index j, Eigen::Index r, __m256d& lo,
-																 __m256d& hi)
+/** choleskyBlockAvx for rows [r, r + 8) (two packets sharing the
+ *  broadcasts of row j), no partial packet. */
+__attribute__((target("avx,fma"))) inline void choleskyBlockPairAvx(const double* Pj, const double* L, Eigen::Index ls,
+																	 Eigen::Index j, Eigen::Index r, __m256d& lo,
+																	 __m256d& hi)
 {
 	lo = _mm256_loadu_pd(Pj + r);
 	hi = _mm256_loadu_pd(Pj + r + 4);
 	const double* Lr = L + r;	// rows r… of column 0
 	const double* Lrow = L + j;	// row j of column 0
-	Eigen::Index l = 0;
-	for (; l + 4 <= j; l += 4)
+	for (Eigen::Index l = 0; l < j; ++l)
 	{
-		const __m256d c0 = _mm256_broadcast_sd(Lrow + l * ls), c1 = _mm256_broadcast_sd(Lrow + (l + 1) * ls),
-					  c2 = _mm256_broadcast_sd(Lrow + (l + 2) * ls), c3 = _mm256_broadcast_sd(Lrow + (l + 3) * ls);
-		const double* X0 = Lr + l * ls;
-		__m256d s = _mm256_mul_pd(_mm256_loadu_pd(X0), c0);
-		__m256d t = _mm256_mul_pd(_mm256_loadu_pd(X0 + 4), c0);
-		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + ls), c1));
-		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + ls + 4), c1));
-		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + 2 * ls), c2));
-		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + 2 * ls + 4), c2));
-		s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + 3 * ls), c3));
-		t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + 3 * ls + 4), c3));
-		lo = _mm256_sub_pd(lo, s);
-		hi = _mm256_sub_pd(hi, t);
-	}
-	if (l < j)
-	{
-		const double* X0 = Lr + l * ls;
-		const __m256d c0 = _mm256_broadcast_sd(Lrow + l * ls);
-		__m256d s = _mm256_mul_pd(_mm256_loadu_pd(X0), c0);
-		__m256d t = _mm256_mul_pd(_mm256_loadu_pd(X0 + 4), c0);
-		for (Eigen::Index e = 1; e < j - l; ++e)
-		{
-			const __m256d c = _mm256_broadcast_sd(Lrow + (l + e) * ls);
-			s = _mm256_add_pd(s, _mm256_mul_pd(_mm256_loadu_pd(X0 + e * ls), c));
-			t = _mm256_add_pd(t, _mm256_mul_pd(_mm256_loadu_pd(X0 + e * ls + 4), c));
-		}
-		lo = _mm256_sub_pd(lo, s);
-		hi = _mm256_sub_pd(hi, t);
+		const __m256d c = _mm256_broadcast_sd(Lrow + l * ls);
+		lo = _mm256_fnmadd_pd(_mm256_loadu_pd(Lr + l * ls), c, lo);
+		hi = _mm256_fnmadd_pd(_mm256_loadu_pd(Lr + l * ls + 4), c, hi);
 	}
 }
 
@@ -388,11 +349,11 @@ __attribute__((target("avx"))) inline void choleskyBlockPairAvx(const double* Pj
  *  each packet's sum kept in a register over all earlier columns (the
  *  column-pass form reloaded and stored it once per pass of four), the
  *  last rows by masked loads and stores. The same operations per entry as
- *  the column-pass form (ukf.cpp's choleskyColumns), so the same bits;
- *  false where P is not positive definite (columns partly written). */
-__attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, Eigen::Index ps, Eigen::Index from,
-															   Eigen::Index to, double* L, Eigen::Index ls,
-															   Eigen::Index rows)
+ *  choleskyColumnsFused (ukf.cpp's baseline), so the same bits; false
+ *  where P is not positive definite (columns partly written). */
+__attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* P, Eigen::Index ps,
+																   Eigen::Index from, Eigen::Index to, double* L,
+																   Eigen::Index ls, Eigen::Index rows)
 {
 	for (Eigen::Index j = from; j < to; ++j)
 	{
@@ -438,21 +399,26 @@ __attribute__((target("avx"))) inline bool choleskyColumnsAvx(const double* P, E
 
 /** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
  *  ls) over rows j… up to `rows`, the columns before `from` already in L
- *  over those rows; rows above the diagonal zeroed. Column j is P's column
- *  less Σ_{l<j} L_l L(j, l) by subtractAllColumns (passes of four), then
- *  its root and the division of the rest by it. False where P is not
- *  positive definite (columns partly written). The baseline path;
- *  choleskyColumnsAvx takes the same operations per entry. */
-inline bool choleskyColumnsByPasses(const double* P, Eigen::Index ps, Eigen::Index from, Eigen::Index to, double* L,
-									Eigen::Index ls, Eigen::Index rows)
+ *  over those rows; rows above the diagonal zeroed. Entry (i, j) is P(i, j)
+ *  less L(i, l) L(j, l) for l = 0, 1, …, j − 1, each by std::fma (one
+ *  rounding: a third fewer instructions on the AVX path than a product and
+ *  a sum, and no less accurate), then the column's root and the division of
+ *  the rest by it. False where P is not positive definite (columns partly
+ *  written). The baseline path; choleskyColumnsAvx takes the same
+ *  operations per entry. */
+inline bool choleskyColumnsFused(const double* P, Eigen::Index ps, Eigen::Index from, Eigen::Index to, double* L,
+								 Eigen::Index ls, Eigen::Index rows)
 {
 	for (Eigen::Index j = from; j < to; ++j)
 	{
 		double* Lj = L + j * ls;
 		for (Eigen::Index i = 0; i < j; ++i) Lj[i] = 0.0;
-		for (Eigen::Index i = j; i < rows; ++i) Lj[i] = P[j * ps + i];
-		if (j > 0)
-			subtractAllColumns(Lj + j, 0, rows - j, L + j, ls, j, [&](Eigen::Index l) { return L[l * ls + j]; });
+		for (Eigen::Index i = j; i < rows; ++i)
+		{
+			double acc = P[j * ps + i];
+			for (Eigen::Index l = 0; l < j; ++l) acc = std::fma(-L[l * ls + i], L[l * ls + j], acc);
+			Lj[i] = acc;
+		}
 		const double d = Lj[j];
 		if (!(d > 0) || !std::isfinite(d)) return false;
 		const double root = std::sqrt(d);
@@ -553,70 +519,24 @@ inline void solveLeftLowerTransposed(double* B, Eigen::Index k, Eigen::Index bs,
 
 /** Columns j and j + 1 of a symmetric P less C columns of W (X, stride
  *  x_stride) times their rows j and j + 1 (a, b): rows j… of column j and
- *  j + 1… of column j + 1, each new entry also stored at its mirror. Both
- *  columns share the loads of W's rows; every entry takes the products and
- *  order of subtractColumns. */
+ *  j + 1… of column j + 1, each new entry also stored at its mirror. Each
+ *  entry less x_c·a_c for c = 0, 1, … in turn, one fused multiply-subtract
+ *  each (std::fma: one rounding; the AVX path's FMA instructions give the
+ *  same numbers with a third fewer instructions than a product and a sum). */
 template <int C>
 void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
 						Eigen::Index x_stride, const double* a, const double* b)
 {
 	double* __restrict P0 = P + j * n;
 	double* __restrict P1 = P0 + n;
-	const double* X0 = X;
-	const double* X1 = C > 1 ? X + x_stride : X;
-	const double* X2 = C > 2 ? X + 2 * x_stride : X;
-	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	auto sum = [&](const double* c, Eigen::Index i) {
-		double s = X0[i] * c[0];
-		if constexpr (C > 1) s = s + X1[i] * c[1];
-		if constexpr (C > 2) s = s + X2[i] * c[2];
-		if constexpr (C > 3) s = s + X3[i] * c[3];
-		return s;
+	auto less = [&](double v, const double* c, Eigen::Index i) {
+		for (int k = 0; k < C; ++k) v = std::fma(-X[k * x_stride + i], c[k], v);
+		return v;
 	};
-	P0[j] = P0[j] - sum(a, j);	// the diagonal of column j (its own mirror)
-	Eigen::Index i = j + 1;
-#if defined(__SSE2__)
-	__m128d ca[4], cb[4];
-	for (int c = 0; c < C; ++c)
+	P0[j] = less(P0[j], a, j);	// the diagonal of column j (its own mirror)
+	for (Eigen::Index i = j + 1; i < n; ++i)
 	{
-		ca[c] = _mm_set1_pd(a[c]);
-		cb[c] = _mm_set1_pd(b[c]);
-	}
-	for (; i + 2 <= n; i += 2)
-	{
-		const __m128d x0 = _mm_loadu_pd(X0 + i);
-		__m128d s0 = _mm_mul_pd(x0, ca[0]), s1 = _mm_mul_pd(x0, cb[0]);
-		if constexpr (C > 1)
-		{
-			const __m128d x = _mm_loadu_pd(X1 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[1]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[1]));
-		}
-		if constexpr (C > 2)
-		{
-			const __m128d x = _mm_loadu_pd(X2 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[2]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[2]));
-		}
-		if constexpr (C > 3)
-		{
-			const __m128d x = _mm_loadu_pd(X3 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, ca[3]));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, cb[3]));
-		}
-		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
-		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
-		_mm_storeu_pd(P0 + i, v0);
-		_mm_storeu_pd(P1 + i, v1);
-		// Mirrors: (j, i), (j, i+1) and (j+1, i), (j+1, i+1) are adjacent
-		// pairs in columns i and i + 1.
-		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
-		_mm_storeu_pd(P + (i + 1) * n + j, _mm_unpackhi_pd(v0, v1));
-	}
-#endif
-	for (; i < n; ++i)
-	{
-		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		const double v0 = less(P0[i], a, i), v1 = less(P1[i], b, i);
 		P0[i] = v0;
 		P1[i] = v1;
 		P[i * n + j] = v0;
@@ -625,26 +545,19 @@ void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, co
 }
 
 #if AUVNAV_AVX_KERNELS
-/** downdateColumnPair with four rows per packet (AVX, no FMA). */
+/** downdateColumnPair with four rows per packet (AVX and FMA). */
 template <int C>
-__attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, Eigen::Index n, Eigen::Index j,
-														  const double* __restrict X, Eigen::Index x_stride,
-														  const double* a, const double* b)
+__attribute__((target("avx,fma"))) void downdateColumnPairAvx(double* __restrict P, Eigen::Index n, Eigen::Index j,
+															   const double* __restrict X, Eigen::Index x_stride,
+															   const double* a, const double* b)
 {
 	double* __restrict P0 = P + j * n;
 	double* __restrict P1 = P0 + n;
-	const double* X0 = X;
-	const double* X1 = C > 1 ? X + x_stride : X;
-	const double* X2 = C > 2 ? X + 2 * x_stride : X;
-	const double* X3 = C > 3 ? X + 3 * x_stride : X;
-	auto sum = [&](const double* c, Eigen::Index i) {
-		double s = X0[i] * c[0];
-		if constexpr (C > 1) s = s + X1[i] * c[1];
-		if constexpr (C > 2) s = s + X2[i] * c[2];
-		if constexpr (C > 3) s = s + X3[i] * c[3];
-		return s;
+	auto less = [&](double v, const double* c, Eigen::Index i) __attribute__((target("avx,fma"))) {
+		for (int k = 0; k < C; ++k) v = std::fma(-X[k * x_stride + i], c[k], v);
+		return v;
 	};
-	P0[j] = P0[j] - sum(a, j);
+	P0[j] = less(P0[j], a, j);
 	Eigen::Index i = j + 1;
 	__m256d ca[4], cb[4];
 	for (int c = 0; c < C; ++c)
@@ -654,28 +567,13 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 	}
 	for (; i + 4 <= n; i += 4)
 	{
-		const __m256d x0 = _mm256_loadu_pd(X0 + i);
-		__m256d s0 = _mm256_mul_pd(x0, ca[0]), s1 = _mm256_mul_pd(x0, cb[0]);
-		if constexpr (C > 1)
+		__m256d v0 = _mm256_loadu_pd(P0 + i), v1 = _mm256_loadu_pd(P1 + i);
+		for (int c = 0; c < C; ++c)
 		{
-			const __m256d x = _mm256_loadu_pd(X1 + i);
-			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[1]));
-			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[1]));
+			const __m256d x = _mm256_loadu_pd(X + c * x_stride + i);
+			v0 = _mm256_fnmadd_pd(x, ca[c], v0);
+			v1 = _mm256_fnmadd_pd(x, cb[c], v1);
 		}
-		if constexpr (C > 2)
-		{
-			const __m256d x = _mm256_loadu_pd(X2 + i);
-			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[2]));
-			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[2]));
-		}
-		if constexpr (C > 3)
-		{
-			const __m256d x = _mm256_loadu_pd(X3 + i);
-			s0 = _mm256_add_pd(s0, _mm256_mul_pd(x, ca[3]));
-			s1 = _mm256_add_pd(s1, _mm256_mul_pd(x, cb[3]));
-		}
-		const __m256d v0 = _mm256_sub_pd(_mm256_loadu_pd(P0 + i), s0);
-		const __m256d v1 = _mm256_sub_pd(_mm256_loadu_pd(P1 + i), s1);
 		_mm256_storeu_pd(P0 + i, v0);
 		_mm256_storeu_pd(P1 + i, v1);
 		// Mirrors: rows i…i+3 of columns j, j+1 are the adjacent pairs
@@ -687,30 +585,15 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 		_mm_storeu_pd(P + (i + 2) * n + j, _mm256_extractf128_pd(lo, 1));
 		_mm_storeu_pd(P + (i + 3) * n + j, _mm256_extractf128_pd(hi, 1));
 	}
-	if (i + 2 <= n)	 // two rows left: a 128-bit step, as the SSE2 path's
+	if (i + 2 <= n)	 // two rows left: a 128-bit step
 	{
-		const __m128d x0 = _mm_loadu_pd(X0 + i);
-		__m128d s0 = _mm_mul_pd(x0, _mm256_castpd256_pd128(ca[0])), s1 = _mm_mul_pd(x0, _mm256_castpd256_pd128(cb[0]));
-		if constexpr (C > 1)
+		__m128d v0 = _mm_loadu_pd(P0 + i), v1 = _mm_loadu_pd(P1 + i);
+		for (int c = 0; c < C; ++c)
 		{
-			const __m128d x = _mm_loadu_pd(X1 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[1])));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[1])));
+			const __m128d x = _mm_loadu_pd(X + c * x_stride + i);
+			v0 = _mm_fnmadd_pd(x, _mm256_castpd256_pd128(ca[c]), v0);
+			v1 = _mm_fnmadd_pd(x, _mm256_castpd256_pd128(cb[c]), v1);
 		}
-		if constexpr (C > 2)
-		{
-			const __m128d x = _mm_loadu_pd(X2 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[2])));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[2])));
-		}
-		if constexpr (C > 3)
-		{
-			const __m128d x = _mm_loadu_pd(X3 + i);
-			s0 = _mm_add_pd(s0, _mm_mul_pd(x, _mm256_castpd256_pd128(ca[3])));
-			s1 = _mm_add_pd(s1, _mm_mul_pd(x, _mm256_castpd256_pd128(cb[3])));
-		}
-		const __m128d v0 = _mm_sub_pd(_mm_loadu_pd(P0 + i), s0);
-		const __m128d v1 = _mm_sub_pd(_mm_loadu_pd(P1 + i), s1);
 		_mm_storeu_pd(P0 + i, v0);
 		_mm_storeu_pd(P1 + i, v1);
 		_mm_storeu_pd(P + i * n + j, _mm_unpacklo_pd(v0, v1));
@@ -719,7 +602,7 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
 	}
 	for (; i < n; ++i)
 	{
-		const double v0 = P0[i] - sum(a, i), v1 = P1[i] - sum(b, i);
+		const double v0 = less(P0[i], a, i), v1 = less(P1[i], b, i);
 		P0[i] = v0;
 		P1[i] = v1;
 		P[i * n + j] = v0;
@@ -731,7 +614,7 @@ __attribute__((target("avx"))) void downdateColumnPairAvx(double* __restrict P, 
  *  C columns of W (X, stride x_stride): one call per group of columns, not
  *  per pair, with the pairs' coefficients read here. */
 template <int C>
-__attribute__((target("avx"))) void downdateAllPairsAvx(double* __restrict P, Eigen::Index n,
+__attribute__((target("avx,fma"))) void downdateAllPairsAvx(double* __restrict P, Eigen::Index n,
 														const double* __restrict X, Eigen::Index x_stride)
 {
 	for (Eigen::Index j = 0; j + 2 <= n; j += 2)
@@ -750,50 +633,26 @@ __attribute__((target("avx"))) void downdateAllPairsAvx(double* __restrict P, Ei
 /** G(i, j) = Σ_r X(i, r) Y(j, r) on the 4 × 4 blocks of G on and below its
  *  diagonal (blocks above it are not written). G, X and Y are column-major
  *  with leading dimension kp, a multiple of 4; X and Y have R columns. Each
- *  entry is summed in the order r = 0, 1, … from zero, one multiply and one
- *  add a term, on every path; the AVX path keeps a 4 × 4 block in registers
- *  (a load of X and four broadcasts of Y per r: the Gram matrix of the
- *  prediction's sigma-point deviations, which dot products took 2.5 times
- *  the instructions for). */
+ *  entry is summed in the order r = 0, 1, … from zero, one fused
+ *  multiply-add a term (one rounding: std::fma here, the FMA instruction
+ *  on the AVX path, the same numbers), on every path; the AVX path keeps a
+ *  4 × 4 block in registers (a load of X and four broadcasts of Y per r:
+ *  the Gram matrix of the prediction's sigma-point deviations, which dot
+ *  products took 2.5 times the instructions for; a multiply and an add a
+ *  term took a third more than the fused form). */
 template <int kp, int R>
 void lowerBlockGram(const double* __restrict X, const double* __restrict Y, double* __restrict G)
 {
 	static_assert(kp % 4 == 0, "lowerBlockGram: kp must be a multiple of 4");
-#if defined(__SSE2__)
-	for (int jb = 0; jb < kp; jb += 4)
-		for (int ib = jb; ib < kp; ib += 4)
-		{
-			// The block as two 2 × 4 halves (rows ib, ib + 1 and ib + 2, ib + 3).
-			__m128d lo[4], hi[4];
-			for (int c = 0; c < 4; ++c) lo[c] = hi[c] = _mm_setzero_pd();
-			for (int r = 0; r < R; ++r)
-			{
-				const __m128d xl = _mm_loadu_pd(X + r * kp + ib), xh = _mm_loadu_pd(X + r * kp + ib + 2);
-				const double* y = Y + r * kp + jb;
-				for (int c = 0; c < 4; ++c)
-				{
-					const __m128d yc = _mm_set1_pd(y[c]);
-					lo[c] = _mm_add_pd(lo[c], _mm_mul_pd(xl, yc));
-					hi[c] = _mm_add_pd(hi[c], _mm_mul_pd(xh, yc));
-				}
-			}
-			for (int c = 0; c < 4; ++c)
-			{
-				_mm_storeu_pd(G + (jb + c) * kp + ib, lo[c]);
-				_mm_storeu_pd(G + (jb + c) * kp + ib + 2, hi[c]);
-			}
-		}
-#else
 	for (int jb = 0; jb < kp; jb += 4)
 		for (int ib = jb; ib < kp; ib += 4)
 			for (int c = 0; c < 4; ++c)
 				for (int i = ib; i < ib + 4; ++i)
 				{
 					double acc = 0;
-					for (int r = 0; r < R; ++r) acc = acc + X[r * kp + i] * Y[r * kp + jb + c];
+					for (int r = 0; r < R; ++r) acc = std::fma(X[r * kp + i], Y[r * kp + jb + c], acc);
 					G[(jb + c) * kp + i] = acc;
 				}
-#endif
 }
 
 #if AUVNAV_AVX_KERNELS
@@ -802,27 +661,27 @@ void lowerBlockGram(const double* __restrict X, const double* __restrict Y, doub
  *  skip_to) are skipped: the caller's zeros in these rows of Y (a term
  *  x · 0 added to a sum leaves it as it is). */
 template <int kp, int R, bool kTwo>
-__attribute__((target("avx"))) inline void gramBlocksAvx(const double* __restrict X, const double* __restrict Y,
+__attribute__((target("avx,fma"))) inline void gramBlocksAvx(const double* __restrict X, const double* __restrict Y,
 														  double* __restrict G, int ib, int jb, int skip_from,
 														  int skip_to)
 {
 	__m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
-	auto step = [&](int r) __attribute__((target("avx"))) {
+	auto step = [&](int r) __attribute__((target("avx,fma"))) {
 		const double* y = Y + r * kp + jb;
 		const __m256d y0 = _mm256_broadcast_sd(y), y1 = _mm256_broadcast_sd(y + 1), y2 = _mm256_broadcast_sd(y + 2),
 					  y3 = _mm256_broadcast_sd(y + 3);
 		const __m256d x = _mm256_loadu_pd(X + r * kp + ib);
-		a0 = _mm256_add_pd(a0, _mm256_mul_pd(x, y0));
-		a1 = _mm256_add_pd(a1, _mm256_mul_pd(x, y1));
-		a2 = _mm256_add_pd(a2, _mm256_mul_pd(x, y2));
-		a3 = _mm256_add_pd(a3, _mm256_mul_pd(x, y3));
+		a0 = _mm256_fmadd_pd(x, y0, a0);
+		a1 = _mm256_fmadd_pd(x, y1, a1);
+		a2 = _mm256_fmadd_pd(x, y2, a2);
+		a3 = _mm256_fmadd_pd(x, y3, a3);
 		if constexpr (kTwo)
 		{
 			const __m256d x2 = _mm256_loadu_pd(X + r * kp + ib + 4);
-			b0 = _mm256_add_pd(b0, _mm256_mul_pd(x2, y0));
-			b1 = _mm256_add_pd(b1, _mm256_mul_pd(x2, y1));
-			b2 = _mm256_add_pd(b2, _mm256_mul_pd(x2, y2));
-			b3 = _mm256_add_pd(b3, _mm256_mul_pd(x2, y3));
+			b0 = _mm256_fmadd_pd(x2, y0, b0);
+			b1 = _mm256_fmadd_pd(x2, y1, b1);
+			b2 = _mm256_fmadd_pd(x2, y2, b2);
+			b3 = _mm256_fmadd_pd(x2, y3, b3);
 		}
 	};
 	for (int r = 0; r < skip_from; ++r) step(r);
@@ -848,7 +707,7 @@ __attribute__((target("avx"))) inline void gramBlocksAvx(const double* __restric
  *  prediction those are the lumped pairs' J L_j, zero above the rows J
  *  reaches from L_j's diagonal on: the skips save a quarter of the terms. */
 template <int kp, int R>
-__attribute__((target("avx"))) void lowerBlockGramAvx(const double* __restrict X, const double* __restrict Y,
+__attribute__((target("avx,fma"))) void lowerBlockGramAvx(const double* __restrict X, const double* __restrict Y,
 													   double* __restrict G, int zero_from = 0, int zero_to = 0)
 {
 	static_assert(kp % 4 == 0, "lowerBlockGram: kp must be a multiple of 4");
@@ -1010,8 +869,8 @@ inline void mirrorLowerToUpper(double* A, Eigen::Index as, Eigen::Index n)
  *  j… are computed and each entry stored at its mirror too (one triangle's
  *  arithmetic with no separate mirroring pass, whose strided loads cost
  *  what the triangle saved), two columns of P at a time sharing the loads
- *  of W. Entry (i, j) takes the products and order of the whole-matrix
- *  passes of earlier versions, so results are unchanged bit for bit. */
+ *  of W. Entry (i, j) is P(i, j) less W(i, l) W(j, l) for l = 0, 1, … in
+ *  turn, one fused multiply-subtract each, on either path (the same bits). */
 inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	const Eigen::Index n = P.rows(), m = W.cols(), ws = W.outerStride();
@@ -1055,8 +914,12 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 				default: downdateColumnPair<1>(p, n, j, Wl, ws, a, b); break;
 			}
 		}
-	for (; j < n; ++j)
-		subtractAllColumns<true>(p + j * n, j, n, W.data(), ws, m, [&](Eigen::Index l) { return W(j, l); }, p + j, n);
+	if (j < n)	// an odd n's last column: its diagonal alone, the same fused steps
+	{
+		double v = p[j * n + j];
+		for (Eigen::Index l = 0; l < m; ++l) v = std::fma(-W(j, l), W(j, l), v);
+		p[j * n + j] = v;
+	}
 }
 
 

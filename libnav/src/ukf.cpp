@@ -60,7 +60,7 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int r
 	if (g_wide_kernels.load(std::memory_order_relaxed))
 		return choleskyColumnsAvx(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
 #endif
-	return choleskyColumnsByPasses(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
+	return choleskyColumnsFused(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
 }
 
 /** One prediction step of the first kNonlinear coordinates along departures

@@ -192,18 +192,18 @@ namespace auvnav
 namespace
 {
 /** Cholesky columns [from, to) over `rows` rows as ukf.cpp's baseline path
- *  forms them (column passes). */
+ *  forms them (a fused multiply-subtract per earlier column). */
 bool columnPassCholesky(const Eigen::MatrixXd& P, int from, int to, Eigen::MatrixXd& L, int rows)
 {
-	return choleskyColumnsByPasses(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), rows);
+	return choleskyColumnsFused(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), rows);
 }
 }  // namespace
 
 #if AUVNAV_AVX_KERNELS
-// The register-held packets (choleskyColumnsAvx) take the column passes'
+// The register-held packets (choleskyColumnsAvx) take the baseline's fused
 // operations entry by entry: equal bit for bit, for every remainder of the
-// rows below the diagonal (masked last packets) and of the groups of four
-// earlier columns, for the filter's split (leading columns over all rows,
+// rows below the diagonal (masked last packets) and any number of earlier
+// columns, for the filter's split (leading columns over all rows,
 // the next over the first k only) and a start past column 0.
 TEST(FilterKernels, PacketCholeskyEqualsTheColumnPassesBitForBit)
 {
