@@ -271,9 +271,10 @@ __attribute__((target("avx,fma"))) inline __m256d choleskyBlockAvx(const double*
  *  c < cols of Y (rows × cols, stride ys; X rows × J, stride xs): the
  *  prediction's cross block, a J-column axpy per column then its decay.
  *  Each four-row packet of Y_c is held in a register over the J terms,
- *  added in j order, then scaled: the operations of the column axpys, bit
- *  for bit. The last rows by masked loads and stores. */
-__attribute__((target("avx"))) inline void addColumnCombinationsAvx(double* Y, Eigen::Index rows, Eigen::Index ys,
+ *  each a fused multiply-add in j order, then scaled: the operations of
+ *  the column axpys (std::fma), bit for bit. The last rows by masked loads
+ *  and stores. */
+__attribute__((target("avx,fma"))) inline void addColumnCombinationsAvx(double* Y, Eigen::Index rows, Eigen::Index ys,
 																	 Eigen::Index cols, const double* X,
 																	 Eigen::Index xs, Eigen::Index J,
 																	 const double* coef, Eigen::Index cs,
@@ -290,15 +291,15 @@ __attribute__((target("avx"))) inline void addColumnCombinationsAvx(double* Y, E
 		{
 			__m256d acc = _mm256_loadu_pd(y + r);
 			for (Eigen::Index j = 0; j < J; ++j)
-				acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(cf + j * cs), _mm256_loadu_pd(X + j * xs + r)));
+				acc = _mm256_fmadd_pd(_mm256_broadcast_sd(cf + j * cs), _mm256_loadu_pd(X + j * xs + r), acc);
 			_mm256_storeu_pd(y + r, _mm256_mul_pd(acc, sc));
 		}
 		if (whole < rows)
 		{
 			__m256d acc = _mm256_maskload_pd(y + whole, mask);
 			for (Eigen::Index j = 0; j < J; ++j)
-				acc = _mm256_add_pd(acc, _mm256_mul_pd(_mm256_broadcast_sd(cf + j * cs),
-													   _mm256_maskload_pd(X + j * xs + whole, mask)));
+				acc = _mm256_fmadd_pd(_mm256_broadcast_sd(cf + j * cs), _mm256_maskload_pd(X + j * xs + whole, mask),
+									  acc);
 			_mm256_maskstore_pd(y + whole, mask, _mm256_mul_pd(acc, sc));
 		}
 	}
@@ -737,8 +738,8 @@ void lowerBlockGramDispatch(const double* X, const double* Y, double* G, int zer
 }
 
 /** addColumnCombinationsAvx's baseline, column by column: Y_c ← (Y_c +
- *  Σ_{j<J} coef[c + j·cs] X_j) · scale[c], an axpy per term in j order then
- *  the scaling (entry by entry the same operations as the packets). */
+ *  Σ_{j<J} coef[c + j·cs] X_j) · scale[c], a fused axpy per term in j order
+ *  then the scaling (entry by entry the same operations as the packets). */
 inline void addColumnCombinationsByColumns(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols,
 										   const double* X, Eigen::Index xs, Eigen::Index J, const double* coef,
 										   Eigen::Index cs, const double* scale)
@@ -750,7 +751,7 @@ inline void addColumnCombinationsByColumns(double* Y, Eigen::Index rows, Eigen::
 		{
 			const double w = coef[c + j * cs];
 			const double* x = X + j * xs;
-			for (Eigen::Index i = 0; i < rows; ++i) y[i] += w * x[i];
+			for (Eigen::Index i = 0; i < rows; ++i) y[i] = std::fma(w, x[i], y[i]);
 		}
 		for (Eigen::Index i = 0; i < rows; ++i) y[i] *= scale[c];
 	}
