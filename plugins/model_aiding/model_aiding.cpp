@@ -33,9 +33,10 @@ void place(Matrix6d& M, const Eigen::Matrix<double, 2, 3>& sub)
 	}
 }
 /** physicalSub of the three parameter sub-matrices, their six logarithms
- *  taken out as one Eigen exp (two or four lanes a step, against six calls
+ *  taken out as one Eigen exp (two lanes a step, against six calls
  *  of the C library's exp: this runs once per sigma point, 87 of them an
- *  update). The two differ by an ulp at most. */
+ *  update). The two differ by 2 ulps at most (12 M values over [−20, 20]
+ *  against std::exp). */
 struct PhysicalSubs
 {
 	Eigen::Matrix<double, 2, 3> M, D_l, D_q;
