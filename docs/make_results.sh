@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md and docs/figures/ from simulated missions:
-#   docs/make_results.sh [BUILD_DIR]        (default: build; about 30 minutes on 2 cores)
+#   docs/make_results.sh [BUILD_DIR]        (default: build; about 35 minutes on 2 cores)
 # Every table is the output of the command named above it; nothing is typed in.
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
@@ -68,6 +68,22 @@ done
 cp "$work/square_mc/position_error.png" "$fig/square_position_error.png"
 cp "$work/square_mc/nees_monte_carlo.png" "$fig/square_nees_monte_carlo.png"
 
+# 6. Instructions per IMU tick on the committed cut (issue 16), by callgrind,
+#    beside the figures measured before the issue (bench/instructions_afda2ec.txt).
+speed_rows="| (valgrind is not installed here: run bench/instructions.sh) | | |"
+speed_from="not measured"
+if command -v valgrind > /dev/null; then
+  log "instructions per IMU tick (callgrind, ~4 minutes)"
+  bash "$repo/bench/instructions.sh" --build "$(dirname "$bin")" > "$work/instructions.txt"
+  speed_from="$(sed -n 's/^auvnav-run on [^ ]* (\([^)]*\)).*/\1/p' "$work/instructions.txt")"
+  # Stage names and figures are separated by two spaces or more in its output.
+  speed_rows="$(awk 'NR == FNR { if ($0 !~ /^#/ && split($0, b, "\t") == 2) before[b[1]] = b[2]; next }
+    /^auvnav-run on/ || /^stage / { next }
+    { line = $0; sub(/^ +/, "", line); if (split(line, f, /   */) < 4) next
+      printf "| %s | %s | %s |\n", f[1], (f[1] in before) ? before[f[1]] : "", f[3] }' \
+    "$repo/bench/instructions_afda2ec.txt" "$work/instructions.txt")"
+fi
+
 {
 cat <<MD
 # Results
@@ -134,6 +150,14 @@ $(sed -n '/| sensor |/,/^$/p' "$work/sample/eval/eval.md")
 |---|---|---|---|---|---|---|---|---|---|---|
 ${sonar_rows}
 ![sonar fan](figures/sonar_fan.png)
+
+## Speed: instructions per IMU tick (issue 16)
+
+\`bash bench/instructions.sh\` (callgrind on \`bench/cut_120s.rawlog\`, 11 099 IMU ticks, every sensor on; thousands of instructions per tick; commit ${speed_from}), beside the figures measured before issue 16 (\`bench/instructions_afda2ec.txt\`). A sensor's row counts only inside its updates. Step by step: [results_notes.md](results_notes.md).
+
+| stage | before (afda2ec) | now |
+|---|---|---|
+${speed_rows}
 
 ## Tests behind further claims
 
