@@ -347,9 +347,8 @@ __attribute__((target("avx,fma"))) inline void choleskyBlockPairAvx(const double
 /** Left-looking Cholesky columns [from, to) of P (stride ps) into L (stride
  *  ls), rows j… up to `rows` (the columns before `from` already in L over
  *  those rows; rows above the diagonal zeroed), four rows per packet with
- *  each packet's sum kept in a register over all earlier columns (the
- *  column-pass form reloaded and stored it once per pass of four), the
- *  last rows by masked loads and stores. The same operations per entry as
+ *  each packet kept in a register over all earlier columns (one fused
+ *  multiply-subtract each), the last rows by masked loads and stores. The same operations per entry as
  *  choleskyColumnsFused (ukf.cpp's baseline), so the same bits; false
  *  where P is not positive definite (columns partly written). */
 __attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* P, Eigen::Index ps,
