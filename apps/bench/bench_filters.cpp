@@ -55,7 +55,7 @@ struct FilterTrace
 {
 	PluginHost host;  // declared first: outlives the models
 	std::map<std::string, ModelPtr> models;
-	std::unique_ptr<Navigator> nav;	 // holds the start state, the process model and the frame
+	std::unique_ptr<Navigator> nav;  // holds the start state, the process model and the frame
 	NavState x0;
 	Covariance P0;
 	std::vector<Step> steps;
@@ -67,11 +67,13 @@ struct FilterTrace
 		nav = std::make_unique<Navigator>(cfg, host);
 		for (const auto& s : cfg.sequence("sensors"))
 			if (s.string("label") != "GPS")
-				models.emplace(s.string("label"), host.create(s.string("plugin"), pluginConfigText(s), s.string("label")));
+				models.emplace(s.string("label"),
+				               host.create(s.string("plugin"), pluginConfigText(s), s.string("label")));
 		io::RawlogReader reader(sourceDir() + "/bench/cut_120s.rawlog");
 		mrpt::obs::CObservation::Ptr o;
 		while (!nav->initialized() && (o = reader.next())) nav->process(*o);
-		if (!nav->initialized()) throw std::runtime_error("bench/cut_120s.rawlog: the navigator never initialised");
+		if (!nav->initialized())
+			throw std::runtime_error("bench/cut_120s.rawlog: the navigator never initialised");
 		x0 = nav->filter().state();
 		P0 = nav->filter().covariance();
 		const char* sec = std::getenv("AUVNAV_BENCH_FILTER_SECONDS");
@@ -94,7 +96,8 @@ struct FilterTrace
 				const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get());
 				Step p;
 				p.is_prediction = true;
-				p.omega_ib_b = {imu->get(mrpt::obs::IMU_WX), imu->get(mrpt::obs::IMU_WY), imu->get(mrpt::obs::IMU_WZ)};
+				p.omega_ib_b = {imu->get(mrpt::obs::IMU_WX), imu->get(mrpt::obs::IMU_WY),
+				                imu->get(mrpt::obs::IMU_WZ)};
 				p.dt_s = t_obs - t;
 				if (p.dt_s <= 0) continue;
 				fast.predict(p.omega_ib_b, ctx.omega_ie_n, p.dt_s);
@@ -177,7 +180,8 @@ void BM_FastVsDenseFilter(benchmark::State& state)
 		}
 		dense_s += std::chrono::duration<double>(Clock::now() - t0).count();
 		const TangentVector sd = dense.covariance().diagonal().cwiseSqrt();
-		worst_sd = std::max(worst_sd, (fast.state().boxminus(dense.state()).array().abs() / sd.array()).maxCoeff());
+		worst_sd =
+		    std::max(worst_sd, (fast.state().boxminus(dense.state()).array().abs() / sd.array()).maxCoeff());
 	}
 	const double ticks = double(tr.ticks) * double(state.iterations());
 	state.counters["imu_ticks"] = tr.ticks;

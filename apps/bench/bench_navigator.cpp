@@ -44,7 +44,7 @@ struct Dataset
 	Dataset()
 	{
 		const auto spec = auvnav::sim::MissionSpec::load(
-			envOr("AUVNAV_BENCH_MISSION", sourceDir() + "/config/missions/square_5x50m.yaml"));
+		    envOr("AUVNAV_BENCH_MISSION", sourceDir() + "/config/missions/square_5x50m.yaml"));
 		dir = fs::temp_directory_path() / ("auvnav_bench_" + std::to_string(::getpid()));
 		const auto summary = auvnav::sim::runMission(spec, 1, dir.string());
 		rawlog = summary.rawlog_path;

@@ -102,7 +102,8 @@ std::string pluginYaml(const FitResult& r, const std::string& source_comment);
 /** Centroid c and RMS distance s of `pts` from it: the algebraic fits work
  *  on (p − c)/s, since raw µT squared swamp the constant term. */
 template <int N>
-void centreAndScale(const std::vector<Eigen::Matrix<double, N, 1>>& pts, Eigen::Matrix<double, N, 1>& c, double& s)
+void centreAndScale(const std::vector<Eigen::Matrix<double, N, 1>>& pts, Eigen::Matrix<double, N, 1>& c,
+                    double& s)
 {
 	c.setZero();
 	for (const auto& p : pts) c += p;

@@ -9,8 +9,8 @@
 // under the label or unwritable output, 3 calibration refused (too few
 // readings, not enough rotation or heading coverage, no ellipsoid/ellipse,
 // implausible result).
-#include <auvnav/io/rawlog.h>
 #include <auvnav/cli.h>
+#include <auvnav/io/rawlog.h>
 
 #include <cmath>
 #include <fstream>

@@ -106,7 +106,7 @@ void writeRawlog(const std::string& path, const std::vector<Eigen::Vector3d>& ra
 
 class TempDir : public auvnav::testing::ScratchDir
 {
-   public:
+ public:
 	TempDir() : ScratchDir("calmag") {}
 	std::string file(const std::string& name) const { return (*this / name).string(); }
 };

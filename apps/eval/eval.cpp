@@ -45,20 +45,36 @@ namespace
 /** The columns of states.csv a Sample needs. */
 struct StateColumns
 {
-	std::size_t t, qw, qx, qy, qz, bn, be, bd, spn, spe, spd, san, sae, sad, cpne, cpnd, cped, cane, cand, caed, curn,
-		cure, scn, sce, dmp[4], sdmp[4];
+	std::size_t t, qw, qx, qy, qz, bn, be, bd, spn, spe, spd, san, sae, sad, cpne, cpnd, cped, cane, cand,
+	    caed, curn, cure, scn, sce, dmp[4], sdmp[4];
 	explicit StateColumns(const io::CsvTable& c)
-		: t(c.column("time_s")), qw(c.column("qw")), qx(c.column("qx")), qy(c.column("qy")), qz(c.column("qz")),
-		  bn(c.column("body_n_m")), be(c.column("body_e_m")), bd(c.column("body_d_m")),
-		  spn(c.column("sigma_pos_n")), spe(c.column("sigma_pos_e")), spd(c.column("sigma_pos_d")),
-		  san(c.column("sigma_att_n")), sae(c.column("sigma_att_e")), sad(c.column("sigma_att_d")),
-		  cpne(c.column("cov_pos_ne")), cpnd(c.column("cov_pos_nd")), cped(c.column("cov_pos_ed")),
-		  cane(c.column("cov_att_ne")), cand(c.column("cov_att_nd")), caed(c.column("cov_att_ed")),
-		  curn(c.column("current_n")), cure(c.column("current_e")), scn(c.column("sigma_current_n")),
-		  sce(c.column("sigma_current_e")),
-		  dmp{c.column("Dl_ln_xx"), c.column("Dl_ln_yy"), c.column("Dq_ln_xx"), c.column("Dq_ln_yy")},
-		  sdmp{c.column("sigma_Dl_ln_xx"), c.column("sigma_Dl_ln_yy"), c.column("sigma_Dq_ln_xx"),
-			   c.column("sigma_Dq_ln_yy")}
+	    : t(c.column("time_s")),
+	      qw(c.column("qw")),
+	      qx(c.column("qx")),
+	      qy(c.column("qy")),
+	      qz(c.column("qz")),
+	      bn(c.column("body_n_m")),
+	      be(c.column("body_e_m")),
+	      bd(c.column("body_d_m")),
+	      spn(c.column("sigma_pos_n")),
+	      spe(c.column("sigma_pos_e")),
+	      spd(c.column("sigma_pos_d")),
+	      san(c.column("sigma_att_n")),
+	      sae(c.column("sigma_att_e")),
+	      sad(c.column("sigma_att_d")),
+	      cpne(c.column("cov_pos_ne")),
+	      cpnd(c.column("cov_pos_nd")),
+	      cped(c.column("cov_pos_ed")),
+	      cane(c.column("cov_att_ne")),
+	      cand(c.column("cov_att_nd")),
+	      caed(c.column("cov_att_ed")),
+	      curn(c.column("current_n")),
+	      cure(c.column("current_e")),
+	      scn(c.column("sigma_current_n")),
+	      sce(c.column("sigma_current_e")),
+	      dmp{c.column("Dl_ln_xx"), c.column("Dl_ln_yy"), c.column("Dq_ln_xx"), c.column("Dq_ln_yy")},
+	      sdmp{c.column("sigma_Dl_ln_xx"), c.column("sigma_Dl_ln_yy"), c.column("sigma_Dq_ln_xx"),
+	           c.column("sigma_Dq_ln_yy")}
 	{
 	}
 };
@@ -69,17 +85,19 @@ Sample sampleOf(const io::CsvTable& c, const StateColumns& k, const io::Trajecto
 	Sample s;
 	s.t = c.number(k.t);
 	const Eigen::Matrix3d R =
-		Eigen::Quaterniond(c.number(k.qw), c.number(k.qx), c.number(k.qy), c.number(k.qz)).normalized().toRotationMatrix();
+	    Eigen::Quaterniond(c.number(k.qw), c.number(k.qx), c.number(k.qy), c.number(k.qz))
+	        .normalized()
+	        .toRotationMatrix();
 	const Eigen::Matrix3d R_true = tr.q_nb.toRotationMatrix();
 	s.pos_err_ned = Eigen::Vector3d(c.number(k.bn), c.number(k.be), c.number(k.bd)) - tr.p_n;
 	auto sq = [](double v) { return v * v; };
 	s.P_pos = symmetric(sq(c.number(k.spn)), sq(c.number(k.spe)), sq(c.number(k.spd)), c.number(k.cpne),
-						c.number(k.cpnd), c.number(k.cped));
+	                    c.number(k.cpnd), c.number(k.cped));
 	s.P_att = symmetric(sq(c.number(k.san)), sq(c.number(k.sae)), sq(c.number(k.sad)), c.number(k.cane),
-						c.number(k.cand), c.number(k.caed));
+	                    c.number(k.cand), c.number(k.caed));
 	s.att_err = so3::Log(R * R_true.transpose());
 	s.heading_err_rad =
-		std::remainder(std::atan2(R(1, 0), R(0, 0)) - std::atan2(R_true(1, 0), R_true(0, 0)), 2 * M_PI);
+	    std::remainder(std::atan2(R(1, 0), R(0, 0)) - std::atan2(R_true(1, 0), R_true(0, 0)), 2 * M_PI);
 	s.heading_sigma_rad = c.number(k.sad);
 	s.current_est = {c.number(k.curn), c.number(k.cure)};
 	s.current_sigma = {c.number(k.scn), c.number(k.sce)};
@@ -103,7 +121,7 @@ Sample sampleOf(const io::CsvTable& c, const StateColumns& k, const io::Trajecto
 }  // namespace
 
 Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, double every_s,
-					const std::string& states_file)
+                    const std::string& states_file)
 {
 	// The states are stamped at IMU times, between the truth's (10 Hz) rows:
 	// at a 19 deg/s turn the nearest row alone is up to 1 deg off in heading,
@@ -118,28 +136,29 @@ Evaluation evaluate(const std::string& run_dir, const std::string& truth_csv, do
 		const double time = c.number(k.t);
 		if (time < next_t) continue;
 		const auto tr = io::interpolate(truth, time, kMaxTruthGap_s);
-		if (!tr) continue;	// no truth here
+		if (!tr) continue;  // no truth here
 		next_t = time + every_s;
 		ev.samples.push_back(sampleOf(c, k, *tr));
 	}
-	if (ev.samples.empty()) throw std::runtime_error(run_dir + "/" + states_file + ": no state within the truth's time span");
+	if (ev.samples.empty())
+		throw std::runtime_error(run_dir + "/" + states_file + ": no state within the truth's time span");
 	std::ifstream probe(run_dir + "/nis.csv");
 	if (probe)
 	{
 		io::CsvTable n(run_dir + "/nis.csv");
-		const auto nt = n.column("time_s"), nl = n.column("label"), nu = n.column("updates"), ns = n.column("nis_sum"),
-				   nd = n.column("dim_sum");
+		const auto nt = n.column("time_s"), nl = n.column("label"), nu = n.column("updates"),
+		           ns = n.column("nis_sum"), nd = n.column("dim_sum");
 		while (n.next())
 		{
-			ev.nis[n.text(nl)].push_back({n.number(nt), static_cast<std::size_t>(n.number(nu)), static_cast<std::size_t>(n.number(nd)),
-									   n.number(ns)});
+			ev.nis[n.text(nl)].push_back({n.number(nt), static_cast<std::size_t>(n.number(nu)),
+			                              static_cast<std::size_t>(n.number(nd)), n.number(ns)});
 		}
 	}
 	return ev;
 }
 
-std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv, double after_truth_start_s,
-							   const std::string& states_file)
+std::optional<Sample> sampleAt(const std::string& run_dir, const std::string& truth_csv,
+                               double after_truth_start_s, const std::string& states_file)
 {
 	const io::Trajectory truth = io::readGroundTruth(truth_csv);
 	const double t_unix = truth.front().t_unix + after_truth_start_s;

@@ -11,10 +11,10 @@
 // with the filter's attitude at that time, plus declination_deg. Its error
 // therefore includes the filter's roll/pitch error (small here) but not its
 // heading.
+#include <auvnav/cli.h>
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/register.h>
-#include <auvnav/cli.h>
 #include <mrpt/obs/CObservationIMU.h>
 
 #include <Eigen/Geometry>
@@ -35,7 +35,10 @@ namespace
 constexpr double kDeg = M_PI / 180;
 const cv::Scalar kBlue(200, 90, 30), kRed(40, 40, 220), kGrey(150, 150, 150), kGreen(60, 160, 40);
 
-double wrap180(double d) { return std::remainder(d, 360.0); }
+double wrap180(double d)
+{
+	return std::remainder(d, 360.0);
+}
 
 /** A CSV with a header row, as columns by name. */
 std::map<std::string, std::vector<std::string>> readCsv(const std::string& path)
@@ -59,7 +62,8 @@ std::map<std::string, std::vector<std::string>> readCsv(const std::string& path)
 	}
 	return cols;
 }
-std::vector<double> numbers(const std::map<std::string, std::vector<std::string>>& cols, const std::string& name)
+std::vector<double> numbers(const std::map<std::string, std::vector<std::string>>& cols,
+                            const std::string& name)
 {
 	const auto it = cols.find(name);
 	if (it == cols.end()) throw std::runtime_error("no column " + name);
@@ -71,12 +75,16 @@ std::vector<double> numbers(const std::map<std::string, std::vector<std::string>
 
 int main(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd("Plots a run's heading against its magnetometer's and its horizontal track (no ground truth).", ' ',
-					   "1");
-	TCLAP::ValueArg<std::string> run("", "run", "auvnav-run output folder (states.csv, nis.csv).", true, "", "DIR", cmd);
+	TCLAP::CmdLine cmd(
+	    "Plots a run's heading against its magnetometer's and its horizontal track (no ground truth).", ' ',
+	    "1");
+	TCLAP::ValueArg<std::string> run("", "run", "auvnav-run output folder (states.csv, nis.csv).", true, "",
+	                                 "DIR", cmd);
 	TCLAP::ValueArg<std::string> rawlog("", "rawlog", "The rawlog the run read.", true, "", "RAWLOG", cmd);
-	TCLAP::ValueArg<std::string> config("", "config", "The navigator config the run used.", true, "", "NAV.yaml", cmd);
-	TCLAP::ValueArg<std::string> label("", "label", "Magnetometer sensor label. Default: MAG.", false, "MAG", "LABEL", cmd);
+	TCLAP::ValueArg<std::string> config("", "config", "The navigator config the run used.", true, "",
+	                                    "NAV.yaml", cmd);
+	TCLAP::ValueArg<std::string> label("", "label", "Magnetometer sensor label. Default: MAG.", false, "MAG",
+	                                   "LABEL", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "Title prefix of the figures.", false, "", "TEXT", cmd);
 	TCLAP::ValueArg<std::string> out("", "out", "Prefix of the PNG files.", true, "", "PREFIX", cmd);
 	const auvnav::cli::ObsLibOption obs_libs(cmd);
@@ -107,13 +115,15 @@ int main(int argc, char** argv)
 			sigma_mag_deg = c.number("heading_sigma_deg", 3.0);
 			found = true;
 		}
-		if (!found) throw std::runtime_error("no sensor labelled " + label.getValue() + " in " + config.getValue());
+		if (!found)
+			throw std::runtime_error("no sensor labelled " + label.getValue() + " in " + config.getValue());
 		const Eigen::Matrix3d S_inv = S.inverse();
 
 		const auto st = readCsv(run.getValue() + "/states.csv");
-		const auto t = numbers(st, "time_s"), qw = numbers(st, "qw"), qx = numbers(st, "qx"), qy = numbers(st, "qy"),
-				   qz = numbers(st, "qz"), yaw = numbers(st, "yaw_deg"), sig = numbers(st, "sigma_att_d"),
-				   pn = numbers(st, "body_n_m"), pe = numbers(st, "body_e_m");
+		const auto t = numbers(st, "time_s"), qw = numbers(st, "qw"), qx = numbers(st, "qx"),
+		           qy = numbers(st, "qy"), qz = numbers(st, "qz"), yaw = numbers(st, "yaw_deg"),
+		           sig = numbers(st, "sigma_att_d"), pn = numbers(st, "body_n_m"),
+		           pe = numbers(st, "body_e_m");
 		if (t.size() < 2) throw std::runtime_error("states.csv has fewer than 2 rows");
 		const double t0 = t.front();
 
@@ -146,11 +156,12 @@ int main(int argc, char** argv)
 			if (to < t.front() || to > t.back()) continue;
 			while (k + 1 < t.size() && t[k + 1] <= to) ++k;
 			const Eigen::Vector3d raw(imu->get(mrpt::obs::IMU_MAG_X), imu->get(mrpt::obs::IMU_MAG_Y),
-									  imu->get(mrpt::obs::IMU_MAG_Z));
+			                          imu->get(mrpt::obs::IMU_MAG_Z));
 			mrpt::poses::CPose3D pose;
 			o->getSensorPose(pose);
 			const Eigen::Matrix3d R_bs = pose.getRotationMatrix().asEigen();
-			const Eigen::Matrix3d R_nb = Eigen::Quaterniond(qw[k], qx[k], qy[k], qz[k]).normalized().toRotationMatrix();
+			const Eigen::Matrix3d R_nb =
+			    Eigen::Quaterniond(qw[k], qx[k], qy[k], qz[k]).normalized().toRotationMatrix();
 			const Eigen::Vector3d m_n = R_nb * (R_bs * (S_inv * (100.0 * raw - b)));
 			const double alpha = std::atan2(m_n.y(), m_n.x()) / kDeg;
 			const double d = wrap180(decl_deg - alpha);  // magnetometer − filter (the plugin's residual)
@@ -166,9 +177,11 @@ int main(int argc, char** argv)
 		}
 		if (tm.empty()) throw std::runtime_error("no magnetometer readings within the run");
 		const double n = static_cast<double>(tm.size());
-		std::printf("magnetometer - filter heading: %zu readings, mean %.2f deg, rms %.2f deg, within 1.96 sqrt(sigma_psi^2 + "
-					"heading_sigma^2): %.1f %%\n",
-					tm.size(), sum / n, std::sqrt(sum2 / n), 100.0 * n_in / n);
+		std::printf(
+		    "magnetometer - filter heading: %zu readings, mean %.2f deg, rms %.2f deg, within 1.96 "
+		    "sqrt(sigma_psi^2 + "
+		    "heading_sigma^2): %.1f %%\n",
+		    tm.size(), sum / n, std::sqrt(sum2 / n), 100.0 * n_in / n);
 		// 10 s means of the difference against the filter's σ: whether the heading
 		// σ is consistent with the slow part of the magnetometer's error.
 		{
@@ -185,11 +198,14 @@ int main(int argc, char** argv)
 				++windows;
 				in += std::abs(s / c) <= 3 * sg;
 				worst = std::max(worst, std::abs(s / c));
-				std::printf("  %4.0f-%4.0f s: mean difference %6.2f deg, filter heading sigma (max) %.2f deg\n", w0, w0 + 10,
-							s / c, sg);
+				std::printf(
+				    "  %4.0f-%4.0f s: mean difference %6.2f deg, filter heading sigma (max) %.2f deg\n", w0,
+				    w0 + 10, s / c, sg);
 			}
-			std::printf("10 s windows from 10 s: %zu of %zu with |mean difference| <= 3 sigma; largest |mean| %.2f deg\n", in,
-						windows, worst);
+			std::printf(
+			    "10 s windows from 10 s: %zu of %zu with |mean difference| <= 3 sigma; largest |mean| %.2f "
+			    "deg\n",
+			    in, windows, worst);
 		}
 		// Heading σ over time.
 		for (double at : {1.0, 2.0, 5.0, 10.0, 20.0, 40.0, 60.0, tt.back()})
@@ -199,7 +215,8 @@ int main(int argc, char** argv)
 			std::printf("  heading sigma at %5.1f s: %.3f deg\n", tt[i], sig[i] / kDeg);
 		}
 		double exc = 0;
-		for (std::size_t i = 0; i < pn.size(); ++i) exc = std::max(exc, std::hypot(pn[i] - pn[0], pe[i] - pe[0]));
+		for (std::size_t i = 0; i < pn.size(); ++i)
+			exc = std::max(exc, std::hypot(pn[i] - pn[0], pe[i] - pe[0]));
 		std::printf("max horizontal excursion from the start: %.2f m\n", exc);
 
 		// MAG NIS from nis.csv: per second, the summed NIS and dimension.
@@ -219,10 +236,12 @@ int main(int argc, char** argv)
 				in2 += ns[i] >= boost::math::quantile(c, 0.025) && ns[i] <= boost::math::quantile(c, 0.975);
 				in_up += ns[i] <= boost::math::quantile(c, 0.95);
 			}
-			std::printf("%s NIS: mean per dimension %.3f over %.0f updates; seconds with the summed NIS inside the two-sided "
-						"95 %% chi-square interval: %.1f %%, below the 95 %% quantile: %.1f %% (%zu s)\n",
-						label.getValue().c_str(), dsum > 0 ? a / dsum : NAN, dsum, secs ? 100.0 * in2 / secs : NAN,
-						secs ? 100.0 * in_up / secs : NAN, secs);
+			std::printf(
+			    "%s NIS: mean per dimension %.3f over %.0f updates; seconds with the summed NIS inside the "
+			    "two-sided "
+			    "95 %% chi-square interval: %.1f %%, below the 95 %% quantile: %.1f %% (%zu s)\n",
+			    label.getValue().c_str(), dsum > 0 ? a / dsum : NAN, dsum, secs ? 100.0 * in2 / secs : NAN,
+			    secs ? 100.0 * in_up / secs : NAN, secs);
 		}
 
 		const std::string pre = title.getValue().empty() ? "" : title.getValue() + ": ";

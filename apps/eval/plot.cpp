@@ -28,17 +28,21 @@ std::string fmt(double v)
 }  // namespace
 
 Plot::Plot(std::string title, std::string x_label, std::string y_label, int width, int height)
-	: title_(std::move(title)), x_label_(std::move(x_label)), y_label_(std::move(y_label)), w_(width), h_(height)
+    : title_(std::move(title)),
+      x_label_(std::move(x_label)),
+      y_label_(std::move(y_label)),
+      w_(width),
+      h_(height)
 {
 }
 
 void Plot::line(const std::vector<double>& x, const std::vector<double>& y, const cv::Scalar& bgr,
-				const std::string& label, int thickness)
+                const std::string& label, int thickness)
 {
 	series_.push_back({Series::Line, x, y, {}, bgr, label, thickness});
 }
 void Plot::band(const std::vector<double>& x, const std::vector<double>& lo, const std::vector<double>& hi,
-				const cv::Scalar& bgr, const std::string& label)
+                const cv::Scalar& bgr, const std::string& label)
 {
 	series_.push_back({Series::Band, x, lo, hi, bgr, label, 1});
 }
@@ -90,7 +94,8 @@ void Plot::save(const std::string& png) const
 	for (double v = std::ceil(x0 / xs) * xs; v <= x1 + 1e-9; v += xs)
 	{
 		cv::line(img, {X(v), T}, {X(v), T + ph}, grey, 1);
-		cv::putText(img, fmt(v), {X(v) - 12, T + ph + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+		cv::putText(img, fmt(v), {X(v) - 12, T + ph + 18}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1,
+		            cv::LINE_AA);
 	}
 	for (double v = std::ceil(y0 / ys) * ys; v <= y1 + 1e-9; v += ys)
 	{
@@ -104,12 +109,13 @@ void Plot::save(const std::string& png) const
 		cv::Mat overlay = img.clone();
 		for (std::size_t i = 1; i < s.x.size(); ++i)
 		{
-			if (!(std::isfinite(s.y[i - 1]) && std::isfinite(s.y2[i - 1]) && std::isfinite(s.y[i]) && std::isfinite(s.y2[i])))
+			if (!(std::isfinite(s.y[i - 1]) && std::isfinite(s.y2[i - 1]) && std::isfinite(s.y[i]) &&
+			      std::isfinite(s.y2[i])))
 				continue;
 			const std::vector<cv::Point> quad = {{X(s.x[i - 1]), Y(s.y[i - 1])},
-												 {X(s.x[i]), Y(s.y[i])},
-												 {X(s.x[i]), Y(s.y2[i])},
-												 {X(s.x[i - 1]), Y(s.y2[i - 1])}};
+			                                     {X(s.x[i]), Y(s.y[i])},
+			                                     {X(s.x[i]), Y(s.y2[i])},
+			                                     {X(s.x[i - 1]), Y(s.y2[i - 1])}};
 			cv::fillConvexPoly(overlay, quad, s.bgr, cv::LINE_AA);
 		}
 		// Blend inside the frame only: a band beyond a fixed y range (the
@@ -122,12 +128,14 @@ void Plot::save(const std::string& png) const
 	{
 		if (s.kind == Series::HLine)
 		{
-			for (int x = L; x < L + pw; x += 12) cv::line(img, {x, Y(s.y[0])}, {std::min(x + 6, L + pw), Y(s.y[0])}, s.bgr, 1);
+			for (int x = L; x < L + pw; x += 12)
+				cv::line(img, {x, Y(s.y[0])}, {std::min(x + 6, L + pw), Y(s.y[0])}, s.bgr, 1);
 			continue;
 		}
 		if (s.kind != Series::Line) continue;
 		std::vector<cv::Point> pts;
-		auto flush = [&] {
+		auto flush = [&]
+		{
 			if (pts.size() > 1) cv::polylines(img, pts, false, s.bgr, s.thickness, cv::LINE_AA);
 			pts.clear();
 		};
@@ -145,7 +153,8 @@ void Plot::save(const std::string& png) const
 	// Frame, labels, legend.
 	cv::rectangle(img, {L, T}, {L + pw, T + ph}, black, 1);
 	cv::putText(img, title_, {L, 26}, cv::FONT_HERSHEY_SIMPLEX, 0.6, black, 1, cv::LINE_AA);
-	cv::putText(img, x_label_, {L + pw / 2 - 40, h_ - 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
+	cv::putText(img, x_label_, {L + pw / 2 - 40, h_ - 18}, cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1,
+	            cv::LINE_AA);
 	cv::putText(img, y_label_, {8, T - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
 	int ly = T + 16;
 	for (const auto& s : series_)

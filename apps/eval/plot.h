@@ -12,12 +12,12 @@ namespace auvnav::eval
 {
 class Plot
 {
-   public:
+ public:
 	Plot(std::string title, std::string x_label, std::string y_label, int width = 960, int height = 480);
-	void line(const std::vector<double>& x, const std::vector<double>& y, const cv::Scalar& bgr, const std::string& label,
-			  int thickness = 2);
+	void line(const std::vector<double>& x, const std::vector<double>& y, const cv::Scalar& bgr,
+	          const std::string& label, int thickness = 2);
 	void band(const std::vector<double>& x, const std::vector<double>& lo, const std::vector<double>& hi,
-			  const cv::Scalar& bgr, const std::string& label);
+	          const cv::Scalar& bgr, const std::string& label);
 	void hline(double y, const cv::Scalar& bgr, const std::string& label);
 	/** Fixes the y range (otherwise from the data). */
 	void yRange(double lo, double hi);
@@ -26,10 +26,15 @@ class Plot
 	/** Renders and writes the PNG; throws std::runtime_error on failure. */
 	void save(const std::string& png) const;
 
-   private:
+ private:
 	struct Series
 	{
-		enum Kind { Line, Band, HLine } kind;
+		enum Kind
+		{
+			Line,
+			Band,
+			HLine
+		} kind;
 		std::vector<double> x, y, y2;
 		cv::Scalar bgr;
 		std::string label;

@@ -6,8 +6,8 @@
 // Exit codes: 0 success, 1 usage error, 2 bad spec or input (one line on
 // stderr naming file, line/message and field; the partial rawlog is removed,
 // the report still written).
-#include <auvnav/import/importer.h>
 #include <auvnav/cli.h>
+#include <auvnav/import/importer.h>
 
 #include <cstdio>
 #include <fstream>
@@ -39,22 +39,29 @@ bool writeText(const std::string& path, const std::string& text)
 int main(int argc, char** argv)
 {
 	TCLAP::CmdLine cmd(
-		"Converts vehicle logs (CSV files with a header row, ROS 1 bags, ROS 2 .db3 bags) into an MRPT rawlog "
-		"for auvnav-run, as the import spec says: per sensor its label, source, fields, units, axes, time column "
-		"and offset, mounting and observation class (docs/import.md; examples in config/import/). INPUT are the "
-		"files or folders the spec's sources are looked up in. Observations are written in time order. A report "
-		"OUT.import.json and OUT.import.md lists per sensor rows read, written, rejected (with reasons), time "
-		"span, rate, gaps and clock jumps. Exit code: 0 ok, 1 usage error, 2 bad spec or input.",
-		' ', AUVNAV_VERSION);
+	    "Converts vehicle logs (CSV files with a header row, ROS 1 bags, ROS 2 .db3 bags) into an MRPT "
+	    "rawlog "
+	    "for auvnav-run, as the import spec says: per sensor its label, source, fields, units, axes, time "
+	    "column "
+	    "and offset, mounting and observation class (docs/import.md; examples in config/import/). INPUT are "
+	    "the "
+	    "files or folders the spec's sources are looked up in. Observations are written in time order. A "
+	    "report "
+	    "OUT.import.json and OUT.import.md lists per sensor rows read, written, rejected (with reasons), "
+	    "time "
+	    "span, rate, gaps and clock jumps. Exit code: 0 ok, 1 usage error, 2 bad spec or input.",
+	    ' ', AUVNAV_VERSION);
 	TCLAP::ValueArg<std::string> spec("", "spec", "Import spec (YAML).", true, "", "SPEC.yaml", cmd);
 	TCLAP::ValueArg<std::string> out("", "out", "Rawlog to write.", true, "", "OUT.rawlog", cmd);
-	TCLAP::SwitchArg lenient("", "lenient",
-							 "Count unusable rows/messages (malformed, non-numeric, non-finite) by reason and go on, "
-							 "instead of stopping at the first with an error.",
-							 cmd);
-	TCLAP::SwitchArg check("", "check", "Only validate the spec (keys, classes, units, formats); read no input.", cmd);
-	TCLAP::UnlabeledMultiArg<std::string> inputs("INPUT", "Files or folders holding the spec's sources.", false,
-												 "INPUT", cmd);
+	TCLAP::SwitchArg lenient(
+	    "", "lenient",
+	    "Count unusable rows/messages (malformed, non-numeric, non-finite) by reason and go on, "
+	    "instead of stopping at the first with an error.",
+	    cmd);
+	TCLAP::SwitchArg check("", "check",
+	                       "Only validate the spec (keys, classes, units, formats); read no input.", cmd);
+	TCLAP::UnlabeledMultiArg<std::string> inputs("INPUT", "Files or folders holding the spec's sources.",
+	                                             false, "INPUT", cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-import")) return *code;
 
 	if (check.getValue())
@@ -101,18 +108,20 @@ int main(int argc, char** argv)
 	if (!report.sensors.empty())
 	{
 		const bool ok = writeText(report_base + ".import.json", report.toJson()) &&
-						writeText(report_base + ".import.md", report.toMarkdown());
+		                writeText(report_base + ".import.md", report.toMarkdown());
 		if (!ok)
 		{
-			std::cerr << "auvnav-import: error: cannot write the report " << report_base << ".import.{json,md}\n";
+			std::cerr << "auvnav-import: error: cannot write the report " << report_base
+			          << ".import.{json,md}\n";
 			if (rc == kExitOk) rc = kExitBadInput;
 		}
 	}
 	if (rc == kExitOk)
 	{
-		std::cout << "auvnav-import: " << report.written << " observations written to " << opt.out_rawlog << "\n"
-				  << report.toTable() << "  report: " << report_base << ".import.md, " << report_base
-				  << ".import.json\n";
+		std::cout << "auvnav-import: " << report.written << " observations written to " << opt.out_rawlog
+		          << "\n"
+		          << report.toTable() << "  report: " << report_base << ".import.md, " << report_base
+		          << ".import.json\n";
 		std::size_t rejected = 0;
 		for (const auto& s : report.sensors) rejected += s.rejected;
 		if (rejected > 0) std::cout << "  " << rejected << " records rejected: reasons in the report\n";

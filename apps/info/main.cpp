@@ -4,13 +4,13 @@
 //
 // Exit codes: 0 success, 1 usage or output error, 2 unreadable/corrupt rawlog
 // (the summary of what was read before the error is still printed).
+#include <auvnav/cli.h>
 #include <auvnav/io/json.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationADCP.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
-#include <auvnav/cli.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/system/datetime.h>
 
@@ -408,6 +408,7 @@ int main(int argc, char** argv)
 	if (!log.error.empty()) return auvnav::cli::fail("auvnav-info", log.error, kExitBadRawlog);
 	// An empty file reads as a clean empty log (rawlog.h), but it is no dataset.
 	if (log.observations == 0 && log.actions_skipped == 0)
-		return auvnav::cli::fail("auvnav-info", log.path + ": no observations (an empty rawlog)", kExitBadRawlog);
+		return auvnav::cli::fail("auvnav-info", log.path + ": no observations (an empty rawlog)",
+		                         kExitBadRawlog);
 	return json_ok ? kExitOk : kExitUsage;
 }

@@ -29,14 +29,14 @@ struct Impl
 
 class WindowLiveView final : public LiveView
 {
-   public:
+ public:
 	explicit WindowLiveView(const std::string& title) : impl_(std::make_unique<Impl>(title)) {}
 	void onState(const Navigator& nav) override;
 	void onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r) override;
 	void refresh(bool force = false) override;
 	void hold(double seconds) override;
 
-   private:
+ private:
 	std::unique_ptr<Impl> impl_;
 };
 
@@ -57,8 +57,10 @@ void WindowLiveView::onState(const Navigator& nav)
 void WindowLiveView::onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
 {
 	if (m.z.size() < 2) return;
-	impl_->data.fixes.push_back(
-		{t, label, {m.z[0], m.z[1]}, r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
+	impl_->data.fixes.push_back({t,
+	                             label,
+	                             {m.z[0], m.z[1]},
+	                             r.status == UpdateStatus::Accepted || r.status == UpdateStatus::Recovered});
 }
 
 void WindowLiveView::refresh(bool force)
@@ -93,8 +95,8 @@ void WindowLiveView::hold(double seconds)
 }  // namespace
 }  // namespace auvnav::run
 
-extern "C" __attribute__((visibility("default"))) auvnav::run::LiveView* auvnav_live_view_create_v1(const char* title,
-																									 std::string* error)
+extern "C" __attribute__((visibility("default"))) auvnav::run::LiveView* auvnav_live_view_create_v1(
+    const char* title, std::string* error)
 {
 	try
 	{

@@ -19,7 +19,7 @@ namespace auvnav::run
 {
 class LiveView
 {
-   public:
+ public:
 	virtual ~LiveView() = default;
 	virtual void onState(const Navigator& nav) = 0;
 	virtual void onFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r) = 0;

@@ -39,7 +39,8 @@ std::unique_ptr<LiveView> openLiveView(const std::string& title)
 {
 	// Checked here too, so that a headless machine gets this message rather
 	// than the module's loading error.
-	if (!std::getenv("DISPLAY")) throw std::runtime_error("--view needs a display (DISPLAY is not set; try xvfb-run)");
+	if (!std::getenv("DISPLAY"))
+		throw std::runtime_error("--view needs a display (DISPLAY is not set; try xvfb-run)");
 	const auto candidates = moduleCandidates();
 	const fs::path* module = nullptr;
 	for (const auto& c : candidates)
@@ -52,8 +53,8 @@ std::unique_ptr<LiveView> openLiveView(const std::string& title)
 	{
 		std::string looked;
 		for (const auto& c : candidates) looked += (looked.empty() ? "" : ", ") + c.string();
-		throw std::runtime_error(std::string("--view: the live view module ") + kModuleName + " is not installed (looked for " +
-								 looked + ")");
+		throw std::runtime_error(std::string("--view: the live view module ") + kModuleName +
+		                         " is not installed (looked for " + looked + ")");
 	}
 	// Never dlclose'd: see live_view.h.
 	void* handle = dlopen(module->c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -61,7 +62,8 @@ std::unique_ptr<LiveView> openLiveView(const std::string& title)
 	using Create = LiveView* (*)(const char*, std::string*);
 	auto create = reinterpret_cast<Create>(dlsym(handle, AUVNAV_LIVE_VIEW_ENTRY_SYMBOL));
 	if (!create)
-		throw std::runtime_error("--view: " + module->string() + " has no entry point " AUVNAV_LIVE_VIEW_ENTRY_SYMBOL);
+		throw std::runtime_error("--view: " + module->string() +
+		                         " has no entry point " AUVNAV_LIVE_VIEW_ENTRY_SYMBOL);
 	std::string error;
 	std::unique_ptr<LiveView> view(create(title.c_str(), &error));
 	if (!view) throw std::runtime_error(error.empty() ? "--view: the live view could not be opened" : error);

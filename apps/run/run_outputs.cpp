@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 
@@ -39,8 +39,11 @@ std::string oneLine(std::string text)
 }  // namespace
 
 RunOutputs::RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
-					   std::vector<std::string> stored_names, bool updates_csv)
-	: dir_(dir), names_(std::move(tangent_names)), stored_names_(std::move(stored_names)), period_s_(1.0 / rate_hz)
+                       std::vector<std::string> stored_names, bool updates_csv)
+    : dir_(dir),
+      names_(std::move(tangent_names)),
+      stored_names_(std::move(stored_names)),
+      period_s_(1.0 / rate_hz)
 {
 	fs::create_directories(dir);
 	const auto file = [&](const char* name) { return (fs::path(dir) / name).string(); };
@@ -77,13 +80,13 @@ void appendG10(std::string& s, double v)
 }  // namespace
 
 void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s,
-							 const UpdateResult& r)
+                             const UpdateResult& r)
 {
 	if (!updates_.isOpen()) return;
-	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
-						 : r.status == UpdateStatus::Recovered ? "recovered"
-						 : r.status == UpdateStatus::Rejected  ? "rejected"
-															   : "invalid";
+	const char* status = r.status == UpdateStatus::Accepted    ? "accepted"
+	                     : r.status == UpdateStatus::Recovered ? "recovered"
+	                     : r.status == UpdateStatus::Rejected  ? "rejected"
+	                                                           : "invalid";
 	const bool has_nis = r.status != UpdateStatus::Invalid || r.nis > 0;
 	// One row per update of every sensor (~25 per IMU tick with an ADCP):
 	// io::appendFixed / appendGeneral, as printf's "%.6f,%.6f,%s,%s,%.6g,%d" would write it.
@@ -117,20 +120,22 @@ void RunOutputs::onAnyUpdate(const std::string& label, double t_filter_s, double
 	updates_.line(s);
 }
 
-void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m, const UpdateResult& r)
+void RunOutputs::onPositionFix(const std::string& label, double t, const Measurement& m,
+                               const UpdateResult& r)
 {
-	if (m.z.size() < 2) return;	// north, east (a USBL fix may add its depth)
-	const char* status = r.status == UpdateStatus::Accepted	   ? "accepted"
-						 : r.status == UpdateStatus::Recovered ? "recovered"
-						 : r.status == UpdateStatus::Rejected  ? "rejected"
-															   : "invalid";
+	if (m.z.size() < 2) return;  // north, east (a USBL fix may add its depth)
+	const char* status = r.status == UpdateStatus::Accepted    ? "accepted"
+	                     : r.status == UpdateStatus::Recovered ? "recovered"
+	                     : r.status == UpdateStatus::Rejected  ? "rejected"
+	                                                           : "invalid";
 	char line[256];
 	std::snprintf(line, sizeof line, "%.3f,%s,%.3f,%.3f,%s", t, label.c_str(), m.z[0], m.z[1], status);
 	fixes_.line(line);
 	fixes_.flush();  // rare (GPS, USBL), and what a person watching a run reads
 }
 
-std::string statesCsvHeader(const std::vector<std::string>& tangent_names, const std::vector<std::string>& stored_names)
+std::string statesCsvHeader(const std::vector<std::string>& tangent_names,
+                            const std::vector<std::string>& stored_names)
 {
 	std::string header = "time_s,qw,qx,qy,qz,roll_deg,pitch_deg,yaw_deg";
 	for (std::size_t i = 3; i < stored_names.size(); ++i) header += ',' + stored_names[i];
@@ -158,8 +163,8 @@ void formatTumRow(std::string& s, double t, const NavState& x, const Eigen::Vect
 	}
 }
 
-void formatStatesRow(std::string& s, double t, const NavState& x, const Eigen::Vector3d& p, const double* sigma,
-					 const double* cov_offdiag)
+void formatStatesRow(std::string& s, double t, const NavState& x, const Eigen::Vector3d& p,
+                     const double* sigma, const double* cov_offdiag)
 {
 	const Eigen::Quaterniond q(x.R_nb);
 	const Eigen::Matrix3d& R = x.R_nb;
@@ -189,7 +194,7 @@ void sigmaAndOffDiagonals(const Covariance& P, double* sigma, double* cov_offdia
 void RunOutputs::onState(const Navigator& nav)
 {
 	const double t = nav.time();
-	if (t < last_t_) last_t_ = -1e300;	// the clock went back (a jump, clock.on_jump: reinitialize)
+	if (t < last_t_) last_t_ = -1e300;  // the clock went back (a jump, clock.on_jump: reinitialize)
 	if (t - last_t_ < period_s_ - 1e-9) return;
 	last_t_ = t;
 	const NavState& x = nav.filter().state();
@@ -247,7 +252,7 @@ void RunOutputs::onEvent(double t_s, const std::string& label, const std::string
 }
 
 void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, const std::string& rawlog,
-							  const std::string& error) const
+                              const std::string& error) const
 {
 	const double data_s = nav.startTime() > 0 ? nav.time() - nav.startTime() : 0.0;
 	io::Json j;
@@ -276,19 +281,19 @@ void RunOutputs::writeSummary(const Navigator& nav, double wall_s, Phase phase, 
 	j["sensors"] = io::Json::array();
 	for (const auto& s : nav.stats())
 		j["sensors"].push_back({{"label", s.label},
-								{"plugin", s.plugin},
-								{"accepted", s.accepted},
-								{"recovered", s.recovered},
-								{"rejected", s.rejected},
-								{"invalid", s.invalid},
-								{"skipped", s.skipped},
-								{"denied", s.denied},
-								{"late", s.late},
-								{"delayed", s.delayed},
-								{"before_init", s.before_init},
-								{"position_reinitializations", s.reinitialized},
-								{"mean_nis_per_dim", s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN},
-								{"last_problem", s.last_problem}});
+		                        {"plugin", s.plugin},
+		                        {"accepted", s.accepted},
+		                        {"recovered", s.recovered},
+		                        {"rejected", s.rejected},
+		                        {"invalid", s.invalid},
+		                        {"skipped", s.skipped},
+		                        {"denied", s.denied},
+		                        {"late", s.late},
+		                        {"delayed", s.delayed},
+		                        {"before_init", s.before_init},
+		                        {"position_reinitializations", s.reinitialized},
+		                        {"mean_nis_per_dim", s.nis_dim_sum > 0 ? s.nis_sum / s.nis_dim_sum : NAN},
+		                        {"last_problem", s.last_problem}});
 	io::Json sigma = io::Json::object();
 	const auto& P = nav.filter().covariance();
 	for (int i = 0; i < static_cast<int>(names_.size()) && i < P.rows(); ++i)

@@ -40,26 +40,28 @@
 namespace auvnav::run
 {
 /** states.csv's header row (also smoothed_states.csv's). */
-std::string statesCsvHeader(const std::vector<std::string>& tangent_names, const std::vector<std::string>& stored_names);
+std::string statesCsvHeader(const std::vector<std::string>& tangent_names,
+                            const std::vector<std::string>& stored_names);
 /** A trajectory.tum row (no newline) for time t, attitude of x and body-origin position p [m, NED]. */
 void formatTumRow(std::string& row, double t, const NavState& x, const Eigen::Vector3d& p);
 /** A states.csv row: x, body position p, x.dim() σ and the six off-diagonal
  *  position/attitude covariances (sigmaAndOffDiagonals). */
-void formatStatesRow(std::string& row, double t, const NavState& x, const Eigen::Vector3d& p, const double* sigma,
-					 const double* cov_offdiag);
+void formatStatesRow(std::string& row, double t, const NavState& x, const Eigen::Vector3d& p,
+                     const double* sigma, const double* cov_offdiag);
 void sigmaAndOffDiagonals(const Covariance& P, double* sigma, double* cov_offdiag);
 
 class RunOutputs
 {
-   public:
+ public:
 	/** `tangent_names` / `stored_names`: Navigator::stateNames() and
 	 *  storedStateNames() (the 43 and the plugin states), for the headers. */
 	RunOutputs(const std::string& dir, double rate_hz, std::vector<std::string> tangent_names,
-			   std::vector<std::string> stored_names, bool updates_csv = true);
+	           std::vector<std::string> stored_names, bool updates_csv = true);
 	/** One updates.csv row per update of any sensor and any status: filter
 	 *  time, measurement time, sensor, status, NIS, dimension, why (for
 	 *  invalid and rejected ones). */
-	void onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s, const UpdateResult& r);
+	void onAnyUpdate(const std::string& label, double t_filter_s, double t_measurement_s,
+	                 const UpdateResult& r);
 	/** Appends a row if at least 1/rate since the last one. */
 	void onState(const Navigator& nav);
 	/** Appends a GPS-like 2-D position update (label "…GPS…" or any update
@@ -75,19 +77,19 @@ class RunOutputs
 	/** Where the run is when summary.json is written. */
 	enum class Phase
 	{
-		Running,	  //!< at the start and at the interval: completed false, running true
+		Running,      //!< at the start and at the interval: completed false, running true
 		Interrupted,  //!< stopped by a signal: completed false
-		Ended,		  //!< the end of the rawlog, or an error: completed = no error
+		Ended,        //!< the end of the rawlog, or an error: completed = no error
 	};
 	/** Writes summary.json (complete rewrite: SUMMARY.tmp renamed over it, so
 	 *  a reader or a kill never sees half a file). `error` (one line) is
 	 *  written when not empty. `clock_jumps`: the jumps re-initialised
 	 *  through (Navigator::clockJumps(), clock.on_jump: reinitialize). */
 	void writeSummary(const Navigator& nav, double wall_s, Phase phase, const std::string& rawlog,
-					  const std::string& error) const;
+	                  const std::string& error) const;
 	std::size_t rows() const { return rows_; }
 
-   private:
+ private:
 	std::string dir_;
 	std::vector<std::string> names_, stored_names_;
 	double period_s_;
@@ -101,7 +103,7 @@ class RunOutputs
 	std::map<std::string, NisAcc> nis_acc_;
 	double nis_t0_ = -1e300;
 	std::size_t rows_ = 0;
-	std::string row_;			// states.csv and trajectory.tum row buffer (reused: no allocation per row)
-	std::string update_row_;	// updates.csv row buffer
+	std::string row_;         // states.csv and trajectory.tum row buffer (reused: no allocation per row)
+	std::string update_row_;  // updates.csv row buffer
 };
 }  // namespace auvnav::run

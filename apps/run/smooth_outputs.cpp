@@ -18,7 +18,10 @@ namespace fs = std::filesystem;
 
 namespace auvnav::run
 {
-std::string stretchFileOf(const std::string& run_dir) { return (fs::path(run_dir) / "smoother" / "stretches.bin").string(); }
+std::string stretchFileOf(const std::string& run_dir)
+{
+	return (fs::path(run_dir) / "smoother" / "stretches.bin").string();
+}
 
 namespace
 {
@@ -26,9 +29,9 @@ namespace
  *  the six off-diagonal covariances. */
 class ReversedRows
 {
-   public:
+ public:
 	ReversedRows(const std::string& path, int n)
-		: path_(path), n_(n), row_(2 + 9 + 2 * n + 6), f_(io::openCFile(path, "w+b", "cannot create"))
+	    : path_(path), n_(n), row_(2 + 9 + 2 * n + 6), f_(io::openCFile(path, "w+b", "cannot create"))
 	{
 	}
 	~ReversedRows()
@@ -54,10 +57,12 @@ class ReversedRows
 	}
 	std::size_t rows() const { return rows_; }
 	/** Row i in time order (the last one written is the first). */
-	void get(std::size_t i, double& t, NavState& x, SmoothedKind& kind, const double*& sigma, const double*& cov)
+	void get(std::size_t i, double& t, NavState& x, SmoothedKind& kind, const double*& sigma,
+	         const double*& cov)
 	{
 		const off_t at = static_cast<off_t>((rows_ - 1 - i) * row_.size() * sizeof(double));
-		if (fseeko(f_.get(), at, SEEK_SET) != 0 || std::fread(row_.data(), sizeof(double), row_.size(), f_.get()) != row_.size())
+		if (fseeko(f_.get(), at, SEEK_SET) != 0 ||
+		    std::fread(row_.data(), sizeof(double), row_.size(), f_.get()) != row_.size())
 			throw std::runtime_error(path_ + ": read failed");
 		const double* p = row_.data();
 		t = *p++;
@@ -70,7 +75,7 @@ class ReversedRows
 		cov = p + 2 * n_;
 	}
 
-   private:
+ private:
 	std::string path_;
 	int n_;
 	std::vector<double> row_;  // before f_: no file is created if it cannot be allocated
@@ -84,7 +89,8 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 	const auto t0 = std::chrono::steady_clock::now();
 	const std::string stretches = stretchFileOf(run_dir);
 	if (!fs::exists(stretches))
-		throw std::runtime_error(stretches + ": no stretch file (was the run made with auvnav-run --smooth?)");
+		throw std::runtime_error(stretches +
+		                         ": no stretch file (was the run made with auvnav-run --smooth?)");
 	StretchFileHeader header;
 	{
 		StretchReader probe(stretches);
@@ -92,8 +98,9 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 	}
 	SmoothRunResult res;
 	ReversedRows scratch((fs::path(run_dir) / "smoother" / "reversed.tmp").string(), header.n);
-	const BackwardPassSummary sum = smoothStretchFile(
-		stretches, [&](double t, const NavState& x, const Covariance& P, SmoothedKind kind) { scratch.add(t, x, P, kind); });
+	const BackwardPassSummary sum =
+	    smoothStretchFile(stretches, [&](double t, const NavState& x, const Covariance& P, SmoothedKind kind)
+	                      { scratch.add(t, x, P, kind); });
 
 	// Text outputs written as .tmp and renamed: a half-written file never
 	// stands beside a finished run.
@@ -102,7 +109,9 @@ SmoothRunResult smoothRun(const std::string& run_dir)
 	std::size_t written = 0;
 	{
 		io::LineFile tum(tum_path.string() + ".tmp"), csv(csv_path.string() + ".tmp");
-		tum.line("# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav RTS smoother)");
+		tum.line(
+		    "# timestamp north_m east_m down_m qx qy qz qw  (body origin, NED tangent frame; auvnav RTS "
+		    "smoother)");
 		csv.line(statesCsvHeader(header.tangent_names, header.stored_names) + ",smoother");
 		std::string row;
 		NavState x;

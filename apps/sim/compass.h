@@ -25,13 +25,13 @@ namespace auvnav::sim
 {
 class CompassSim
 {
-   public:
+ public:
 	CompassSim(const config::Node& n, double declination_rad, uint32_t seed);
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
 	mrpt::obs::CObservationIMU::Ptr sample(const Truth& truth);
 
-   private:
+ private:
 	double period_s_, offset_s_;
 	Mounting mount_;
 	double declination_rad_, bias_rad_, sigma_rad_;

@@ -5,14 +5,13 @@
 
 namespace auvnav::sim
 {
-Environment::Environment(const CurrentParams& c, const SeabedParams& s, const WaterParams& w,
-						 uint32_t seed)
-	: cur_(c), bed_(s), water_(w)
+Environment::Environment(const CurrentParams& c, const SeabedParams& s, const WaterParams& w, uint32_t seed)
+    : cur_(c), bed_(s), water_(w)
 {
 	rng_.randomize(seed);
 	// Start the wander in its stationary distribution.
 	wander_ne_ = {cur_.wander_sigma_mps * rng_.drawGaussian1D_normalized(),
-				  cur_.wander_sigma_mps * rng_.drawGaussian1D_normalized()};
+	              cur_.wander_sigma_mps * rng_.drawGaussian1D_normalized()};
 }
 
 namespace
@@ -60,7 +59,7 @@ void Environment::advanceTo(double t_s)
 	const double phi = std::exp(-dt / cur_.wander_tau_s);
 	const double q = cur_.wander_sigma_mps * std::sqrt(1 - phi * phi);
 	wander_ne_ = phi * wander_ne_ +
-				 q * Eigen::Vector2d(rng_.drawGaussian1D_normalized(), rng_.drawGaussian1D_normalized());
+	             q * Eigen::Vector2d(rng_.drawGaussian1D_normalized(), rng_.drawGaussian1D_normalized());
 	t_s_ = t_s;
 }
 
@@ -68,9 +67,9 @@ Eigen::Vector3d Environment::current(double depth_m) const
 {
 	const double w_surface = std::exp(-std::max(0.0, depth_m) / cur_.shear_depth_m);
 	const Eigen::Vector2d tide =
-		cur_.tidal_amplitude_ne_mps * std::sin(2 * M_PI * t_s_ / cur_.tidal_period_s + cur_.tidal_phase_rad);
+	    cur_.tidal_amplitude_ne_mps * std::sin(2 * M_PI * t_s_ / cur_.tidal_period_s + cur_.tidal_phase_rad);
 	const Eigen::Vector2d c =
-		w_surface * cur_.surface_ne_mps + (1 - w_surface) * cur_.deep_ne_mps + tide + wander_ne_;
+	    w_surface * cur_.surface_ne_mps + (1 - w_surface) * cur_.deep_ne_mps + tide + wander_ne_;
 	return {c.x(), c.y(), 0.0};
 }
 
@@ -78,15 +77,15 @@ double Environment::seabedDepth(double north_m, double east_m) const
 {
 	const double k = 2 * M_PI / bed_.wavelength_m;
 	return bed_.depth_m + bed_.slope_ne.x() * north_m + bed_.slope_ne.y() * east_m +
-		   bed_.undulation_m * std::sin(k * north_m) * std::cos(k * 0.7 * east_m);
+	       bed_.undulation_m * std::sin(k * north_m) * std::cos(k * 0.7 * east_m);
 }
 
-double Environment::rayToSeabed(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-								double max_range_m) const
+double Environment::rayToSeabed(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range_m) const
 {
 	// Height above the seabed along the ray; march to the first sign change,
 	// then bisect. Steps are small against the relief wavelength.
-	auto clearance = [&](double s) {
+	auto clearance = [&](double s)
+	{
 		const Eigen::Vector3d p = o + s * d;
 		return seabedDepth(p.x(), p.y()) - p.z();
 	};

@@ -16,10 +16,10 @@ namespace auvnav::sim
 struct CurrentParams
 {
 	Eigen::Vector2d surface_ne_mps{0, 0};  //!< current at the surface
-	Eigen::Vector2d deep_ne_mps{0, 0};	   //!< current far below the shear layer
-	double shear_depth_m = 10;			   //!< e-folding depth of the surface part
+	Eigen::Vector2d deep_ne_mps{0, 0};     //!< current far below the shear layer
+	double shear_depth_m = 10;             //!< e-folding depth of the surface part
 	Eigen::Vector2d tidal_amplitude_ne_mps{0, 0};
-	double tidal_period_s = 44712;	//!< M2 tide, 12.42 h
+	double tidal_period_s = 44712;  //!< M2 tide, 12.42 h
 	double tidal_phase_rad = 0;
 	double wander_sigma_mps = 0;  //!< stationary σ of the Gauss–Markov wander (per axis)
 	double wander_tau_s = 3600;
@@ -27,9 +27,9 @@ struct CurrentParams
 
 struct SeabedParams
 {
-	double depth_m = 30;			//!< depth at the origin
-	Eigen::Vector2d slope_ne{0, 0};	//!< depth gradient along N and E [m/m]
-	double undulation_m = 0;		//!< amplitude of the sinusoidal relief
+	double depth_m = 30;             //!< depth at the origin
+	Eigen::Vector2d slope_ne{0, 0};  //!< depth gradient along N and E [m/m]
+	double undulation_m = 0;         //!< amplitude of the sinusoidal relief
 	double wavelength_m = 100;
 };
 
@@ -43,7 +43,7 @@ struct WaterParams
 
 class Environment
 {
-   public:
+ public:
 	Environment(const CurrentParams& c, const SeabedParams& s, const WaterParams& w, uint32_t seed);
 	static Environment fromConfig(const config::Node& node, uint32_t seed);
 
@@ -56,11 +56,11 @@ class Environment
 	/** Distance along a ray from `origin_n` in unit direction `dir_n` to the
 	 *  seabed, or a negative number if it is not hit within `max_range_m`. */
 	double rayToSeabed(const Eigen::Vector3d& origin_n, const Eigen::Vector3d& dir_n,
-					   double max_range_m) const;
+	                   double max_range_m) const;
 	double temperature(double depth_m) const;
 	const WaterParams& water() const { return water_; }
 
-   private:
+ private:
 	CurrentParams cur_;
 	SeabedParams bed_;
 	WaterParams water_;

@@ -9,10 +9,17 @@ namespace auvnav::sim
 {
 namespace
 {
-double wrapPi(double a) { return std::atan2(std::sin(a), std::cos(a)); }
-double yawOf(const Eigen::Matrix3d& R_nb) { return std::atan2(R_nb(1, 0), R_nb(0, 0)); }
+double wrapPi(double a)
+{
+	return std::atan2(std::sin(a), std::cos(a));
+}
+double yawOf(const Eigen::Matrix3d& R_nb)
+{
+	return std::atan2(R_nb(1, 0), R_nb(0, 0));
+}
 
-void appendSteps(const config::Node& list_owner, const std::string& key, std::vector<PlanStep>& out, int depth)
+void appendSteps(const config::Node& list_owner, const std::string& key, std::vector<PlanStep>& out,
+                 int depth)
 {
 	if (depth > 4) list_owner.fail(key, "repeat blocks nested too deep");
 	for (const auto& s : list_owner.sequence(key))
@@ -90,7 +97,7 @@ ControllerGains ControllerGains::fromConfig(const config::Node& n)
 }
 
 Controller::Controller(const VehicleParams& vehicle, const ControllerGains& gains, std::vector<PlanStep> plan)
-	: vehicle_(vehicle), k_(gains), plan_(std::move(plan))
+    : vehicle_(vehicle), k_(gains), plan_(std::move(plan))
 {
 	// Allocate surge, sway, heave, pitch and yaw only: with two heave thrusters
 	// roll and pitch cannot be set independently (the configuration matrix has
@@ -101,9 +108,10 @@ Controller::Controller(const VehicleParams& vehicle, const ControllerGains& gain
 		// All six axes: only if the thrusters span them (e.g. 4 vertical thrusters).
 		const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod{Eigen::MatrixXd(T)};
 		if (cod.rank() < 6)
-			throw config::ConfigError("controller.roll_kp/roll_kd: the thrusters cannot produce all six axes "
-									  "(configuration matrix rank " + std::to_string(cod.rank()) +
-									  "); leave roll to the restoring moment (gains 0)");
+			throw config::ConfigError(
+			    "controller.roll_kp/roll_kd: the thrusters cannot produce all six axes "
+			    "(configuration matrix rank " +
+			    std::to_string(cod.rank()) + "); leave roll to the restoring moment (gains 0)");
 		allocation_ = cod.pseudoInverse();
 		return;
 	}
@@ -112,7 +120,10 @@ Controller::Controller(const VehicleParams& vehicle, const ControllerGains& gain
 	allocation_ = T_controlled.completeOrthogonalDecomposition().pseudoInverse();
 }
 
-bool Controller::surfaceDemanded() const { return finished() || plan_[step_].surface; }
+bool Controller::surfaceDemanded() const
+{
+	return finished() || plan_[step_].surface;
+}
 
 void Controller::beginStep(const VehicleState& x, double t_s)
 {
@@ -150,7 +161,7 @@ Vector6d Controller::wrench(const VehicleState& x, double dt_s)
 	const double u_err = speed_demand_mps_ - v_b.x();
 	speed_integral_ = std::clamp(speed_integral_ + u_err * dt_s, -5.0, 5.0);
 	const double ff = vehicle_.D_l(0, 0) * speed_demand_mps_ +
-					  vehicle_.D_q(0, 0) * speed_demand_mps_ * std::abs(speed_demand_mps_);
+	                  vehicle_.D_q(0, 0) * speed_demand_mps_ * std::abs(speed_demand_mps_);
 	tau[0] = ff + k_.speed_kp * u_err + k_.speed_ki * speed_integral_;
 	tau[1] = -k_.sway_kp * v_b.y();
 	tau[5] = k_.heading_kp * wrapPi(heading_demand - yaw) - k_.heading_kd * r;
@@ -173,7 +184,7 @@ Vector6d Controller::wrench(const VehicleState& x, double dt_s)
 		depth_integral_ = std::clamp(depth_integral_ + depth_err * dt_s, -20.0, 20.0);
 		// Feed-forward cancels the net buoyancy.
 		const double fz_n = (vehicle_.buoyancy_n - vehicle_.weight_n) + k_.depth_kp * depth_err -
-							k_.depth_kd * depth_rate + k_.depth_ki * depth_integral_;
+		                    k_.depth_kd * depth_rate + k_.depth_ki * depth_integral_;
 		tau.head<3>() += R_nb.transpose() * Eigen::Vector3d(0, 0, fz_n);
 	}
 	else
@@ -190,10 +201,10 @@ Eigen::VectorXd Controller::command(const VehicleState& x, double t_s, double dt
 	if (!started_) beginStep(x, t_s);
 	const PlanStep* s = &plan_[step_];
 	const bool done = s->kind == PlanStep::Kind::Goto
-						  ? (x.p_n.head<2>() - s->target_ne).norm() < s->acceptance_m ||
-								(x.p_n.head<2>() - leg_start_ne_).dot(s->target_ne - leg_start_ne_) >=
-									(s->target_ne - leg_start_ne_).squaredNorm()
-						  : t_s - step_start_s_ >= s->duration_s;
+	                      ? (x.p_n.head<2>() - s->target_ne).norm() < s->acceptance_m ||
+	                            (x.p_n.head<2>() - leg_start_ne_).dot(s->target_ne - leg_start_ne_) >=
+	                                (s->target_ne - leg_start_ne_).squaredNorm()
+	                      : t_s - step_start_s_ >= s->duration_s;
 	if (done)
 	{
 		++step_;

@@ -26,7 +26,7 @@ struct PlanStep
 	Kind kind = Kind::Goto;
 	Eigen::Vector2d target_ne{0, 0};
 	bool surface = true;  //!< float at the surface (no depth control)
-	double depth_m = 0;	  //!< depth demand when not surfaced
+	double depth_m = 0;   //!< depth demand when not surfaced
 	double speed_mps = 0.5;
 	double duration_s = 0;
 	double acceptance_m = 2;
@@ -39,11 +39,11 @@ std::vector<PlanStep> planFromConfig(const config::Node& mission);
 struct ControllerGains
 {
 	double lookahead_m = 6;
-	double heading_kp = 120, heading_kd = 350;	// N·m/rad, N·m/(rad/s)
-	double speed_kp = 150, speed_ki = 10;		// N/(m/s), N/m
-	double sway_kp = 80;						// N/(m/s)
-	double depth_kp = 60, depth_kd = 250, depth_ki = 2;	 // N/m, N/(m/s), N/(m·s)
-	double attitude_kp = 200, attitude_kd = 60;	 // pitch hold, N·m/rad, N·m/(rad/s)
+	double heading_kp = 120, heading_kd = 350;           // N·m/rad, N·m/(rad/s)
+	double speed_kp = 150, speed_ki = 10;                // N/(m/s), N/m
+	double sway_kp = 80;                                 // N/(m/s)
+	double depth_kp = 60, depth_kd = 250, depth_ki = 2;  // N/m, N/(m/s), N/(m·s)
+	double attitude_kp = 200, attitude_kd = 60;          // pitch hold, N·m/rad, N·m/(rad/s)
 	//! Roll hold, N·m/rad, N·m/(rad/s); 0 (default): roll left to the restoring
 	//! moment and the roll row dropped from the allocation (5 controlled axes).
 	double roll_kp = 0, roll_kd = 0;
@@ -55,7 +55,7 @@ struct ControllerGains
 
 class Controller
 {
-   public:
+ public:
 	Controller(const VehicleParams& vehicle, const ControllerGains& gains, std::vector<PlanStep> plan);
 
 	/** Thruster force commands for the next control period [N]. */
@@ -64,7 +64,7 @@ class Controller
 	std::size_t stepIndex() const { return step_; }
 	bool surfaceDemanded() const;
 
-   private:
+ private:
 	void beginStep(const VehicleState& x, double t_s);
 	Vector6d wrench(const VehicleState& x, double dt_s);
 

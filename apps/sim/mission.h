@@ -13,8 +13,8 @@
  *  logger_clock.h); without jitter that is the simulation order, as before.
  */
 #include <auvnav/config.h>
-#include <auvnav/sonar/landmarks.h>
 #include <auvnav/earth.h>
+#include <auvnav/sonar/landmarks.h>
 
 #include <map>
 #include <string>

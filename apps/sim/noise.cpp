@@ -14,7 +14,7 @@ double gaussMarkovAllanVariance(double sigma, double tau_c, double T)
 	// Limits: q T/3 (rate random walk) for T ≪ τc, 2σ²τc/T (white) for T ≫ τc.
 	const double q = 2 * sigma * sigma / tau_c;
 	const double x = T / tau_c;
-	if (x < 1e-4) return q * T / 3;	 // small-T limit, avoids cancellation
+	if (x < 1e-4) return q * T / 3;  // small-T limit, avoids cancellation
 	return q * tau_c * tau_c / T * (1 - (3 - 4 * std::exp(-x) + std::exp(-2 * x)) / (2 * x));
 }
 
@@ -46,7 +46,8 @@ double gaussMarkovSigmaForAllanFloor(double random_walk, double bias_instability
 		lo = hi;
 		hi *= 2;
 		if (hi > 1e6 * bias_instability)
-			throw std::invalid_argument("bias instability unattainable with this random walk and correlation time");
+			throw std::invalid_argument(
+			    "bias instability unattainable with this random walk and correlation time");
 	}
 	for (int i = 0; i < 60; ++i)
 	{
@@ -57,11 +58,11 @@ double gaussMarkovSigmaForAllanFloor(double random_walk, double bias_instability
 }
 
 InertialAxisError::InertialAxisError(const InertialAxisErrorParams& p, mrpt::random::CRandomGenerator& rng)
-	: p_(p)
+    : p_(p)
 {
 	gm_sigma_ = gaussMarkovSigmaForAllanFloor(p.random_walk, p.bias_instability, p.bias_tau_s);
 	turn_on_ = p.turn_on_sigma * rng.drawGaussian1D_normalized();
-	wander_ = gm_sigma_ * rng.drawGaussian1D_normalized();	// stationary start
+	wander_ = gm_sigma_ * rng.drawGaussian1D_normalized();  // stationary start
 }
 
 double InertialAxisError::sample(double dt_s, mrpt::random::CRandomGenerator& rng)
@@ -72,7 +73,7 @@ double InertialAxisError::sample(double dt_s, mrpt::random::CRandomGenerator& rn
 }
 
 GaussMarkov::GaussMarkov(double sigma, double tau_s, mrpt::random::CRandomGenerator& rng)
-	: sigma_(sigma), tau_s_(tau_s), x_(sigma * rng.drawGaussian1D_normalized())
+    : sigma_(sigma), tau_s_(tau_s), x_(sigma * rng.drawGaussian1D_normalized())
 {
 }
 

@@ -26,15 +26,15 @@ double gaussMarkovSigmaForAllanFloor(double random_walk, double bias_instability
 
 struct InertialAxisErrorParams
 {
-	double random_walk = 0;		  //!< white-noise density [unit·√s], e.g. rad/√s
+	double random_walk = 0;       //!< white-noise density [unit·√s], e.g. rad/√s
 	double bias_instability = 0;  //!< Allan-deviation floor [unit]
-	double bias_tau_s = 600;	  //!< correlation time of the bias wander
-	double turn_on_sigma = 0;	  //!< σ of the constant turn-on bias [unit]
+	double bias_tau_s = 600;      //!< correlation time of the bias wander
+	double turn_on_sigma = 0;     //!< σ of the constant turn-on bias [unit]
 };
 
 class InertialAxisError
 {
-   public:
+ public:
 	InertialAxisError(const InertialAxisErrorParams& p, mrpt::random::CRandomGenerator& rng);
 	/** Error to add to the true value for a sample after `dt_s`; also
 	 *  advances the bias. */
@@ -43,7 +43,7 @@ class InertialAxisError
 	double bias() const { return turn_on_ + wander_; }
 	double gaussMarkovSigma() const { return gm_sigma_; }
 
-   private:
+ private:
 	InertialAxisErrorParams p_;
 	double gm_sigma_ = 0;
 	double turn_on_ = 0;
@@ -53,13 +53,13 @@ class InertialAxisError
 /** A scalar first-order Gauss–Markov process, exact for any dt. */
 class GaussMarkov
 {
-   public:
+ public:
 	GaussMarkov() = default;
 	GaussMarkov(double sigma, double tau_s, mrpt::random::CRandomGenerator& rng);
 	double advance(double dt_s, mrpt::random::CRandomGenerator& rng);
 	double value() const { return x_; }
 
-   private:
+ private:
 	double sigma_ = 0, tau_s_ = 1, x_ = 0;
 };
 

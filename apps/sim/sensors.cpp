@@ -22,7 +22,10 @@ Eigen::Matrix3d rotationFromYprDeg(const Eigen::Vector3d& ypr_deg)
 }
 
 /** Derives an independent stream from the mission seed and a sensor id. */
-uint32_t streamSeed(uint32_t seed, uint32_t sensor_id) { return seed * 7919u + sensor_id * 104729u + 1u; }
+uint32_t streamSeed(uint32_t seed, uint32_t sensor_id)
+{
+	return seed * 7919u + sensor_id * 104729u + 1u;
+}
 
 /** Position and velocity of a point fixed on the vehicle at `r_b`. */
 struct PointKinematics
@@ -61,30 +64,34 @@ Mounting Mounting::fromConfig(const config::Node& n)
 	Mounting m;
 	m.position_b = n.vector3("position_m");
 	m.R_bs_nominal = rotationFromYprDeg(n.vector3("orientation_ypr_deg", Eigen::Vector3d::Zero()));
-	m.R_bs_true = m.R_bs_nominal * rotationFromYprDeg(n.vector3("misalignment_ypr_deg", Eigen::Vector3d::Zero()));
+	m.R_bs_true =
+	    m.R_bs_nominal * rotationFromYprDeg(n.vector3("misalignment_ypr_deg", Eigen::Vector3d::Zero()));
 	return m;
 }
 
 // ---------------------------------------------------------------- IMU
 ImuSim::ImuSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")), mount_(Mounting::fromConfig(n)), label_(n.string("label", "IMU"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      mount_(Mounting::fromConfig(n)),
+      label_(n.string("label", "IMU"))
 {
 	rng_.randomize(streamSeed(seed, 1));
 	// Datasheet units in the config: gyro °/√h and °/h; accelerometer mg/√Hz and mg.
 	const auto g = n.child("gyro");
 	const auto a = n.child("accelerometer");
 	InertialAxisErrorParams gp = axisParams(g, 1.0);
-	gp.random_walk *= kDeg / 60.0;	 // °/√h -> rad/√s
+	gp.random_walk *= kDeg / 60.0;  // °/√h -> rad/√s
 	gp.bias_instability *= kDeg / 3600.0;
 	gp.turn_on_sigma *= kDeg / 3600.0;
-	InertialAxisErrorParams ap = axisParams(a, 1e-3 * 9.80665);	 // mg -> m/s²; mg/√Hz -> m/s²·√s
+	InertialAxisErrorParams ap = axisParams(a, 1e-3 * 9.80665);  // mg -> m/s²; mg/√Hz -> m/s²·√s
 	for (int i = 0; i < 3; ++i)
 	{
 		gyro_.emplace_back(gp, rng_);
 		accel_.emplace_back(ap, rng_);
 	}
 	// MEMS calibration errors, fixed per unit (config values, no draw).
-	auto scale = [](const config::Node& block) {
+	auto scale = [](const config::Node& block)
+	{
 		const Eigen::Vector3d ppm = block.vector3("scale_factor_error_ppm", Eigen::Vector3d::Zero());
 		if ((ppm.array().abs() > 1e5).any())
 			block.fail("scale_factor_error_ppm", "expected |error| <= 100000 ppm (10 %) per axis");
@@ -96,7 +103,8 @@ ImuSim::ImuSim(const config::Node& n, uint32_t seed)
 	{
 		const auto v = g.numbers("g_sensitivity_dps_per_g");
 		if (v.size() != 3 && v.size() != 9)
-			g.fail("g_sensitivity_dps_per_g", "expected 3 values (diagonal) or 9 (row-major matrix, row = gyro axis)");
+			g.fail("g_sensitivity_dps_per_g",
+			       "expected 3 values (diagonal) or 9 (row-major matrix, row = gyro axis)");
 		for (double e : v)
 			if (std::abs(e) > 1.0) g.fail("g_sensitivity_dps_per_g", "expected |value| <= 1 deg/s per g");
 		Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
@@ -123,7 +131,7 @@ mrpt::obs::CObservationIMU::Ptr ImuSim::sample(const Truth& t, const earth::Tang
 	const Eigen::Vector3d& omega_ie_n = frame.earthRate();
 	// Specific force in a rotating Earth frame: a_rel + 2Ω×v − g (g includes centrifugal).
 	const Eigen::Vector3d f_b =
-		a_imu_b + R_nb.transpose() * (2 * omega_ie_n.cross(imu.v_n) - frame.gravityNed(imu.p_n));
+	    a_imu_b + R_nb.transpose() * (2 * omega_ie_n.cross(imu.v_n) - frame.gravityNed(imu.p_n));
 	const Eigen::Vector3d omega_ib_b = w_b + R_nb.transpose() * omega_ie_n;
 	const Eigen::Matrix3d R_sb = mount_.R_bs_true.transpose();
 	Eigen::Vector3d f_s = R_sb * f_b;
@@ -151,21 +159,27 @@ mrpt::obs::CObservationIMU::Ptr ImuSim::sample(const Truth& t, const earth::Tang
 	return obs;
 }
 
-Eigen::Vector3d ImuSim::gyroBias() const { return {gyro_[0].bias(), gyro_[1].bias(), gyro_[2].bias()}; }
-Eigen::Vector3d ImuSim::accelBias() const { return {accel_[0].bias(), accel_[1].bias(), accel_[2].bias()}; }
+Eigen::Vector3d ImuSim::gyroBias() const
+{
+	return {gyro_[0].bias(), gyro_[1].bias(), gyro_[2].bias()};
+}
+Eigen::Vector3d ImuSim::accelBias() const
+{
+	return {accel_[0].bias(), accel_[1].bias(), accel_[2].bias()};
+}
 
 // ---------------------------------------------------------------- DVL
 DvlSim::DvlSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
-	  mount_(Mounting::fromConfig(n)),
-	  inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
-	  beam_sigma_mps_(n.nonNegative("beam_velocity_sigma_mps")),
-	  scale_factor_(n.inRange("scale_factor_error", -0.1, 0.1)),
-	  min_altitude_m_(n.nonNegative("min_altitude_m")),
-	  max_range_m_(n.positive("max_altitude_m")),
-	  beam_dropout_probability_(n.inRange("beam_dropout_probability", 0, 1)),
-	  label_(n.string("label", "DVL"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      offset_s_(n.nonNegative("time_offset_s", 0.0)),
+      mount_(Mounting::fromConfig(n)),
+      inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
+      beam_sigma_mps_(n.nonNegative("beam_velocity_sigma_mps")),
+      scale_factor_(n.inRange("scale_factor_error", -0.1, 0.1)),
+      min_altitude_m_(n.nonNegative("min_altitude_m")),
+      max_range_m_(n.positive("max_altitude_m")),
+      beam_dropout_probability_(n.inRange("beam_dropout_probability", 0, 1)),
+      label_(n.string("label", "DVL"))
 {
 	rng_.randomize(streamSeed(seed, 2));
 	const int beams = n.integer("beam_count", 4);
@@ -182,7 +196,7 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	}
 	for (double az : beam_azimuths_rad_)
 		beam_dirs_s_.emplace_back(std::sin(inclination_rad_) * std::cos(az),
-								  std::sin(inclination_rad_) * std::sin(az), std::cos(inclination_rad_));
+		                          std::sin(inclination_rad_) * std::sin(az), std::cos(inclination_rad_));
 	Eigen::Matrix3d AtA = Eigen::Matrix3d::Zero();
 	for (const auto& d : beam_dirs_s_) AtA += d * d.transpose();
 	if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(AtA, Eigen::EigenvaluesOnly).eigenvalues()[0] < 1e-3)
@@ -190,7 +204,8 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 
 	const std::string frame = n.string("output_frame", "instrument");
 	if (!auvnav::obs::parseDvlFrame(frame, frame_))
-		n.fail("output_frame", "expected instrument, vehicle, earth_ned, earth_enu or beam, got '" + frame + "'");
+		n.fail("output_frame",
+		       "expected instrument, vehicle, earth_ned, earth_enu or beam, got '" + frame + "'");
 	const std::string sign = n.string("sign", "vehicle_over_bottom");
 	if (!auvnav::obs::parseDvlSign(sign, sign_))
 		n.fail("sign", "expected vehicle_over_bottom or bottom_over_instrument, got '" + sign + "'");
@@ -199,7 +214,7 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	mrpt::random::CRandomGenerator compass_rng;
 	compass_rng.randomize(streamSeed(seed, 12));
 	heading_error_rad_ =
-		n.inRange("heading_error_sigma_deg", 0, 90, 0.0) * kDeg * compass_rng.drawGaussian1D_normalized();
+	    n.inRange("heading_error_sigma_deg", 0, 90, 0.0) * kDeg * compass_rng.drawGaussian1D_normalized();
 	dropout_rate_per_s_ = n.inRange("dropout_rate_per_h", 0, 3600, 0.0) / 3600;
 	dropout_duration_s_ = n.inRange("dropout_duration_s", 0, 600, 0.0);
 	if (dropout_rate_per_s_ > 0 && !(dropout_duration_s_ > 0))
@@ -207,12 +222,13 @@ DvlSim::DvlSim(const config::Node& n, uint32_t seed)
 	outage_rng_.randomize(streamSeed(seed, 13));
 }
 
-void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
-							const Eigen::Matrix3d& C_ls_s) const
+void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x,
+                            const Eigen::Vector3d& v_ls_s, const Eigen::Matrix3d& C_ls_s) const
 {
 	using auvnav::obs::DvlFrame;
 	const double sgn = sign_ == auvnav::obs::DvlSign::BottomOverInstrument ? -1.0 : 1.0;
-	auto write = [&obs](const Eigen::Vector3d& v, const Eigen::Matrix3d& C) {
+	auto write = [&obs](const Eigen::Vector3d& v, const Eigen::Matrix3d& C)
+	{
 		for (int i = 0; i < 3; ++i) obs.velocity_s_mps[i] = v[i];
 		for (int r = 0; r < 3; ++r)
 			for (int c = 0; c < 3; ++c) obs.velocity_cov[3 * r + c] = C(r, c);
@@ -221,14 +237,18 @@ void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleStat
 	Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
 	switch (frame_)
 	{
-		case DvlFrame::Instrument: write(sgn * v_ls_s, C_ls_s); return;  // as it always was, bit for bit
-		case DvlFrame::Vehicle: R = mount_.R_bs_nominal; break;
+		case DvlFrame::Instrument:
+			write(sgn * v_ls_s, C_ls_s);
+			return;  // as it always was, bit for bit
+		case DvlFrame::Vehicle:
+			R = mount_.R_bs_nominal;
+			break;
 		case DvlFrame::EarthNed:
 		case DvlFrame::EarthEnu:
 			// The DVL's own attitude sensors see the housing's true attitude;
 			// its compass adds a heading error about the down axis.
-			R = Eigen::AngleAxisd(heading_error_rad_, Eigen::Vector3d::UnitZ()).toRotationMatrix() * x.R_nb() *
-				mount_.R_bs_true;
+			R = Eigen::AngleAxisd(heading_error_rad_, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+			    x.R_nb() * mount_.R_bs_true;
 			if (frame_ == DvlFrame::EarthEnu)
 			{
 				Eigen::Matrix3d ned_to_enu;
@@ -236,7 +256,8 @@ void DvlSim::reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleStat
 				R = ned_to_enu * R;
 			}
 			break;
-		case DvlFrame::Beam: return;
+		case DvlFrame::Beam:
+			return;
 	}
 	write(sgn * (R * v_ls_s), R * C_ls_s * R.transpose());
 }
@@ -263,7 +284,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 	{
 		// Outages start only while locked; the first ping cannot start one.
 		if (t.t_s >= outage_until_s_ && last_ping_s_ >= 0 &&
-			outage_rng_.drawUniform(0.0, 1.0) < 1 - std::exp(-dropout_rate_per_s_ * (t.t_s - last_ping_s_)))
+		    outage_rng_.drawUniform(0.0, 1.0) < 1 - std::exp(-dropout_rate_per_s_ * (t.t_s - last_ping_s_)))
 		{
 			outage_until_s_ = t.t_s - dropout_duration_s_ * std::log(1 - outage_rng_.drawUniform(0.0, 1.0));
 			++outages_;
@@ -284,9 +305,11 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const double vertical = range * std::cos(inclination_rad_);
 		const bool dropped = rng_.drawUniform(0.0, 1.0) < beam_dropout_probability_;
 		beam.range_m = range > 0 ? range : 0;
-		beam.valid = range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped && !outage;
+		beam.valid =
+		    range > 0 && vertical >= min_altitude_m_ && vertical <= max_range_m_ && !dropped && !outage;
 		beam.azimuth_rad = beam_azimuths_rad_[i];
-		const double radial = (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
+		const double radial =
+		    (1 + scale_factor_) * d_s.dot(v_s) + beam_sigma_mps_ * rng_.drawGaussian1D_normalized();
 		if (beam.valid)
 		{
 			A.row(valid) = d_s.transpose();
@@ -301,7 +324,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 	obs->altitude_m = valid > 0 ? altitude_sum / valid : std::nan("");
 	if (beam_mode)
 	{
-		obs->velocity_s_mps.fill(std::nan(""));	 // no 3-D velocity in beam coordinates
+		obs->velocity_s_mps.fill(std::nan(""));  // no 3-D velocity in beam coordinates
 		obs->velocity_cov.fill(std::nan(""));
 	}
 	else if (obs->bottom_lock)
@@ -311,7 +334,7 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 		const Eigen::LDLT<Eigen::Matrix3d> ldlt(AtA);
 		const Eigen::Vector3d v = ldlt.solve(Av.transpose() * u.head(valid));
 		const Eigen::Matrix3d cov =
-			beam_sigma_mps_ * beam_sigma_mps_ * ldlt.solve(Eigen::Matrix3d::Identity());
+		    beam_sigma_mps_ * beam_sigma_mps_ * ldlt.solve(Eigen::Matrix3d::Identity());
 		reportVelocity(*obs, x, v, cov);
 	}
 	return obs;
@@ -319,17 +342,17 @@ auvnav::obs::CObservationDVL::Ptr DvlSim::sample(const Truth& t, const Environme
 
 // ---------------------------------------------------------------- ADCP
 AdcpSim::AdcpSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
-	  mount_(Mounting::fromConfig(n)),
-	  blank_m_(n.nonNegative("blank_distance_m")),
-	  cell_m_(n.positive("cell_size_m")),
-	  sigma_mps_(n.nonNegative("velocity_sigma_mps")),
-	  inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
-	  min_correlation_(n.inRange("min_correlation", 0, 1)),
-	  bad_cell_sigma_mps_(n.nonNegative("low_correlation_sigma_mps")),
-	  cell_count_(n.integer("cell_count")),
-	  label_(n.string("label", "ADCP"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      offset_s_(n.nonNegative("time_offset_s", 0.0)),
+      mount_(Mounting::fromConfig(n)),
+      blank_m_(n.nonNegative("blank_distance_m")),
+      cell_m_(n.positive("cell_size_m")),
+      sigma_mps_(n.nonNegative("velocity_sigma_mps")),
+      inclination_rad_(n.inRange("beam_inclination_deg", 5, 60) * kDeg),
+      min_correlation_(n.inRange("min_correlation", 0, 1)),
+      bad_cell_sigma_mps_(n.nonNegative("low_correlation_sigma_mps")),
+      cell_count_(n.integer("cell_count")),
+      label_(n.string("label", "ADCP"))
 {
 	if (cell_count_ < 1 || cell_count_ > 256) n.fail("cell_count", "expected 1..256");
 	rng_.randomize(streamSeed(seed, 3));
@@ -338,7 +361,10 @@ AdcpSim::AdcpSim(const config::Node& n, uint32_t seed)
 	bias_ = {GaussMarkov(sigma, tau, rng_), GaussMarkov(sigma, tau, rng_)};
 }
 
-double AdcpSim::farRange_m() const { return blank_m_ + cell_count_ * cell_m_; }
+double AdcpSim::farRange_m() const
+{
+	return blank_m_ + cell_count_ * cell_m_;
+}
 
 auvnav::obs::CObservationADCP::Ptr AdcpSim::sample(const Truth& t, const Environment& env)
 {
@@ -369,14 +395,15 @@ auvnav::obs::CObservationADCP::Ptr AdcpSim::sample(const Truth& t, const Environ
 		const bool in_water = d + 0.5 * cell_m_ <= clean_range;
 		const Eigen::Vector3d p_cell = s.p_n + d * axis_n;
 		// In water: current relative to the sensor; in the seabed: bottom echo.
-		const Eigen::Vector3d rel_n = in_water ? Eigen::Vector3d(env.current(p_cell.z()) - s.v_n) : Eigen::Vector3d(-s.v_n);
+		const Eigen::Vector3d rel_n =
+		    in_water ? Eigen::Vector3d(env.current(p_cell.z()) - s.v_n) : Eigen::Vector3d(-s.v_n);
 		cell.correlation = std::clamp(0.95 - 0.02 * i + 0.03 * rng_.drawGaussian1D_normalized(), 0.0, 1.0);
 		const bool good = cell.correlation >= min_correlation_;
 		const double sigma = good ? sigma_mps_ : bad_cell_sigma_mps_;
-		const Eigen::Vector3d v_s = R_ns.transpose() * rel_n + bias_s +
-									sigma * Eigen::Vector3d(rng_.drawGaussian1D_normalized(),
-															rng_.drawGaussian1D_normalized(),
-															rng_.drawGaussian1D_normalized());
+		const Eigen::Vector3d v_s =
+		    R_ns.transpose() * rel_n + bias_s +
+		    sigma * Eigen::Vector3d(rng_.drawGaussian1D_normalized(), rng_.drawGaussian1D_normalized(),
+		                            rng_.drawGaussian1D_normalized());
 		for (int k = 0; k < 3; ++k) cell.velocity_s_mps[k] = v_s[k];
 		cell.valid = in_water && good;
 		obs->cells.push_back(cell);
@@ -386,19 +413,19 @@ auvnav::obs::CObservationADCP::Ptr AdcpSim::sample(const Truth& t, const Environ
 
 // ---------------------------------------------------------------- pressure
 PressureSim::PressureSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
-	  mount_(Mounting::fromConfig(n)),
-	  sigma_pa_(n.nonNegative("noise_sigma_pa")),
-	  resolution_pa_(n.inRange("resolution_pa", 0, 1e4, 0.0)),
-	  label_(n.string("label", "PRESSURE"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      offset_s_(n.nonNegative("time_offset_s", 0.0)),
+      mount_(Mounting::fromConfig(n)),
+      sigma_pa_(n.nonNegative("noise_sigma_pa")),
+      resolution_pa_(n.inRange("resolution_pa", 0, 1e4, 0.0)),
+      label_(n.string("label", "PRESSURE"))
 {
 	rng_.randomize(streamSeed(seed, 4));
 	bias_pa_ = n.nonNegative("bias_sigma_pa") * rng_.drawGaussian1D_normalized();
 }
 
 auvnav::obs::CObservationPressure::Ptr PressureSim::sample(const Truth& t, const Environment& env,
-														   const earth::TangentFrame& frame)
+                                                           const earth::TangentFrame& frame)
 {
 	const PointKinematics s = pointOnVehicle(*t.x, mount_.position_b);
 	const double depth = std::max(0.0, s.p_n.z());
@@ -408,7 +435,7 @@ auvnav::obs::CObservationPressure::Ptr PressureSim::sample(const Truth& t, const
 	obs->sensorLabel = label_;
 	obs->sensorPose = mount_.nominalPose();
 	obs->pressure_pa = env.water().atmospheric_pressure_pa + env.water().density_kg_m3 * g * depth +
-					   bias_pa_ + sigma_pa_ * rng_.drawGaussian1D_normalized();
+	                   bias_pa_ + sigma_pa_ * rng_.drawGaussian1D_normalized();
 	if (resolution_pa_ > 0) obs->pressure_pa = resolution_pa_ * std::round(obs->pressure_pa / resolution_pa_);
 	obs->temperature_c = env.temperature(depth);
 	return obs;
@@ -416,18 +443,18 @@ auvnav::obs::CObservationPressure::Ptr PressureSim::sample(const Truth& t, const
 
 // ---------------------------------------------------------------- GPS
 GpsSim::GpsSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  mount_(Mounting::fromConfig(n)),
-	  sigma_white_m_(n.nonNegative("white_sigma_m")),
-	  sigma_corr_m_(n.nonNegative("correlated_sigma_m")),
-	  tau_corr_s_(n.positive("correlation_time_s")),
-	  sigma_vertical_m_(n.nonNegative("vertical_sigma_m")),
-	  outlier_probability_(n.inRange("outlier_probability", 0, 1)),
-	  outlier_min_m_(n.nonNegative("outlier_min_m")),
-	  outlier_max_m_(n.nonNegative("outlier_max_m")),
-	  reacquisition_s_(n.nonNegative("reacquisition_s")),
-	  min_antenna_height_m_(n.nonNegative("min_antenna_height_m")),
-	  label_(n.string("label", "GPS"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      mount_(Mounting::fromConfig(n)),
+      sigma_white_m_(n.nonNegative("white_sigma_m")),
+      sigma_corr_m_(n.nonNegative("correlated_sigma_m")),
+      tau_corr_s_(n.positive("correlation_time_s")),
+      sigma_vertical_m_(n.nonNegative("vertical_sigma_m")),
+      outlier_probability_(n.inRange("outlier_probability", 0, 1)),
+      outlier_min_m_(n.nonNegative("outlier_min_m")),
+      outlier_max_m_(n.nonNegative("outlier_max_m")),
+      reacquisition_s_(n.nonNegative("reacquisition_s")),
+      min_antenna_height_m_(n.nonNegative("min_antenna_height_m")),
+      label_(n.string("label", "GPS"))
 {
 	if (outlier_max_m_ < outlier_min_m_) n.fail("outlier_max_m", "must be >= outlier_min_m");
 	rng_.randomize(streamSeed(seed, 5));
@@ -488,19 +515,19 @@ mrpt::obs::CObservationGPS::Ptr GpsSim::sample(const Truth& t, const earth::Tang
 
 // ---------------------------------------------------------------- USBL
 UsblSim::UsblSim(const config::Node& n, uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  mount_(Mounting::fromConfig(n)),
-	  sigma_m_(n.nonNegative("sigma_m")),
-	  sigma_range_fraction_(n.inRange("sigma_range_fraction", 0, 1, 0.0)),
-	  depth_sigma_m_(n.nonNegative("depth_sigma_m", 1.0)),
-	  latency_s_(n.inRange("latency_s", 0, 60)),
-	  dropout_probability_(n.inRange("dropout_probability", 0, 1, 0.0)),
-	  outlier_probability_(n.inRange("outlier_probability", 0, 1, 0.0)),
-	  outlier_min_m_(n.nonNegative("outlier_min_m", 10.0)),
-	  outlier_max_m_(n.nonNegative("outlier_max_m", 50.0)),
-	  report_time_(n.boolean("report_measurement_time", true)),
-	  report_covariance_(n.boolean("report_covariance", true)),
-	  label_(n.string("label", "USBL"))
+    : period_s_(1.0 / n.positive("rate_hz")),
+      mount_(Mounting::fromConfig(n)),
+      sigma_m_(n.nonNegative("sigma_m")),
+      sigma_range_fraction_(n.inRange("sigma_range_fraction", 0, 1, 0.0)),
+      depth_sigma_m_(n.nonNegative("depth_sigma_m", 1.0)),
+      latency_s_(n.inRange("latency_s", 0, 60)),
+      dropout_probability_(n.inRange("dropout_probability", 0, 1, 0.0)),
+      outlier_probability_(n.inRange("outlier_probability", 0, 1, 0.0)),
+      outlier_min_m_(n.nonNegative("outlier_min_m", 10.0)),
+      outlier_max_m_(n.nonNegative("outlier_max_m", 50.0)),
+      report_time_(n.boolean("report_measurement_time", true)),
+      report_covariance_(n.boolean("report_covariance", true)),
+      label_(n.string("label", "USBL"))
 {
 	const auto ship = n.numbers("ship_position_ne_m");
 	if (ship.size() != 2) n.fail("ship_position_ne_m", "expected [north_m, east_m]");
@@ -516,9 +543,10 @@ auvnav::obs::CObservationUSBL::Ptr UsblSim::sample(const Truth& t, const earth::
 	// change the fixes of a seed.
 	const double u_drop = rng_.drawUniform(0.0, 1.0);
 	const Eigen::Vector3d w(rng_.drawGaussian1D_normalized(), rng_.drawGaussian1D_normalized(),
-							rng_.drawGaussian1D_normalized());
-	const double u_out = rng_.drawUniform(0.0, 1.0), out_mag = rng_.drawUniform(outlier_min_m_, outlier_max_m_),
-				 out_dir = rng_.drawUniform(0.0, 2 * M_PI);
+	                        rng_.drawGaussian1D_normalized());
+	const double u_out = rng_.drawUniform(0.0, 1.0),
+	             out_mag = rng_.drawUniform(outlier_min_m_, outlier_max_m_),
+	             out_dir = rng_.drawUniform(0.0, 2 * M_PI);
 	if (u_drop < dropout_probability_) return nullptr;
 
 	const Eigen::Vector3d p_t = pointOnVehicle(*t.x, mount_.position_b).p_n;
@@ -538,12 +566,14 @@ auvnav::obs::CObservationUSBL::Ptr UsblSim::sample(const Truth& t, const earth::
 	auto obs = auvnav::obs::CObservationUSBL::Create();
 	obs->sensorLabel = label_;
 	obs->sensorPose = mount_.nominalPose();
-	obs->timestamp = t.stamp + std::chrono::duration_cast<mrpt::Clock::duration>(std::chrono::duration<double>(latency_s_));
+	obs->timestamp = t.stamp + std::chrono::duration_cast<mrpt::Clock::duration>(
+	                               std::chrono::duration<double>(latency_s_));
 	if (report_time_) obs->measurement_time = t.stamp;
 	obs->frame = auvnav::obs::UsblFrame::Geodetic;
 	obs->position = {g.lat_rad / kDeg, g.lon_rad / kDeg, p_fix.z()};
 	if (report_covariance_)
-		obs->covariance_ned_m2 = {sigma * sigma, 0, 0, 0, sigma * sigma, 0, 0, 0, depth_sigma_m_ * depth_sigma_m_};
+		obs->covariance_ned_m2 = {
+		    sigma * sigma, 0, 0, 0, sigma * sigma, 0, 0, 0, depth_sigma_m_ * depth_sigma_m_};
 	obs->slant_range_m = range;
 	return obs;
 }
@@ -552,7 +582,8 @@ auvnav::obs::CObservationUSBL::Ptr UsblSim::sample(const Truth& t, const earth::
 Eigen::Vector3d MagneticField::fieldNed_ut() const
 {
 	const double cI = std::cos(inclination_rad), sI = std::sin(inclination_rad);
-	return total_intensity_ut * Eigen::Vector3d(cI * std::cos(declination_rad), cI * std::sin(declination_rad), sI);
+	return total_intensity_ut *
+	       Eigen::Vector3d(cI * std::cos(declination_rad), cI * std::sin(declination_rad), sI);
 }
 
 MagneticField MagneticField::fromConfig(const config::Node& n)
@@ -565,18 +596,19 @@ MagneticField MagneticField::fromConfig(const config::Node& n)
 	return f;
 }
 
-MagnetometerSim::MagnetometerSim(const config::Node& n, const MagneticField& field, std::size_t thruster_count,
-								 uint32_t seed)
-	: period_s_(1.0 / n.positive("rate_hz")),
-	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
-	  mount_(Mounting::fromConfig(n)),
-	  m_n_ut_(field.fieldNed_ut()),
-	  sigma_ut_(n.nonNegative("noise_sigma_ut")),
-	  label_(n.string("label", "MAG"))
+MagnetometerSim::MagnetometerSim(const config::Node& n, const MagneticField& field,
+                                 std::size_t thruster_count, uint32_t seed)
+    : period_s_(1.0 / n.positive("rate_hz")),
+      offset_s_(n.nonNegative("time_offset_s", 0.0)),
+      mount_(Mounting::fromConfig(n)),
+      m_n_ut_(field.fieldNed_ut()),
+      sigma_ut_(n.nonNegative("noise_sigma_ut")),
+      label_(n.string("label", "MAG"))
 {
 	rng_.randomize(streamSeed(seed, 6));
 	hard_iron_ut_ = n.vector3("hard_iron_ut", Eigen::Vector3d::Zero());
-	if ((hard_iron_ut_.array().abs() > 1000).any()) n.fail("hard_iron_ut", "expected |offset| <= 1000 uT per axis");
+	if ((hard_iron_ut_.array().abs() > 1000).any())
+		n.fail("hard_iron_ut", "expected |offset| <= 1000 uT per axis");
 	if (n.has("soft_iron"))
 	{
 		const auto v = n.numbers("soft_iron");
@@ -588,8 +620,9 @@ MagnetometerSim::MagnetometerSim(const config::Node& n, const MagneticField& fie
 		const Eigen::JacobiSVD<Eigen::Matrix3d> svd(soft_iron_);
 		const auto sv = svd.singularValues();
 		if (soft_iron_.determinant() <= 0 || sv.minCoeff() < 0.2 || sv.maxCoeff() > 5)
-			n.fail("soft_iron", "expected an invertible matrix with positive determinant and singular values in "
-								"[0.2, 5]");
+			n.fail("soft_iron",
+			       "expected an invertible matrix with positive determinant and singular values in "
+			       "[0.2, 5]");
 	}
 	thruster_gain_ut_per_n_ = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, thruster_count);
 	if (n.has("thruster_disturbance_ut_per_n"))
@@ -597,7 +630,7 @@ MagnetometerSim::MagnetometerSim(const config::Node& n, const MagneticField& fie
 		const auto v = n.numbers("thruster_disturbance_ut_per_n");
 		if (v.size() != 3 && v.size() != 3 * thruster_count)
 			n.fail("thruster_disturbance_ut_per_n", "expected 3 values (every thruster) or 3 per thruster (" +
-														std::to_string(3 * thruster_count) + ")");
+			                                            std::to_string(3 * thruster_count) + ")");
 		for (std::size_t i = 0; i < thruster_count; ++i)
 			for (int k = 0; k < 3; ++k)
 			{
@@ -612,7 +645,8 @@ Eigen::Vector3d MagnetometerSim::expected_ut(const VehicleState& x) const
 {
 	const Eigen::Matrix3d R_ns = x.R_nb() * mount_.R_bs_true;
 	Eigen::Vector3d h = soft_iron_ * (R_ns.transpose() * m_n_ut_) + hard_iron_ut_;
-	if (x.thrust_n.size() == thruster_gain_ut_per_n_.cols()) h += thruster_gain_ut_per_n_ * x.thrust_n.cwiseAbs();
+	if (x.thrust_n.size() == thruster_gain_ut_per_n_.cols())
+		h += thruster_gain_ut_per_n_ * x.thrust_n.cwiseAbs();
 	return h;
 }
 

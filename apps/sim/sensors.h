@@ -30,11 +30,11 @@ namespace auvnav::sim
 /** What the sensors may look at: the true state at one instant. */
 struct Truth
 {
-	double t_s = 0;					  //!< mission time [s]
-	mrpt::Clock::time_point stamp;	  //!< absolute time of this instant
+	double t_s = 0;                   //!< mission time [s]
+	mrpt::Clock::time_point stamp;    //!< absolute time of this instant
 	const VehicleState* x = nullptr;  //!< true vehicle state
 	Vector6d nu_dot_b = Vector6d::Zero();
-	Eigen::Vector3d current_n{0, 0, 0};	 //!< water current at the vehicle
+	Eigen::Vector3d current_n{0, 0, 0};  //!< water current at the vehicle
 };
 
 /** Mounting of a sensor on the vehicle: nominal (what the observation and the
@@ -59,7 +59,7 @@ struct Mounting
  *  draw and leave the noise of a seed unchanged. */
 class ImuSim
 {
-   public:
+ public:
 	ImuSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	/** Specific force and inertial angular rate at the IMU, with errors. */
@@ -67,7 +67,7 @@ class ImuSim
 	Eigen::Vector3d gyroBias() const;
 	Eigen::Vector3d accelBias() const;
 
-   private:
+ private:
 	double period_s_;
 	Mounting mount_;
 	mrpt::random::CRandomGenerator rng_;
@@ -100,7 +100,7 @@ class ImuSim
  *  during one every beam is invalid. Own stream; off by default. */
 class DvlSim
 {
-   public:
+ public:
 	DvlSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
@@ -110,16 +110,16 @@ class DvlSim
 	/** Whole-ping outages begun so far. */
 	std::size_t outages() const { return outages_; }
 
-   private:
+ private:
 	/** Writes the least-squares sensor-frame velocity `v_ls_s` and its
 	 *  covariance `C_ls_s` in the configured frame and sign. */
-	void reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x, const Eigen::Vector3d& v_ls_s,
-						const Eigen::Matrix3d& C_ls_s) const;
+	void reportVelocity(auvnav::obs::CObservationDVL& obs, const VehicleState& x,
+	                    const Eigen::Vector3d& v_ls_s, const Eigen::Matrix3d& C_ls_s) const;
 
 	double period_s_, offset_s_;
 	Mounting mount_;
 	double inclination_rad_, beam_sigma_mps_, scale_factor_, min_altitude_m_, max_range_m_,
-		beam_dropout_probability_;
+	    beam_dropout_probability_;
 	std::vector<Eigen::Vector3d> beam_dirs_s_;
 	std::vector<double> beam_azimuths_rad_;
 	auvnav::obs::DvlFrame frame_ = auvnav::obs::DvlFrame::Instrument;
@@ -135,7 +135,7 @@ class DvlSim
 
 class AdcpSim
 {
-   public:
+ public:
 	AdcpSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
@@ -143,7 +143,7 @@ class AdcpSim
 	Eigen::Vector2d bias() const { return {bias_[0].value(), bias_[1].value()}; }
 	double farRange_m() const;
 
-   private:
+ private:
 	double period_s_, offset_s_;
 	Mounting mount_;
 	double blank_m_, cell_m_, sigma_mps_, inclination_rad_, min_correlation_, bad_cell_sigma_mps_;
@@ -159,14 +159,14 @@ class AdcpSim
  *  0 = none) as a digital sensor (MS5837 class) reports it. */
 class PressureSim
 {
-   public:
+ public:
 	PressureSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
 	auvnav::obs::CObservationPressure::Ptr sample(const Truth& truth, const Environment& env,
-												  const earth::TangentFrame& frame);
+	                                              const earth::TangentFrame& frame);
 
-   private:
+ private:
 	double period_s_, offset_s_;
 	Mounting mount_;
 	double sigma_pa_, bias_pa_, resolution_pa_;
@@ -176,21 +176,21 @@ class PressureSim
 
 class GpsSim
 {
-   public:
+ public:
 	GpsSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	/** A fix, or nothing when the antenna is under water or reacquiring. */
 	mrpt::obs::CObservationGPS::Ptr sample(const Truth& truth, const earth::TangentFrame& frame);
 	std::size_t outliers() const { return outliers_; }
 
-   private:
+ private:
 	double period_s_;
 	Mounting mount_;
 	double sigma_white_m_, sigma_corr_m_, tau_corr_s_, sigma_vertical_m_, outlier_probability_,
-		outlier_min_m_, outlier_max_m_, reacquisition_s_, min_antenna_height_m_;
+	    outlier_min_m_, outlier_max_m_, reacquisition_s_, min_antenna_height_m_;
 	std::array<GaussMarkov, 2> corr_;
 	double last_t_s_ = 0;
-	double surfaced_since_s_ = -1;	// −1: antenna under water
+	double surfaced_since_s_ = -1;  // −1: antenna under water
 	std::size_t outliers_ = 0;
 	mrpt::random::CRandomGenerator rng_;
 	std::string label_;
@@ -213,19 +213,19 @@ class GpsSim
  *  variants log the same fixes. Own stream. */
 class UsblSim
 {
-   public:
+ public:
 	UsblSim(const config::Node& n, uint32_t seed);
 	double period_s() const { return period_s_; }
 	/** A fix (timestamp = arrival), or nothing (dropout). */
 	auvnav::obs::CObservationUSBL::Ptr sample(const Truth& truth, const earth::TangentFrame& frame);
 	std::size_t outliers() const { return outliers_; }
 
-   private:
+ private:
 	double period_s_;
 	Mounting mount_;
 	Eigen::Vector3d ship_n_;
-	double sigma_m_, sigma_range_fraction_, depth_sigma_m_, latency_s_, dropout_probability_, outlier_probability_,
-		outlier_min_m_, outlier_max_m_;
+	double sigma_m_, sigma_range_fraction_, depth_sigma_m_, latency_s_, dropout_probability_,
+	    outlier_probability_, outlier_min_m_, outlier_max_m_;
 	Eigen::Vector2d bias_ne_m_;
 	bool report_time_, report_covariance_;
 	std::size_t outliers_ = 0;
@@ -261,8 +261,9 @@ struct MagneticField
  *  IMU/body axes), sensorPose = the nominal mounting. */
 class MagnetometerSim
 {
-   public:
-	MagnetometerSim(const config::Node& n, const MagneticField& field, std::size_t thruster_count, uint32_t seed);
+ public:
+	MagnetometerSim(const config::Node& n, const MagneticField& field, std::size_t thruster_count,
+	                uint32_t seed);
 	double period_s() const { return period_s_; }
 	double offset_s() const { return offset_s_; }
 	mrpt::obs::CObservationIMU::Ptr sample(const Truth& truth);
@@ -271,7 +272,7 @@ class MagnetometerSim
 	const Eigen::Matrix3d& softIron() const { return soft_iron_; }
 	const Eigen::Vector3d& hardIron_ut() const { return hard_iron_ut_; }
 
-   private:
+ private:
 	double period_s_, offset_s_;
 	Mounting mount_;
 	Eigen::Vector3d m_n_ut_;

@@ -13,18 +13,18 @@ constexpr double kDeg = M_PI / 180;
 }
 
 SonarSim::SonarSim(const config::Node& n, sonar::PoleMap poles, uint32_t seed)
-	: period_s_(1.0 / n.inRange("rate_hz", 0.01, 50)),
-	  offset_s_(n.nonNegative("time_offset_s", 0.0)),
-	  mount_(Mounting::fromConfig(n)),
-	  poles_(std::move(poles)),
-	  tilt_rad_(n.inRange("tilt_deg", 0, 90) * kDeg),
-	  vertical_beamwidth_rad_(n.inRange("vertical_beamwidth_deg", 1, 90) * kDeg),
-	  horizontal_beamwidth_rad_(n.inRange("horizontal_beamwidth_deg", 0.05, 20) * kDeg),
-	  seabed_level_(n.inRange("seabed_level", 0, 255)),
-	  pole_level_(n.inRange("pole_level", 0, 255)),
-	  water_level_(n.inRange("water_level", 0, 255)),
-	  shadow_factor_(n.inRange("shadow_factor", 0, 1)),
-	  label_(n.string("label", "SONAR"))
+    : period_s_(1.0 / n.inRange("rate_hz", 0.01, 50)),
+      offset_s_(n.nonNegative("time_offset_s", 0.0)),
+      mount_(Mounting::fromConfig(n)),
+      poles_(std::move(poles)),
+      tilt_rad_(n.inRange("tilt_deg", 0, 90) * kDeg),
+      vertical_beamwidth_rad_(n.inRange("vertical_beamwidth_deg", 1, 90) * kDeg),
+      horizontal_beamwidth_rad_(n.inRange("horizontal_beamwidth_deg", 0.05, 20) * kDeg),
+      seabed_level_(n.inRange("seabed_level", 0, 255)),
+      pole_level_(n.inRange("pole_level", 0, 255)),
+      water_level_(n.inRange("water_level", 0, 255)),
+      shadow_factor_(n.inRange("shadow_factor", 0, 1)),
+      label_(n.string("label", "SONAR"))
 {
 	geom_ = sonar::PolarGeometry::fromConfig(n);
 	rng_.randomize(seed * 7919u + 101u);
@@ -37,7 +37,7 @@ double SonarSim::sonarHeading(const Truth& truth) const
 }
 
 mrpt::obs::CObservationImage::Ptr SonarSim::sample(const Truth& truth, const Environment& env,
-												   std::vector<PoleInView>& in_view)
+                                                   std::vector<PoleInView>& in_view)
 {
 	const auto& x = *truth.x;
 	const Eigen::Vector3d p_s = x.p_n + x.R_nb() * mount_.position_b;
@@ -102,7 +102,8 @@ mrpt::obs::CObservationImage::Ptr SonarSim::sample(const Truth& truth, const Env
 			{
 				const double a = sonar::wrapAngle(theta - v.bearing) / std::hypot(sigma_theta, v.half_angle);
 				const double b = (rho - v.range) / sigma_rho;
-				if (std::abs(a) < 5 && std::abs(b) < 5) pole += pole_level_ * std::exp(-0.5 * (a * a + b * b));
+				if (std::abs(a) < 5 && std::abs(b) < 5)
+					pole += pole_level_ * std::exp(-0.5 * (a * a + b * b));
 			}
 			const double u1 = std::max(rng_.drawUniform(0.0, 1.0), 1e-12);
 			const double speckle = rayleigh_sigma * std::sqrt(-2.0 * std::log(u1));

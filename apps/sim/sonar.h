@@ -41,7 +41,7 @@ struct PoleInView
 
 class SonarSim
 {
-   public:
+ public:
 	/** `n`: the sensors file's `sonar:` section; `poles`: the truth map. */
 	SonarSim(const config::Node& n, sonar::PoleMap poles, uint32_t seed);
 	double period_s() const { return period_s_; }
@@ -49,11 +49,11 @@ class SonarSim
 	const sonar::PolarGeometry& geometry() const { return geom_; }
 	/** A frame at this instant; `in_view` receives the poles it shows. */
 	mrpt::obs::CObservationImage::Ptr sample(const Truth& truth, const Environment& env,
-											 std::vector<PoleInView>& in_view);
+	                                         std::vector<PoleInView>& in_view);
 	/** True heading of the sonar's bearing-0 direction in NED [rad]. */
 	double sonarHeading(const Truth& truth) const;
 
-   private:
+ private:
 	double period_s_, offset_s_;
 	Mounting mount_;
 	sonar::PolarGeometry geom_;

@@ -15,8 +15,10 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 
 Matrix6d coriolisMatrix(const Matrix6d& M, const Vector6d& nu)
 {
-	const Eigen::Vector3d a = M.topLeftCorner<3, 3>() * nu.head<3>() + M.topRightCorner<3, 3>() * nu.tail<3>();
-	const Eigen::Vector3d b = M.bottomLeftCorner<3, 3>() * nu.head<3>() + M.bottomRightCorner<3, 3>() * nu.tail<3>();
+	const Eigen::Vector3d a =
+	    M.topLeftCorner<3, 3>() * nu.head<3>() + M.topRightCorner<3, 3>() * nu.tail<3>();
+	const Eigen::Vector3d b =
+	    M.bottomLeftCorner<3, 3>() * nu.head<3>() + M.bottomRightCorner<3, 3>() * nu.tail<3>();
 	Matrix6d C = Matrix6d::Zero();
 	C.topRightCorner<3, 3>() = -skew(a);
 	C.bottomLeftCorner<3, 3>() = -skew(a);
@@ -71,7 +73,7 @@ VehicleParams VehicleParams::fromConfig(const config::Node& n)
 			n.fail("inertia_diag", "translational inertia must include the rigid-body mass weight_n/g");
 	for (const auto& t : n.sequence("thrusters"))
 	{
-		t.markFreeForm("name");	 // a label for people only
+		t.markFreeForm("name");  // a label for people only
 		Thruster th;
 		th.position_b = t.vector3("position_m");
 		th.direction_b = t.vector3("direction");
@@ -132,7 +134,7 @@ Eigen::VectorXd Vehicle::steadyThrust(const Eigen::VectorXd& cmd_n) const
 }
 
 VehicleRates Vehicle::rates(const VehicleState& x, const Eigen::VectorXd& cmd_n,
-							const Eigen::Vector3d& current_n) const
+                            const Eigen::Vector3d& current_n) const
 {
 	const Eigen::Matrix3d R_nb = x.R_nb();
 	const Eigen::Vector3d v_b = x.nu_b.head<3>();
@@ -170,9 +172,8 @@ VehicleRates Vehicle::rates(const VehicleState& x, const Eigen::VectorXd& cmd_n,
 	// mass must also accelerate (Fossen 2011, ch. 10).
 	Vector6d current_accel = Vector6d::Zero();
 	current_accel.head<3>() = -w_b.cross(vc_b);
-	const Vector6d rhs = tau - coriolisMatrix(M_RB, x.nu_b) * x.nu_b -
-						 coriolisMatrix(M_A_, nu_r) * nu_r - damping -
-						 restoring(R_nb, x.p_n.z()) + M_A_ * current_accel;
+	const Vector6d rhs = tau - coriolisMatrix(M_RB, x.nu_b) * x.nu_b - coriolisMatrix(M_A_, nu_r) * nu_r -
+	                     damping - restoring(R_nb, x.p_n.z()) + M_A_ * current_accel;
 
 	VehicleRates r;
 	r.nu_dot_b = M_inv_ * rhs;
@@ -201,7 +202,7 @@ VehicleState advance(const VehicleState& x, const VehicleRates& k, double h)
 }  // namespace
 
 void Vehicle::step(VehicleState& x, const Eigen::VectorXd& cmd_n, const Eigen::Vector3d& current_n,
-				   double dt_s) const
+                   double dt_s) const
 {
 	const VehicleRates k1 = rates(x, cmd_n, current_n);
 	const VehicleRates k2 = rates(advance(x, k1, 0.5 * dt_s), cmd_n, current_n);

@@ -25,22 +25,22 @@ struct Thruster
 {
 	Eigen::Vector3d position_b{0, 0, 0};   //!< thruster location [m], body FRD
 	Eigen::Vector3d direction_b{1, 0, 0};  //!< unit force direction for positive effort
-	double max_force_n = 60;			   //!< saturation [N]
-	double time_constant_s = 0.15;		   //!< first-order lag of the produced force
-	double efficiency_forward = 1.0;	   //!< true force / commanded force, positive effort
-	double efficiency_reverse = 1.0;	   //!< same, negative effort
+	double max_force_n = 60;               //!< saturation [N]
+	double time_constant_s = 0.15;         //!< first-order lag of the produced force
+	double efficiency_forward = 1.0;       //!< true force / commanded force, positive effort
+	double efficiency_reverse = 1.0;       //!< same, negative effort
 };
 
 struct VehicleParams
 {
-	Matrix6d M = Matrix6d::Identity();	 //!< total inertia incl. added mass [kg, kg·m²]
-	double mass_kg = 1;					 //!< rigid-body mass (rest of M is added mass)
-	Matrix6d D_l = Matrix6d::Zero();	 //!< linear damping
-	Matrix6d D_q = Matrix6d::Zero();	 //!< quadratic damping, τ_q = D_q (|ν_r| ∘ ν_r)
+	Matrix6d M = Matrix6d::Identity();  //!< total inertia incl. added mass [kg, kg·m²]
+	double mass_kg = 1;                 //!< rigid-body mass (rest of M is added mass)
+	Matrix6d D_l = Matrix6d::Zero();    //!< linear damping
+	Matrix6d D_q = Matrix6d::Zero();    //!< quadratic damping, τ_q = D_q (|ν_r| ∘ ν_r)
 	double weight_n = 0, buoyancy_n = 0;
-	Eigen::Vector3d r_g_b{0, 0, 0};		 //!< centre of gravity [m], body
-	Eigen::Vector3d r_b_b{0, 0, 0};		 //!< centre of buoyancy [m], body
-	double hull_height_m = 0.5;			 //!< for partial buoyancy at the surface
+	Eigen::Vector3d r_g_b{0, 0, 0};  //!< centre of gravity [m], body
+	Eigen::Vector3d r_b_b{0, 0, 0};  //!< centre of buoyancy [m], body
+	double hull_height_m = 0.5;      //!< for partial buoyancy at the surface
 	//! Extra damping [heave N/(m/s), roll, pitch N·m/(rad/s)] while the hull
 	//! breaks the surface (wave radiation), faded out as the hull submerges.
 	Eigen::Vector3d surface_damping{0, 0, 0};
@@ -48,8 +48,8 @@ struct VehicleParams
 	// Tether drag (unmodelled by the filter): horizontal quadratic drag on the
 	// wetted tether length, applied at the attachment point.
 	bool tether_enabled = false;
-	double tether_drag_n_per_m = 0;		 //!< N per metre of tether per (m/s)²
-	double tether_extra_length_m = 0;	 //!< tether in the water beyond the depth
+	double tether_drag_n_per_m = 0;    //!< N per metre of tether per (m/s)²
+	double tether_extra_length_m = 0;  //!< tether in the water beyond the depth
 	Eigen::Vector3d tether_attach_b{0, 0, 0};
 
 	/** Thruster configuration matrix (6 x n): column i = [d_i; r_i × d_i]. */
@@ -63,7 +63,7 @@ struct VehicleState
 	Eigen::Vector3d p_n{0, 0, 0};  //!< CG position, NED tangent frame [m]
 	Eigen::Quaterniond q_nb{1, 0, 0, 0};
 	Vector6d nu_b = Vector6d::Zero();  //!< [v_b; ω_b] over ground [m/s, rad/s]
-	Eigen::VectorXd thrust_n;		   //!< force each thruster produces now [N]
+	Eigen::VectorXd thrust_n;          //!< force each thruster produces now [N]
 
 	Eigen::Matrix3d R_nb() const { return q_nb.toRotationMatrix(); }
 	Eigen::Vector3d v_n() const { return q_nb * nu_b.head<3>(); }
@@ -73,25 +73,25 @@ struct VehicleState
 struct VehicleRates
 {
 	Eigen::Vector3d p_dot_n;
-	Eigen::Vector4d q_dot;	// (w, x, y, z)
+	Eigen::Vector4d q_dot;  // (w, x, y, z)
 	Vector6d nu_dot_b;
 	Eigen::VectorXd thrust_dot;
 };
 
 class Vehicle
 {
-   public:
+ public:
 	explicit Vehicle(VehicleParams p);
 	const VehicleParams& params() const { return p_; }
 
 	/** State derivative given commanded thruster forces `cmd_n` (held
 	 *  constant over the step) and the water current at the vehicle. */
 	VehicleRates rates(const VehicleState& x, const Eigen::VectorXd& cmd_n,
-					   const Eigen::Vector3d& current_n) const;
+	                   const Eigen::Vector3d& current_n) const;
 
 	/** One classical Runge–Kutta step of `dt_s`; renormalises the quaternion. */
 	void step(VehicleState& x, const Eigen::VectorXd& cmd_n, const Eigen::Vector3d& current_n,
-			  double dt_s) const;
+	          double dt_s) const;
 
 	/** Restoring forces/moments g(R) with the buoyancy reduced when the hull
 	 *  breaches the surface (depth of the CG `depth_m`). */
@@ -101,7 +101,7 @@ class Vehicle
 	 *  direction-dependent efficiency); the lag is in the state. */
 	Eigen::VectorXd steadyThrust(const Eigen::VectorXd& cmd_n) const;
 
-   private:
+ private:
 	VehicleParams p_;
 	Matrix6d M_inv_;
 	Matrix6d M_A_;

@@ -6,12 +6,12 @@
 // time is the last number in the file name). Writes DIR/landmark_headings.csv,
 // annotated fan images DIR/fan_NNNNNN.png and, with --truth, DIR/score.md;
 // --export-polar DIR2 also saves the raw frames as PNGs (a PNG-folder input).
+#include <auvnav/cli.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/io/trajectory.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/sonar/frame.h>
 #include <auvnav/sonar/pipeline.h>
-#include <auvnav/cli.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,15 +36,15 @@ constexpr double kMaxTrajectoryGap_s = 2.0;  // no pose interpolated across a lo
 
 struct Frame
 {
-	double t = NAN;	 //!< Unix time [s] (or the file's number)
+	double t = NAN;  //!< Unix time [s] (or the file's number)
 	std::string name;
 	cv::Mat polar;
 	sonar::PolarGeometry geometry;
 };
 
 /** Calls `fn` for each frame of a rawlog; counts what it skips. */
-void rawlogFrames(const std::string& path, const sonar::SonarConfig& cfg, const std::function<void(Frame&)>& fn,
-				  std::size_t& skipped)
+void rawlogFrames(const std::string& path, const sonar::SonarConfig& cfg,
+                  const std::function<void(Frame&)>& fn, std::size_t& skipped)
 {
 	io::RawlogReader reader(path);
 	std::size_t index = 0;
@@ -77,10 +77,11 @@ void rawlogFrames(const std::string& path, const sonar::SonarConfig& cfg, const 
 }
 
 /** Calls `fn` for each PNG in a folder, in name order. */
-void folderFrames(const std::string& dir, const sonar::SonarConfig& cfg, const std::function<void(Frame&)>& fn,
-				  std::size_t& skipped)
+void folderFrames(const std::string& dir, const sonar::SonarConfig& cfg,
+                  const std::function<void(Frame&)>& fn, std::size_t& skipped)
 {
-	if (!cfg.geometry) throw std::runtime_error("PNG frames need 'geometry:' in the config (beams, bins, aperture, ranges)");
+	if (!cfg.geometry)
+		throw std::runtime_error("PNG frames need 'geometry:' in the config (beams, bins, aperture, ranges)");
 	std::vector<fs::path> files;
 	for (const auto& e : fs::directory_iterator(dir))
 	{
@@ -100,11 +101,12 @@ void folderFrames(const std::string& dir, const sonar::SonarConfig& cfg, const s
 		if (f.polar.empty() || f.polar.cols != f.geometry.beam_count || f.polar.rows != f.geometry.range_bins)
 		{
 			std::cerr << "auvnav-sonar: " << f.name << " skipped: "
-					  << (f.polar.empty() ? "not a readable image"
-										  : "size " + std::to_string(f.polar.cols) + "x" + std::to_string(f.polar.rows) +
-												" is not beams x bins " + std::to_string(f.geometry.beam_count) + "x" +
-												std::to_string(f.geometry.range_bins))
-					  << "\n";
+			          << (f.polar.empty()
+			                  ? "not a readable image"
+			                  : "size " + std::to_string(f.polar.cols) + "x" + std::to_string(f.polar.rows) +
+			                        " is not beams x bins " + std::to_string(f.geometry.beam_count) + "x" +
+			                        std::to_string(f.geometry.range_bins))
+			          << "\n";
 			++skipped;
 			continue;
 		}
@@ -118,7 +120,7 @@ void folderFrames(const std::string& dir, const sonar::SonarConfig& cfg, const s
 /** Annotated fan image: detections (green associated with the pole id,
  *  orange not), predicted map poles (blue), the implied heading. */
 cv::Mat annotate(const Frame& f, const sonar::SonarConfig& cfg, const sonar::FrameResult& r,
-				 const std::optional<sonar::SonarPose>& pose, double nav_heading_rad)
+                 const std::optional<sonar::SonarPose>& pose, double nav_heading_rad)
 {
 	const double ppm = std::max(4.0, 600.0 / f.geometry.max_range_m);
 	cv::Mat fan = sonar::fanImage(f.polar, f.geometry, ppm), bgr;
@@ -142,15 +144,16 @@ cv::Mat annotate(const Frame& f, const sonar::SonarConfig& cfg, const sonar::Fra
 		cv::circle(bgr, px, 8, colour, 2);
 		if (pole_of[i] >= 0)
 			cv::putText(bgr, cfg.map.poles[static_cast<std::size_t>(pole_of[i])].id, px + cv::Point2d(10, -6),
-						cv::FONT_HERSHEY_SIMPLEX, 0.5, colour, 1);
+			            cv::FONT_HERSHEY_SIMPLEX, 0.5, colour, 1);
 	}
 	char text[256];
 	if (r.heading)
-		std::snprintf(text, sizeof text, "%s  landmark heading %.2f +- %.2f deg (%d poles)  nav %.2f deg", f.name.c_str(),
-					  r.heading->heading_rad / kDeg, r.heading->sigma_rad / kDeg, r.heading->poles,
-					  nav_heading_rad / kDeg);
+		std::snprintf(text, sizeof text, "%s  landmark heading %.2f +- %.2f deg (%d poles)  nav %.2f deg",
+		              f.name.c_str(), r.heading->heading_rad / kDeg, r.heading->sigma_rad / kDeg,
+		              r.heading->poles, nav_heading_rad / kDeg);
 	else
-		std::snprintf(text, sizeof text, "%s  %zu detections, no landmark heading", f.name.c_str(), r.detections.size());
+		std::snprintf(text, sizeof text, "%s  %zu detections, no landmark heading", f.name.c_str(),
+		              r.detections.size());
 	cv::putText(bgr, text, cv::Point(8, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(255, 255, 255), 1);
 	return bgr;
 }
@@ -159,19 +162,26 @@ cv::Mat annotate(const Frame& f, const sonar::SonarConfig& cfg, const sonar::Fra
 int main(int argc, char** argv)
 {
 	TCLAP::CmdLine cmd(
-		"Landmark (pole) headings from imaging-sonar frames: detection with OpenCV, association with the "
-		"surveyed pole map from a trajectory, the heading each frame implies; annotated fan images and a CSV.",
-		' ', "0.1.0");
-	TCLAP::UnlabeledValueArg<std::string> input("input", "Rawlog or folder of PNG polar frames", true, "", "INPUT", cmd);
-	TCLAP::ValueArg<std::string> config("c", "config", "Sonar YAML (config/sonar/gemini.yaml)", true, "", "FILE", cmd);
+	    "Landmark (pole) headings from imaging-sonar frames: detection with OpenCV, association with the "
+	    "surveyed pole map from a trajectory, the heading each frame implies; annotated fan images and a "
+	    "CSV.",
+	    ' ', "0.1.0");
+	TCLAP::UnlabeledValueArg<std::string> input("input", "Rawlog or folder of PNG polar frames", true, "",
+	                                            "INPUT", cmd);
+	TCLAP::ValueArg<std::string> config("c", "config", "Sonar YAML (config/sonar/gemini.yaml)", true, "",
+	                                    "FILE", cmd);
 	TCLAP::ValueArg<std::string> out("o", "out", "Output directory", true, "", "DIR", cmd);
-	TCLAP::ValueArg<std::string> traj("t", "trajectory", "TUM trajectory (auvnav-run's trajectory.tum or a ground_truth.tum)",
-									  false, "", "FILE", cmd);
-	TCLAP::ValueArg<std::string> truth("", "truth", "auvnav-sim output folder: score against sonar_truth.csv", false, "",
-									   "DIR", cmd);
-	TCLAP::ValueArg<std::string> export_polar("", "export-polar",
-		"Also write each raw polar frame as DIR/frame_<unix time>.png (input for a later PNG-folder run)", false, "", "DIR", cmd);
-	TCLAP::ValueArg<int> every("", "images-every", "Write every Nth annotated fan image (0: none)", false, 1, "N", cmd);
+	TCLAP::ValueArg<std::string> traj("t", "trajectory",
+	                                  "TUM trajectory (auvnav-run's trajectory.tum or a ground_truth.tum)",
+	                                  false, "", "FILE", cmd);
+	TCLAP::ValueArg<std::string> truth("", "truth", "auvnav-sim output folder: score against sonar_truth.csv",
+	                                   false, "", "DIR", cmd);
+	TCLAP::ValueArg<std::string> export_polar(
+	    "", "export-polar",
+	    "Also write each raw polar frame as DIR/frame_<unix time>.png (input for a later PNG-folder run)",
+	    false, "", "DIR", cmd);
+	TCLAP::ValueArg<int> every("", "images-every", "Write every Nth annotated fan image (0: none)", false, 1,
+	                           "N", cmd);
 	const cli::ObsLibOption obs_libs(cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-sonar")) return *code;
 	if (const auto code = obs_libs.load("auvnav-sonar")) return *code;
@@ -188,12 +198,14 @@ int main(int argc, char** argv)
 		fs::create_directories(out.getValue());
 		if (!export_polar.getValue().empty()) fs::create_directories(export_polar.getValue());
 		std::ofstream csv(fs::path(out.getValue()) / "landmark_headings.csv");
-		csv << "time_s,frame,detections,associated,pole_ids,landmark_heading_deg,landmark_sigma_deg,nav_heading_deg,"
-			   "difference_deg\n";
+		csv << "time_s,frame,detections,associated,pole_ids,landmark_heading_deg,landmark_sigma_deg,nav_"
+		       "heading_deg,"
+		       "difference_deg\n";
 		sonarapp::Score score;
 		std::size_t frames = 0, skipped = 0, with_heading = 0, image_index = 0;
 		const Eigen::Matrix2d P = Eigen::Matrix2d::Identity() * cfg.position_sigma_m * cfg.position_sigma_m;
-		auto process = [&](Frame& f) {
+		auto process = [&](Frame& f)
+		{
 			std::optional<sonar::SonarPose> pose;
 			double nav_heading = NAN;
 			if (trajectory)
@@ -211,33 +223,36 @@ int main(int argc, char** argv)
 			}
 			const auto r = sonar::analyseFrame(f.polar, f.geometry, cfg, pose);
 			std::string ids;
-			for (const auto& a : r.associations) ids += (ids.empty() ? "" : ";") + cfg.map.poles[static_cast<std::size_t>(a.pole)].id;
+			for (const auto& a : r.associations)
+				ids += (ids.empty() ? "" : ";") + cfg.map.poles[static_cast<std::size_t>(a.pole)].id;
 			char line[512];
 			if (r.heading)
 			{
 				++with_heading;
-				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f\n", f.t, f.name.c_str(),
-							  r.detections.size(), r.associations.size(), ids.c_str(), r.heading->heading_rad / kDeg,
-							  r.heading->sigma_rad / kDeg, nav_heading / kDeg,
-							  sonar::wrapAngle(r.heading->heading_rad - nav_heading) / kDeg);
+				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f\n", f.t,
+				              f.name.c_str(), r.detections.size(), r.associations.size(), ids.c_str(),
+				              r.heading->heading_rad / kDeg, r.heading->sigma_rad / kDeg, nav_heading / kDeg,
+				              sonar::wrapAngle(r.heading->heading_rad - nav_heading) / kDeg);
 			}
 			else
-				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,,,%.4f,\n", f.t, f.name.c_str(), r.detections.size(),
-							  r.associations.size(), ids.c_str(), nav_heading / kDeg);
+				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,,,%.4f,\n", f.t, f.name.c_str(),
+				              r.detections.size(), r.associations.size(), ids.c_str(), nav_heading / kDeg);
 			csv << line;
 			csv.flush();
 			if (sim_truth)
 			{
 				if (const auto* tf = sim_truth->at(f.t))
-					sonarapp::scoreFrame(*tf, r.detections,
-										 r.heading ? std::optional<double>(r.heading->heading_rad) : std::nullopt,
-										 r.heading ? r.heading->sigma_rad : 1.0, score);
+					sonarapp::scoreFrame(
+					    *tf, r.detections,
+					    r.heading ? std::optional<double>(r.heading->heading_rad) : std::nullopt,
+					    r.heading ? r.heading->sigma_rad : 1.0, score);
 			}
 			if (every.getValue() > 0 && frames % static_cast<std::size_t>(every.getValue()) == 0)
 			{
 				char name[64];
 				std::snprintf(name, sizeof name, "fan_%06zu.png", image_index++);
-				cv::imwrite((fs::path(out.getValue()) / name).string(), annotate(f, cfg, r, pose, nav_heading));
+				cv::imwrite((fs::path(out.getValue()) / name).string(),
+				            annotate(f, cfg, r, pose, nav_heading));
 			}
 			++frames;
 		};
@@ -246,7 +261,7 @@ int main(int argc, char** argv)
 		else
 			rawlogFrames(input.getValue(), cfg, process, skipped);
 		std::printf("%zu frames (%zu skipped), %zu with a landmark heading; outputs in %s\n", frames, skipped,
-					with_heading, out.getValue().c_str());
+		            with_heading, out.getValue().c_str());
 		if (sim_truth)
 		{
 			const std::string md = score.markdown();
@@ -255,7 +270,8 @@ int main(int argc, char** argv)
 		}
 		if (frames == 0)
 		{
-			std::cerr << "auvnav-sonar: no frames with label '" << cfg.label << "' in " << input.getValue() << "\n";
+			std::cerr << "auvnav-sonar: no frames with label '" << cfg.label << "' in " << input.getValue()
+			          << "\n";
 			return cli::kExitBadInput;
 		}
 	}

@@ -12,7 +12,10 @@ namespace auvnav::sonarapp
 namespace
 {
 constexpr double kDeg = M_PI / 180;
-long long key(double t) { return std::llround(t * 1000.0); }
+long long key(double t)
+{
+	return std::llround(t * 1000.0);
+}
 
 std::vector<std::string> split(const std::string& line)
 {
@@ -49,7 +52,8 @@ SonarTruth SonarTruth::load(const std::string& dir)
 		const auto v = split(line);
 		if (v.size() != 4) throw std::runtime_error(poles + ":" + std::to_string(n) + ": expected 4 fields");
 		auto it = t.frames_.find(key(std::stod(v[0])));
-		if (it == t.frames_.end()) throw std::runtime_error(poles + ":" + std::to_string(n) + ": frame not in " + frames);
+		if (it == t.frames_.end())
+			throw std::runtime_error(poles + ":" + std::to_string(n) + ": frame not in " + frames);
 		it->second.in_view.push_back({v[1], std::stod(v[2]) * kDeg, std::stod(v[3])});
 	}
 	return t;
@@ -62,8 +66,8 @@ const TruthFrame* SonarTruth::at(double unix_time_s) const
 }
 
 void scoreFrame(const TruthFrame& truth, const std::vector<sonar::Detection>& dets,
-				std::optional<double> heading_rad, double heading_sigma_rad, Score& s, double bearing_tol_deg,
-				double range_tol_m)
+                std::optional<double> heading_rad, double heading_sigma_rad, Score& s, double bearing_tol_deg,
+                double range_tol_m)
 {
 	++s.frames;
 	std::vector<bool> used(truth.in_view.size(), false);
@@ -115,21 +119,24 @@ double Score::recall() const
 	const auto n = true_positives + false_negatives;
 	return n ? static_cast<double>(true_positives) / n : NAN;
 }
-double Score::headingRms_rad() const { return heading_frames ? std::sqrt(heading_sq_sum / heading_frames) : NAN; }
+double Score::headingRms_rad() const
+{
+	return heading_frames ? std::sqrt(heading_sq_sum / heading_frames) : NAN;
+}
 
 std::string Score::markdown() const
 {
 	char buf[1024];
-	std::snprintf(buf, sizeof buf,
-				  "| frames | poles in view | detections | precision | recall | false poles per 100 empty frames "
-				  "| frames with a heading | heading error RMS | worst | mean NEES |\n"
-				  "|---|---|---|---|---|---|---|---|---|---|\n"
-				  "| %zu | %zu | %zu | %.1f %% | %.1f %% | %.2f (%zu in %zu) | %zu | %.3f° | %.3f° | %.2f |\n",
-				  frames, true_positives + false_negatives, true_positives + false_positives, 100 * precision(),
-				  100 * recall(),
-				  frames_without_poles ? 100.0 * false_in_empty_frames / frames_without_poles : NAN,
-				  false_in_empty_frames, frames_without_poles, heading_frames, headingRms_rad() / kDeg,
-				  heading_max_abs / kDeg, heading_frames ? nees_sum / heading_frames : NAN);
+	std::snprintf(
+	    buf, sizeof buf,
+	    "| frames | poles in view | detections | precision | recall | false poles per 100 empty frames "
+	    "| frames with a heading | heading error RMS | worst | mean NEES |\n"
+	    "|---|---|---|---|---|---|---|---|---|---|\n"
+	    "| %zu | %zu | %zu | %.1f %% | %.1f %% | %.2f (%zu in %zu) | %zu | %.3f° | %.3f° | %.2f |\n",
+	    frames, true_positives + false_negatives, true_positives + false_positives, 100 * precision(),
+	    100 * recall(), frames_without_poles ? 100.0 * false_in_empty_frames / frames_without_poles : NAN,
+	    false_in_empty_frames, frames_without_poles, heading_frames, headingRms_rad() / kDeg,
+	    heading_max_abs / kDeg, heading_frames ? nees_sum / heading_frames : NAN);
 	return buf;
 }
 

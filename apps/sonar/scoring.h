@@ -28,12 +28,12 @@ struct TruthFrame
 
 class SonarTruth
 {
-   public:
+ public:
 	/** Reads DIR/sonar_frames.csv and DIR/sonar_truth.csv (keys: time in ms). */
 	static SonarTruth load(const std::string& dir);
 	const TruthFrame* at(double unix_time_s) const;
 
-   private:
+ private:
 	std::map<long long, TruthFrame> frames_;
 };
 
@@ -51,7 +51,7 @@ struct Score
 
 /** Adds one frame's detections (and landmark heading, if any) to `s`. */
 void scoreFrame(const TruthFrame& truth, const std::vector<sonar::Detection>& dets,
-				std::optional<double> heading_rad, double heading_sigma_rad, Score& s,
-				double bearing_tol_deg = 2.0, double range_tol_m = 0.75);
+                std::optional<double> heading_rad, double heading_sigma_rad, Score& s,
+                double bearing_tol_deg = 2.0, double range_tol_m = 0.75);
 
 }  // namespace auvnav::sonarapp

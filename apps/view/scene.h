@@ -21,15 +21,15 @@ struct TrackPoint
 	double t = 0;
 	Eigen::Vector3d p_ned = Eigen::Vector3d::Zero();
 	Eigen::Quaterniond q_nb = Eigen::Quaterniond::Identity();
-	Eigen::Vector3d sigma_ned = Eigen::Vector3d::Constant(NAN);	//!< 1σ per axis (states.csv), NaN unknown
-	double seabed_depth_m = NAN;									//!< truth only
+	Eigen::Vector3d sigma_ned = Eigen::Vector3d::Constant(NAN);  //!< 1σ per axis (states.csv), NaN unknown
+	double seabed_depth_m = NAN;                                 //!< truth only
 };
 
 /** A position fix offered to the filter by any position sensor (GPS, USBL). */
 struct PositionFix
 {
 	double t = 0;
-	std::string label;	//!< the sensor
+	std::string label;  //!< the sensor
 	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();
 	bool accepted = true;
 };
@@ -49,7 +49,7 @@ std::vector<TrackPoint> loadTruth(const std::string& csv);
 
 struct SceneOptions
 {
-	double ellipsoid_every_s = 60;	//!< spacing of the 2σ ellipsoids
+	double ellipsoid_every_s = 60;  //!< spacing of the 2σ ellipsoids
 	double ellipsoid_min_sigma_m = 0.05;
 };
 
@@ -74,6 +74,7 @@ void frameWindowLikeScene(Window& window, const mrpt::opengl::COpenGLScene& scen
 }
 
 /** Renders `scene` off screen (EGL, no display server) into a PNG. Throws on failure. */
-void renderToPng(const mrpt::opengl::COpenGLScene& scene, const std::string& png, unsigned width, unsigned height);
+void renderToPng(const mrpt::opengl::COpenGLScene& scene, const std::string& png, unsigned width,
+                 unsigned height);
 
 }  // namespace auvnav::view

@@ -75,8 +75,8 @@ using detail::g_wide_kernels;
  *  multi-stream loops scalar); the scalar loop is the same arithmetic. */
 template <int C, bool kMirror = false, bool kAssign = false>
 void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, const double* __restrict X,
-					 Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
-					 Eigen::Index mirror_stride = 0)
+                     Eigen::Index x_stride, const double* coef, double* __restrict mirror = nullptr,
+                     Eigen::Index mirror_stride = 0)
 {
 	const double* X0 = X;
 	const double* X1 = C > 1 ? X + x_stride : X;
@@ -119,10 +119,11 @@ void subtractColumns(double* __restrict y, Eigen::Index from, Eigen::Index to, c
 /** subtractColumns with four rows per packet (AVX, no FMA: the same
  *  arithmetic); the rows past the last whole packet as the scalar loop. */
 template <int C, bool kMirror = false, bool kAssign = false>
-__attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eigen::Index from, Eigen::Index to,
-													   const double* __restrict X, Eigen::Index x_stride,
-													   const double* coef, double* __restrict mirror = nullptr,
-													   Eigen::Index mirror_stride = 0)
+__attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eigen::Index from,
+                                                       Eigen::Index to, const double* __restrict X,
+                                                       Eigen::Index x_stride, const double* coef,
+                                                       double* __restrict mirror = nullptr,
+                                                       Eigen::Index mirror_stride = 0)
 {
 	const double* X0 = X;
 	const double* X1 = C > 1 ? X + x_stride : X;
@@ -183,7 +184,8 @@ __attribute__((target("avx"))) void subtractColumnsAvx(double* __restrict y, Eig
  *  would give, bit for bit, without the zeroing pass). */
 template <bool kMirror = false, bool kAssign = false, typename Coef>
 void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const double* X, Eigen::Index x_stride,
-						Eigen::Index m, Coef&& coef_of, double* mirror = nullptr, Eigen::Index mirror_stride = 0)
+                        Eigen::Index m, Coef&& coef_of, double* mirror = nullptr,
+                        Eigen::Index mirror_stride = 0)
 {
 #if AUVNAV_AVX_KERNELS
 	const bool wide = g_wide_kernels.load(std::memory_order_relaxed);
@@ -194,33 +196,56 @@ void subtractAllColumns(double* y, Eigen::Index from, Eigen::Index to, const dou
 		double coef[4] = {0, 0, 0, 0};
 		for (Eigen::Index c = 0; c < cnt; ++c) coef[c] = coef_of(l + c);
 		const double* Xl = X + l * x_stride;
-		auto pass = [&](auto assign) {
+		auto pass = [&](auto assign)
+		{
 			constexpr bool kA = decltype(assign)::value;
 #if AUVNAV_AVX_KERNELS
 			if (wide)
 			{
 				switch (cnt)
 				{
-					case 4: subtractColumnsAvx<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-					case 3: subtractColumnsAvx<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-					case 2: subtractColumnsAvx<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-					default: subtractColumnsAvx<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+					case 4:
+						subtractColumnsAvx<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror,
+						                                   mirror_stride);
+						break;
+					case 3:
+						subtractColumnsAvx<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror,
+						                                   mirror_stride);
+						break;
+					case 2:
+						subtractColumnsAvx<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror,
+						                                   mirror_stride);
+						break;
+					default:
+						subtractColumnsAvx<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror,
+						                                   mirror_stride);
+						break;
 				}
 				return;
 			}
 #endif
 			switch (cnt)
 			{
-				case 4: subtractColumns<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				case 3: subtractColumns<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				case 2: subtractColumns<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
-				default: subtractColumns<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride); break;
+				case 4:
+					subtractColumns<4, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride);
+					break;
+				case 3:
+					subtractColumns<3, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride);
+					break;
+				case 2:
+					subtractColumns<2, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride);
+					break;
+				default:
+					subtractColumns<1, kMirror, kA>(y, from, to, Xl, x_stride, coef, mirror, mirror_stride);
+					break;
 			}
 		};
 		if constexpr (kAssign)
 		{
-			if (l == 0) pass(std::true_type{});
-			else pass(std::false_type{});
+			if (l == 0)
+				pass(std::true_type{});
+			else
+				pass(std::false_type{});
 		}
 		else
 			pass(std::false_type{});
@@ -255,13 +280,16 @@ __attribute__((target("avx"))) inline __m256i firstLanesAvx(Eigen::Index lanes)
  *  are loaded (the column's last rows; nothing past them is read). */
 template <bool kPartial>
 __attribute__((target("avx,fma"))) inline __m256d choleskyBlockAvx(const double* Pj, const double* L,
-																	Eigen::Index ls, Eigen::Index j, Eigen::Index r,
-																	__m256i mask)
+                                                                   Eigen::Index ls, Eigen::Index j,
+                                                                   Eigen::Index r, __m256i mask)
 {
-	auto load = [mask](const double* p) __attribute__((target("avx"))) { return loadRowsAvx<kPartial>(p, mask); };
+	auto load = [mask](const double* p) __attribute__((target("avx")))
+	{
+		return loadRowsAvx<kPartial>(p, mask);
+	};
 	__m256d acc = load(Pj + r);
-	const double* Lr = L + r;	// rows r… of column 0
-	const double* Lrow = L + j;	// row j of column 0
+	const double* Lr = L + r;    // rows r… of column 0
+	const double* Lrow = L + j;  // row j of column 0
 	for (Eigen::Index l = 0; l < j; ++l)
 		acc = _mm256_fnmadd_pd(load(Lr + l * ls), _mm256_broadcast_sd(Lrow + l * ls), acc);
 	return acc;
@@ -274,11 +302,11 @@ __attribute__((target("avx,fma"))) inline __m256d choleskyBlockAvx(const double*
  *  each a fused multiply-add in j order, then scaled: the operations of
  *  the column axpys (std::fma), bit for bit. The last rows by masked loads
  *  and stores. */
-__attribute__((target("avx,fma"))) inline void addColumnCombinationsAvx(double* Y, Eigen::Index rows, Eigen::Index ys,
-																	 Eigen::Index cols, const double* X,
-																	 Eigen::Index xs, Eigen::Index J,
-																	 const double* coef, Eigen::Index cs,
-																	 const double* scale)
+__attribute__((target("avx,fma"))) inline void addColumnCombinationsAvx(double* Y, Eigen::Index rows,
+                                                                        Eigen::Index ys, Eigen::Index cols,
+                                                                        const double* X, Eigen::Index xs,
+                                                                        Eigen::Index J, const double* coef,
+                                                                        Eigen::Index cs, const double* scale)
 {
 	const Eigen::Index whole = rows / 4 * 4;
 	const __m256i mask = firstLanesAvx(rows - whole);
@@ -298,8 +326,8 @@ __attribute__((target("avx,fma"))) inline void addColumnCombinationsAvx(double* 
 		{
 			__m256d acc = _mm256_maskload_pd(y + whole, mask);
 			for (Eigen::Index j = 0; j < J; ++j)
-				acc = _mm256_fmadd_pd(_mm256_broadcast_sd(cf + j * cs), _mm256_maskload_pd(X + j * xs + whole, mask),
-									  acc);
+				acc = _mm256_fmadd_pd(_mm256_broadcast_sd(cf + j * cs),
+				                      _mm256_maskload_pd(X + j * xs + whole, mask), acc);
 			_mm256_maskstore_pd(y + whole, mask, _mm256_mul_pd(acc, sc));
 		}
 	}
@@ -309,7 +337,7 @@ __attribute__((target("avx,fma"))) inline void addColumnCombinationsAvx(double* 
  *  bs): A B Aᵀ for a diagonal A, four rows per packet (the scalar loop's
  *  operations, bit for bit), the last rows masked. */
 __attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eigen::Index bs, Eigen::Index n,
-																   const double* a)
+                                                                  const double* a)
 {
 	const Eigen::Index whole = n / 4 * 4;
 	const __m256i mask = firstLanesAvx(n - whole);
@@ -318,24 +346,25 @@ __attribute__((target("avx"))) inline void scaleByOuterProductAvx(double* B, Eig
 		double* col = B + j * bs;
 		const __m256d aj = _mm256_broadcast_sd(a + j);
 		for (Eigen::Index i = 0; i < whole; i += 4)
-			_mm256_storeu_pd(col + i, _mm256_mul_pd(_mm256_loadu_pd(col + i), _mm256_mul_pd(_mm256_loadu_pd(a + i), aj)));
+			_mm256_storeu_pd(
+			    col + i, _mm256_mul_pd(_mm256_loadu_pd(col + i), _mm256_mul_pd(_mm256_loadu_pd(a + i), aj)));
 		if (whole < n)
 			_mm256_maskstore_pd(col + whole, mask,
-								_mm256_mul_pd(_mm256_maskload_pd(col + whole, mask),
-											  _mm256_mul_pd(_mm256_maskload_pd(a + whole, mask), aj)));
+			                    _mm256_mul_pd(_mm256_maskload_pd(col + whole, mask),
+			                                  _mm256_mul_pd(_mm256_maskload_pd(a + whole, mask), aj)));
 	}
 }
 
 /** choleskyBlockAvx for rows [r, r + 8) (two packets sharing the
  *  broadcasts of row j), no partial packet. */
-__attribute__((target("avx,fma"))) inline void choleskyBlockPairAvx(const double* Pj, const double* L, Eigen::Index ls,
-																	 Eigen::Index j, Eigen::Index r, __m256d& lo,
-																	 __m256d& hi)
+__attribute__((target("avx,fma"))) inline void choleskyBlockPairAvx(const double* Pj, const double* L,
+                                                                    Eigen::Index ls, Eigen::Index j,
+                                                                    Eigen::Index r, __m256d& lo, __m256d& hi)
 {
 	lo = _mm256_loadu_pd(Pj + r);
 	hi = _mm256_loadu_pd(Pj + r + 4);
-	const double* Lr = L + r;	// rows r… of column 0
-	const double* Lrow = L + j;	// row j of column 0
+	const double* Lr = L + r;    // rows r… of column 0
+	const double* Lrow = L + j;  // row j of column 0
 	for (Eigen::Index l = 0; l < j; ++l)
 	{
 		const __m256d c = _mm256_broadcast_sd(Lrow + l * ls);
@@ -352,8 +381,9 @@ __attribute__((target("avx,fma"))) inline void choleskyBlockPairAvx(const double
  *  choleskyColumnsFused (ukf.cpp's baseline), so the same bits; false
  *  where P is not positive definite (columns partly written). */
 __attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* P, Eigen::Index ps,
-																   Eigen::Index from, Eigen::Index to, double* L,
-																   Eigen::Index ls, Eigen::Index rows)
+                                                                  Eigen::Index from, Eigen::Index to,
+                                                                  double* L, Eigen::Index ls,
+                                                                  Eigen::Index rows)
 {
 	for (Eigen::Index j = from; j < to; ++j)
 	{
@@ -361,11 +391,11 @@ __attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* 
 		const double* Pj = P + j * ps;
 		for (Eigen::Index i = 0; i < j; ++i) Lj[i] = 0.0;
 		const Eigen::Index whole_end = j + (rows - j) / 4 * 4;
-		const Eigen::Index left = rows - whole_end;	 // 0..3 rows in a last, partial packet
+		const Eigen::Index left = rows - whole_end;  // 0..3 rows in a last, partial packet
 		const __m256i mask = firstLanesAvx(left);
 		// The packet holding the diagonal first: its root scales the rest.
 		const __m256d first = whole_end > j ? choleskyBlockAvx<false>(Pj, L, ls, j, j, mask)
-											: choleskyBlockAvx<true>(Pj, L, ls, j, j, mask);
+		                                    : choleskyBlockAvx<true>(Pj, L, ls, j, j, mask);
 		const double d = _mm256_cvtsd_f64(first);
 		if (!(d > 0) || !std::isfinite(d)) return false;
 		const double root = std::sqrt(d);
@@ -391,7 +421,7 @@ __attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* 
 			_mm256_storeu_pd(Lj + r, _mm256_div_pd(choleskyBlockAvx<false>(Pj, L, ls, j, r, mask), div));
 		if (left > 0)
 			_mm256_maskstore_pd(Lj + whole_end, mask,
-								_mm256_div_pd(choleskyBlockAvx<true>(Pj, L, ls, j, whole_end, mask), div));
+			                    _mm256_div_pd(choleskyBlockAvx<true>(Pj, L, ls, j, whole_end, mask), div));
 	}
 	return true;
 }
@@ -406,8 +436,8 @@ __attribute__((target("avx,fma"))) inline bool choleskyColumnsAvx(const double* 
  *  the rest by it. False where P is not positive definite (columns partly
  *  written). The baseline path; choleskyColumnsAvx takes the same
  *  operations per entry. */
-inline bool choleskyColumnsFused(const double* P, Eigen::Index ps, Eigen::Index from, Eigen::Index to, double* L,
-								 Eigen::Index ls, Eigen::Index rows)
+inline bool choleskyColumnsFused(const double* P, Eigen::Index ps, Eigen::Index from, Eigen::Index to,
+                                 double* L, Eigen::Index ls, Eigen::Index rows)
 {
 	for (Eigen::Index j = from; j < to; ++j)
 	{
@@ -461,7 +491,7 @@ void solveRightLower(double* X, Eigen::Index rows, Eigen::Index xs, Eigen::Index
 	{
 		double* Xc = X + c * xs;
 		subtractAllColumns(Xc, 0, rows, X + (c + 1) * xs, xs, k - 1 - c,
-						   [&](Eigen::Index l) { return L(c + 1 + l, c); });
+		                   [&](Eigen::Index l) { return L(c + 1 + l, c); });
 		const double d = L(c, c);
 		for (Eigen::Index r = 0; r < rows; ++r) Xc[r] /= d;
 	}
@@ -471,7 +501,7 @@ void solveRightLower(double* X, Eigen::Index rows, Eigen::Index xs, Eigen::Index
  *  bs), L k × k column-major with stride ls. Per column of L, an axpy of
  *  its part below the diagonal into every column of B. */
 inline void solveLeftLower(double* B, Eigen::Index k, Eigen::Index bs, Eigen::Index m, const double* L,
-						   Eigen::Index ls)
+                           Eigen::Index ls)
 {
 	for (Eigen::Index i = 0; i < k; ++i)
 	{
@@ -492,8 +522,8 @@ inline void solveLeftLower(double* B, Eigen::Index k, Eigen::Index bs, Eigen::In
  *  m columns side by side and four partial sums per dot: the entries of a
  *  column depend on each other in turn, and one running sum made each step
  *  wait for the one before. */
-inline void solveLeftLowerTransposed(double* B, Eigen::Index k, Eigen::Index bs, Eigen::Index m, const double* L,
-									 Eigen::Index ls)
+inline void solveLeftLowerTransposed(double* B, Eigen::Index k, Eigen::Index bs, Eigen::Index m,
+                                     const double* L, Eigen::Index ls)
 {
 	for (Eigen::Index i = k - 1; i >= 0; --i)
 	{
@@ -525,15 +555,16 @@ inline void solveLeftLowerTransposed(double* B, Eigen::Index k, Eigen::Index bs,
  *  same numbers with a third fewer instructions than a product and a sum). */
 template <int C>
 void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, const double* __restrict X,
-						Eigen::Index x_stride, const double* a, const double* b)
+                        Eigen::Index x_stride, const double* a, const double* b)
 {
 	double* __restrict P0 = P + j * n;
 	double* __restrict P1 = P0 + n;
-	auto less = [&](double v, const double* c, Eigen::Index i) {
+	auto less = [&](double v, const double* c, Eigen::Index i)
+	{
 		for (int k = 0; k < C; ++k) v = std::fma(-X[k * x_stride + i], c[k], v);
 		return v;
 	};
-	P0[j] = less(P0[j], a, j);	// the diagonal of column j (its own mirror)
+	P0[j] = less(P0[j], a, j);  // the diagonal of column j (its own mirror)
 	for (Eigen::Index i = j + 1; i < n; ++i)
 	{
 		const double v0 = less(P0[i], a, i), v1 = less(P1[i], b, i);
@@ -547,13 +578,15 @@ void downdateColumnPair(double* __restrict P, Eigen::Index n, Eigen::Index j, co
 #if AUVNAV_AVX_KERNELS
 /** downdateColumnPair with four rows per packet (AVX and FMA). */
 template <int C>
-__attribute__((target("avx,fma"))) void downdateColumnPairAvx(double* __restrict P, Eigen::Index n, Eigen::Index j,
-															   const double* __restrict X, Eigen::Index x_stride,
-															   const double* a, const double* b)
+__attribute__((target("avx,fma"))) void downdateColumnPairAvx(double* __restrict P, Eigen::Index n,
+                                                              Eigen::Index j, const double* __restrict X,
+                                                              Eigen::Index x_stride, const double* a,
+                                                              const double* b)
 {
 	double* __restrict P0 = P + j * n;
 	double* __restrict P1 = P0 + n;
-	auto less = [&](double v, const double* c, Eigen::Index i) __attribute__((target("avx,fma"))) {
+	auto less = [&](double v, const double* c, Eigen::Index i) __attribute__((target("avx,fma")))
+	{
 		for (int k = 0; k < C; ++k) v = std::fma(-X[k * x_stride + i], c[k], v);
 		return v;
 	};
@@ -585,7 +618,7 @@ __attribute__((target("avx,fma"))) void downdateColumnPairAvx(double* __restrict
 		_mm_storeu_pd(P + (i + 2) * n + j, _mm256_extractf128_pd(lo, 1));
 		_mm_storeu_pd(P + (i + 3) * n + j, _mm256_extractf128_pd(hi, 1));
 	}
-	if (i + 2 <= n)	 // two rows left: a 128-bit step
+	if (i + 2 <= n)  // two rows left: a 128-bit step
 	{
 		__m128d v0 = _mm_loadu_pd(P0 + i), v1 = _mm_loadu_pd(P1 + i);
 		for (int c = 0; c < C; ++c)
@@ -615,7 +648,7 @@ __attribute__((target("avx,fma"))) void downdateColumnPairAvx(double* __restrict
  *  per pair, with the pairs' coefficients read here. */
 template <int C>
 __attribute__((target("avx,fma"))) void downdateAllPairsAvx(double* __restrict P, Eigen::Index n,
-														const double* __restrict X, Eigen::Index x_stride)
+                                                            const double* __restrict X, Eigen::Index x_stride)
 {
 	for (Eigen::Index j = 0; j + 2 <= n; j += 2)
 	{
@@ -661,15 +694,16 @@ void lowerBlockGram(const double* __restrict X, const double* __restrict Y, doub
  *  skip_to) are skipped: the caller's zeros in these rows of Y (a term
  *  x · 0 added to a sum leaves it as it is). */
 template <int kp, int R, bool kTwo>
-__attribute__((target("avx,fma"))) inline void gramBlocksAvx(const double* __restrict X, const double* __restrict Y,
-														  double* __restrict G, int ib, int jb, int skip_from,
-														  int skip_to)
+__attribute__((target("avx,fma"))) inline void gramBlocksAvx(const double* __restrict X,
+                                                             const double* __restrict Y, double* __restrict G,
+                                                             int ib, int jb, int skip_from, int skip_to)
 {
 	__m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0, b0 = a0, b1 = a0, b2 = a0, b3 = a0;
-	auto step = [&](int r) __attribute__((target("avx,fma"))) {
+	auto step = [&](int r) __attribute__((target("avx,fma")))
+	{
 		const double* y = Y + r * kp + jb;
-		const __m256d y0 = _mm256_broadcast_sd(y), y1 = _mm256_broadcast_sd(y + 1), y2 = _mm256_broadcast_sd(y + 2),
-					  y3 = _mm256_broadcast_sd(y + 3);
+		const __m256d y0 = _mm256_broadcast_sd(y), y1 = _mm256_broadcast_sd(y + 1),
+		              y2 = _mm256_broadcast_sd(y + 2), y3 = _mm256_broadcast_sd(y + 3);
 		const __m256d x = _mm256_loadu_pd(X + r * kp + ib);
 		a0 = _mm256_fmadd_pd(x, y0, a0);
 		a1 = _mm256_fmadd_pd(x, y1, a1);
@@ -707,16 +741,17 @@ __attribute__((target("avx,fma"))) inline void gramBlocksAvx(const double* __res
  *  prediction those are the lumped pairs' J L_j, zero above the rows J
  *  reaches from L_j's diagonal on: the skips save a quarter of the terms. */
 template <int kp, int R>
-__attribute__((target("avx,fma"))) void lowerBlockGramAvx(const double* __restrict X, const double* __restrict Y,
-													   double* __restrict G, int zero_from = 0, int zero_to = 0)
+__attribute__((target("avx,fma"))) void lowerBlockGramAvx(const double* __restrict X,
+                                                          const double* __restrict Y, double* __restrict G,
+                                                          int zero_from = 0, int zero_to = 0)
 {
 	static_assert(kp % 4 == 0, "lowerBlockGram: kp must be a multiple of 4");
 	const __m256d zero = _mm256_setzero_pd();
 	for (int jb = 0; jb < kp; jb += 4)
 	{
 		int from = zero_to;
-		while (from > zero_from &&
-			   _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(Y + (from - 1) * kp + jb), zero, _CMP_NEQ_UQ)) == 0)
+		while (from > zero_from && _mm256_movemask_pd(_mm256_cmp_pd(_mm256_loadu_pd(Y + (from - 1) * kp + jb),
+		                                                            zero, _CMP_NEQ_UQ)) == 0)
 			--from;
 		int ib = jb;
 		for (; ib + 8 <= kp; ib += 8) gramBlocksAvx<kp, R, true>(X, Y, G, ib, jb, from, zero_to);
@@ -740,8 +775,8 @@ void lowerBlockGramDispatch(const double* X, const double* Y, double* G, int zer
  *  Σ_{j<J} coef[c + j·cs] X_j) · scale[c], a fused axpy per term in j order
  *  then the scaling (entry by entry the same operations as the packets). */
 inline void addColumnCombinationsByColumns(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols,
-										   const double* X, Eigen::Index xs, Eigen::Index J, const double* coef,
-										   Eigen::Index cs, const double* scale)
+                                           const double* X, Eigen::Index xs, Eigen::Index J,
+                                           const double* coef, Eigen::Index cs, const double* scale)
 {
 	for (Eigen::Index c = 0; c < cols; ++c)
 	{
@@ -768,9 +803,9 @@ inline void scaleByOuterProductByEntries(double* B, Eigen::Index bs, Eigen::Inde
 }
 
 /** addColumnCombinationsByColumns on the AVX path where the CPU has it. */
-inline void addColumnCombinations(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols, const double* X,
-								  Eigen::Index xs, Eigen::Index J, const double* coef, Eigen::Index cs,
-								  const double* scale)
+inline void addColumnCombinations(double* Y, Eigen::Index rows, Eigen::Index ys, Eigen::Index cols,
+                                  const double* X, Eigen::Index xs, Eigen::Index J, const double* coef,
+                                  Eigen::Index cs, const double* scale)
 {
 #if AUVNAV_AVX_KERNELS
 	if (g_wide_kernels.load(std::memory_order_relaxed))
@@ -783,8 +818,7 @@ inline void addColumnCombinations(double* Y, Eigen::Index rows, Eigen::Index ys,
 inline void scaleByOuterProduct(double* B, Eigen::Index bs, Eigen::Index n, const double* a)
 {
 #if AUVNAV_AVX_KERNELS
-	if (g_wide_kernels.load(std::memory_order_relaxed))
-		return scaleByOuterProductAvx(B, bs, n, a);
+	if (g_wide_kernels.load(std::memory_order_relaxed)) return scaleByOuterProductAvx(B, bs, n, a);
 #endif
 	scaleByOuterProductByEntries(B, bs, n, a);
 }
@@ -793,7 +827,7 @@ inline void scaleByOuterProduct(double* B, Eigen::Index bs, Eigen::Index n, cons
  *  dimensions ss and ds; the two blocks do not overlap): a transposed copy,
  *  one entry at a time. The baseline of copyTransposedAvx. */
 inline void copyTransposedByEntries(const double* __restrict src, Eigen::Index ss, Eigen::Index rows,
-									Eigen::Index cols, double* __restrict dst, Eigen::Index ds)
+                                    Eigen::Index cols, double* __restrict dst, Eigen::Index ds)
 {
 	for (Eigen::Index j = 0; j < cols; ++j)
 		for (Eigen::Index i = 0; i < rows; ++i) dst[i * ds + j] = src[j * ss + i];
@@ -805,13 +839,13 @@ inline void copyTransposedByEntries(const double* __restrict src, Eigen::Index s
  *  them) into columns i.. of dst, rows j..j+3 (`lanes` columns stored). */
 template <bool kPartial>
 __attribute__((target("avx"))) inline void transposedTileAvx(const double* s, Eigen::Index ss, double* d,
-															  Eigen::Index ds, Eigen::Index lanes)
+                                                             Eigen::Index ds, Eigen::Index lanes)
 {
 	const __m256i mask = kPartial ? firstLanesAvx(lanes) : _mm256_setzero_si256();
 	const __m256d c0 = loadRowsAvx<kPartial>(s, mask), c1 = loadRowsAvx<kPartial>(s + ss, mask),
-				  c2 = loadRowsAvx<kPartial>(s + 2 * ss, mask), c3 = loadRowsAvx<kPartial>(s + 3 * ss, mask);
+	              c2 = loadRowsAvx<kPartial>(s + 2 * ss, mask), c3 = loadRowsAvx<kPartial>(s + 3 * ss, mask);
 	const __m256d lo01 = _mm256_unpacklo_pd(c0, c1), hi01 = _mm256_unpackhi_pd(c0, c1),
-				  lo23 = _mm256_unpacklo_pd(c2, c3), hi23 = _mm256_unpackhi_pd(c2, c3);
+	              lo23 = _mm256_unpacklo_pd(c2, c3), hi23 = _mm256_unpackhi_pd(c2, c3);
 	_mm256_storeu_pd(d, _mm256_permute2f128_pd(lo01, lo23, 0x20));  // row i of src
 	if (kPartial && lanes < 2) return;
 	_mm256_storeu_pd(d + ds, _mm256_permute2f128_pd(hi01, hi23, 0x20));
@@ -826,8 +860,8 @@ __attribute__((target("avx"))) inline void transposedTileAvx(const double* s, Ei
  *  of a strided access per entry; the last rows by a masked tile, the last
  *  columns entry by entry. Copies only: the same bits. */
 __attribute__((target("avx"))) inline void copyTransposedAvx(const double* __restrict src, Eigen::Index ss,
-															  Eigen::Index rows, Eigen::Index cols,
-															  double* __restrict dst, Eigen::Index ds)
+                                                             Eigen::Index rows, Eigen::Index cols,
+                                                             double* __restrict dst, Eigen::Index ds)
 {
 	Eigen::Index j = 0;
 	for (; j + 4 <= cols; j += 4)
@@ -841,8 +875,8 @@ __attribute__((target("avx"))) inline void copyTransposedAvx(const double* __res
 #endif
 
 /** copyTransposedByEntries on the AVX path where the CPU has it. */
-inline void copyTransposed(const double* src, Eigen::Index ss, Eigen::Index rows, Eigen::Index cols, double* dst,
-						   Eigen::Index ds)
+inline void copyTransposed(const double* src, Eigen::Index ss, Eigen::Index rows, Eigen::Index cols,
+                           double* dst, Eigen::Index ds)
 {
 #if AUVNAV_AVX_KERNELS
 	if (g_wide_kernels.load(std::memory_order_relaxed))
@@ -886,10 +920,18 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 			const double* Wl = W.data() + l * ws;
 			switch (std::min<Eigen::Index>(4, m - l))
 			{
-				case 4: downdateAllPairsAvx<4>(p, n, Wl, ws); break;
-				case 3: downdateAllPairsAvx<3>(p, n, Wl, ws); break;
-				case 2: downdateAllPairsAvx<2>(p, n, Wl, ws); break;
-				default: downdateAllPairsAvx<1>(p, n, Wl, ws); break;
+				case 4:
+					downdateAllPairsAvx<4>(p, n, Wl, ws);
+					break;
+				case 3:
+					downdateAllPairsAvx<3>(p, n, Wl, ws);
+					break;
+				case 2:
+					downdateAllPairsAvx<2>(p, n, Wl, ws);
+					break;
+				default:
+					downdateAllPairsAvx<1>(p, n, Wl, ws);
+					break;
 			}
 		}
 		j = n - n % 2;
@@ -908,20 +950,27 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 			const double* Wl = W.data() + l * ws;
 			switch (cnt)
 			{
-				case 4: downdateColumnPair<4>(p, n, j, Wl, ws, a, b); break;
-				case 3: downdateColumnPair<3>(p, n, j, Wl, ws, a, b); break;
-				case 2: downdateColumnPair<2>(p, n, j, Wl, ws, a, b); break;
-				default: downdateColumnPair<1>(p, n, j, Wl, ws, a, b); break;
+				case 4:
+					downdateColumnPair<4>(p, n, j, Wl, ws, a, b);
+					break;
+				case 3:
+					downdateColumnPair<3>(p, n, j, Wl, ws, a, b);
+					break;
+				case 2:
+					downdateColumnPair<2>(p, n, j, Wl, ws, a, b);
+					break;
+				default:
+					downdateColumnPair<1>(p, n, j, Wl, ws, a, b);
+					break;
 			}
 		}
-	if (j < n)	// an odd n's last column: its diagonal alone, the same fused steps
+	if (j < n)  // an odd n's last column: its diagonal alone, the same fused steps
 	{
 		double v = p[j * n + j];
 		for (Eigen::Index l = 0; l < m; ++l) v = std::fma(-W(j, l), W(j, l), v);
 		p[j * n + j] = v;
 	}
 }
-
 
 /** Two and four doubles as one value (GCC/Clang vector extensions): a
  *  128-bit register in the baseline, a 256-bit one inside a target("avx")
@@ -955,12 +1004,13 @@ inline double rightTransposedEntry(const double* row, const double* F, int j)
  *  unrolled (no loop test per multiply). */
 template <typename Pack, int P, int K, int JB>
 __attribute__((always_inline)) inline void rightTransposedPanelBlock(const double* __restrict panel,
-																	  const double* __restrict F, int j,
-																	  double* __restrict out, Eigen::Index xs)
+                                                                     const double* __restrict F, int j,
+                                                                     double* __restrict out, Eigen::Index xs)
 {
 	constexpr int w = sizeof(Pack) / sizeof(double), h = P * w;
 	Pack acc[P][JB];
-	auto group = [&](int l0, auto count) {
+	auto group = [&](int l0, auto count)
+	{
 		constexpr int G = decltype(count)::value;
 		Pack t[P][JB];
 #pragma GCC unroll 4
@@ -995,8 +1045,8 @@ __attribute__((always_inline)) inline void rightTransposedPanelBlock(const doubl
 /** All K output columns of the panel of P Packs of rows at row r (copied to
  *  the stack first: the product is in place), three at a time. */
 template <typename Pack, int P, int K>
-__attribute__((always_inline)) inline void rightTransposedPanel(double* __restrict X, Eigen::Index r, Eigen::Index xs,
-																 const double* __restrict F)
+__attribute__((always_inline)) inline void rightTransposedPanel(double* __restrict X, Eigen::Index r,
+                                                                Eigen::Index xs, const double* __restrict F)
 {
 	constexpr int h = P * static_cast<int>(sizeof(Pack) / sizeof(double));
 	alignas(32) double panel[K * h];
@@ -1010,8 +1060,9 @@ __attribute__((always_inline)) inline void rightTransposedPanel(double* __restri
 /** The body of rightMultiplyTransposed: panels of two Packs of rows, then
  *  one Pack, then (AVX) one 128-bit Pack, then a last row alone. */
 template <typename Pack, int K>
-__attribute__((always_inline)) inline void rightMultiplyTransposedBody(double* __restrict X, Eigen::Index rows,
-																		Eigen::Index xs, const double* __restrict F)
+__attribute__((always_inline)) inline void rightMultiplyTransposedBody(double* __restrict X,
+                                                                       Eigen::Index rows, Eigen::Index xs,
+                                                                       const double* __restrict F)
 {
 	constexpr int w = static_cast<int>(sizeof(Pack) / sizeof(double));
 	Eigen::Index r = 0;
@@ -1038,7 +1089,7 @@ __attribute__((always_inline)) inline void rightMultiplyTransposedBody(double* _
 #if AUVNAV_AVX_KERNELS
 template <int K>
 __attribute__((target("avx"))) void rightMultiplyTransposedAvx(double* X, Eigen::Index rows, Eigen::Index xs,
-																const double* F)
+                                                               const double* F)
 {
 	rightMultiplyTransposedBody<Pack4, K>(X, rows, xs, F);
 }

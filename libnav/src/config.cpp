@@ -1,6 +1,6 @@
-#include <algorithm>
 #include <auvnav/config.h>
 #include <yaml.h>
+#include <algorithm>
 
 #include <cctype>
 #include <cmath>
@@ -15,7 +15,7 @@ namespace auvnav::config
 using mrpt::containers::yaml;
 
 Node::Node(yaml y, std::string file, std::string path, std::shared_ptr<Access> access)
-	: y_(std::move(y)), file_(std::move(file)), path_(std::move(path)), access_(std::move(access))
+    : y_(std::move(y)), file_(std::move(file)), path_(std::move(path)), access_(std::move(access))
 {
 }
 
@@ -37,7 +37,7 @@ namespace
  *  Each is refused as one line: "ORIGIN:LINE:COLUMN: [KEY.PATH: ]what". */
 class StructureCheck
 {
-   public:
+ public:
 	explicit StructureCheck(std::string origin) : origin_(std::move(origin)) {}
 
 	/** Empty, or the reason `event` makes the document unusable. */
@@ -47,7 +47,8 @@ class StructureCheck
 		switch (event.type)
 		{
 			case YAML_DOCUMENT_START_EVENT:
-				if (++documents_ > 1) return at(mark, "", "a second YAML document ('---' or '...'): one document per file");
+				if (++documents_ > 1)
+					return at(mark, "", "a second YAML document ('---' or '...'): one document per file");
 				return "";
 			case YAML_ALIAS_EVENT:
 				return at(mark, path(), "aliases (*" + text(event.data.alias.anchor) + ") are not supported");
@@ -63,18 +64,21 @@ class StructureCheck
 				return why;
 			}
 			case YAML_SEQUENCE_END_EVENT:
-			case YAML_MAPPING_END_EVENT: levels_.pop_back(); return "";
-			default: return "";
+			case YAML_MAPPING_END_EVENT:
+				levels_.pop_back();
+				return "";
+			default:
+				return "";
 		}
 	}
 
-   private:
+ private:
 	struct Level
 	{
 		bool map = false;
-		bool at_key = true;			   // a map's next node is a key
-		std::string key;			   // a map's latest key
-		int items = 0;				   // a sequence's items so far
+		bool at_key = true;                // a map's next node is a key
+		std::string key;                   // a map's latest key
+		int items = 0;                     // a sequence's items so far
 		std::map<std::string, int> lines;  // a map's keys and their lines
 	};
 
@@ -94,7 +98,8 @@ class StructureCheck
 		if (!scalar) return at(mark, path(), "a key must be a plain name, not a list or a map");
 		l.key = value;
 		const auto [it, fresh] = l.lines.emplace(value, static_cast<int>(mark.line) + 1);
-		if (!fresh) return at(mark, path(), "duplicate key (first at line " + std::to_string(it->second) + ")");
+		if (!fresh)
+			return at(mark, path(), "duplicate key (first at line " + std::to_string(it->second) + ")");
 		return "";
 	}
 
@@ -113,7 +118,7 @@ class StructureCheck
 	std::string at(const yaml_mark_t& mark, const std::string& key_path, const std::string& what) const
 	{
 		return origin_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1) + ": " +
-			   (key_path.empty() ? "" : key_path + ": ") + what;
+		       (key_path.empty() ? "" : key_path + ": ") + what;
 	}
 
 	std::string origin_;
@@ -432,17 +437,19 @@ void Node::set(const std::string& dotted_path, const std::string& value)
 			const bool numeric = keys[i].find_first_not_of("0123456789") == std::string::npos;
 			for (std::size_t j = 0; j < seq.size() && !found; ++j)
 			{
-				if (numeric && std::stoul(keys[i]) == j) found = &seq[j];
+				if (numeric && std::stoul(keys[i]) == j)
+					found = &seq[j];
 				else if (seq[j].isMap())
 				{
 					const auto& m = seq[j].asMap();
 					const auto it = m.find(yaml::node_t("label"));
-					if (it != m.end() && it->second.isScalar() && it->second.as<std::string>() == keys[i]) found = &seq[j];
+					if (it != m.end() && it->second.isScalar() && it->second.as<std::string>() == keys[i])
+						found = &seq[j];
 				}
 			}
 			if (!found)
-				throw ConfigError(file_ + ": override '" + dotted_path + "': no element '" + keys[i] + "' (label or index) in '" +
-								  walked + "'");
+				throw ConfigError(file_ + ": override '" + dotted_path + "': no element '" + keys[i] +
+				                  "' (label or index) in '" + walked + "'");
 			n = found;
 			walked += (walked.empty() ? "" : ".") + keys[i];
 			canonical += "[" + std::to_string(found - &seq[0]) + "]";
@@ -470,7 +477,10 @@ void Node::fail(const std::string& key, const std::string& what) const
 	throw ConfigError(where(key) + ": " + what);
 }
 
-std::string Node::fullPath(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+std::string Node::fullPath(const std::string& key) const
+{
+	return path_.empty() ? key : path_ + "." + key;
+}
 
 namespace
 {
@@ -556,14 +566,18 @@ void Node::markFreeForm(const std::string& key) const
 	access_->free_form.insert(fullPath(key));
 }
 
-void Node::checkAllKeysUsed(const std::vector<std::string>& except) const { checkUnder(y_, path_, except); }
+void Node::checkAllKeysUsed(const std::vector<std::string>& except) const
+{
+	checkUnder(y_, path_, except);
+}
 
 void Node::checkUnder(const yaml& y, const std::string& path, const std::vector<std::string>& except) const
 {
 	if (y.isSequence())
 	{
 		const auto& seq = y.asSequence();
-		for (std::size_t i = 0; i < seq.size(); ++i) checkUnder(yaml(seq[i]), path + "[" + std::to_string(i) + "]", {});
+		for (std::size_t i = 0; i < seq.size(); ++i)
+			checkUnder(yaml(seq[i]), path + "[" + std::to_string(i) + "]", {});
 		return;
 	}
 	if (!y.isMap()) return;
@@ -576,16 +590,26 @@ void Node::checkUnder(const yaml& y, const std::string& path, const std::vector<
 		if (!access_->used.count(full))
 		{
 			const auto it = access_->asked.find(levelOf(path));
-			const std::string hint = suggestion(k, it == access_->asked.end() ? std::set<std::string>{} : it->second);
+			const std::string hint =
+			    suggestion(k, it == access_->asked.end() ? std::set<std::string>{} : it->second);
 			throw ConfigError(file_ + ": " + full + ": unknown key" + hint +
-							  (access_->overridden.count(full) ? " [given as an override]" : ""));
+			                  (access_->overridden.count(full) ? " [given as an override]" : ""));
 		}
 		checkUnder(yaml(kv.second), full, {});
 	}
 }
-bool Node::isScalar(const std::string& key) const { return has(key) && yaml(y_[key].node()).isScalar(); }
-bool Node::isSequence(const std::string& key) const { return has(key) && yaml(y_[key].node()).isSequence(); }
-bool Node::isMapAt(const std::string& key) const { return has(key) && yaml(y_[key].node()).isMap(); }
+bool Node::isScalar(const std::string& key) const
+{
+	return has(key) && yaml(y_[key].node()).isScalar();
+}
+bool Node::isSequence(const std::string& key) const
+{
+	return has(key) && yaml(y_[key].node()).isSequence();
+}
+bool Node::isMapAt(const std::string& key) const
+{
+	return has(key) && yaml(y_[key].node()).isMap();
+}
 
 std::vector<std::string> Node::keys() const
 {
@@ -663,7 +687,10 @@ double Node::number(const std::string& key) const
 	if (!parseFinite(s, v)) fail(key, "expected a finite number, got '" + s + "'");
 	return v;
 }
-double Node::number(const std::string& key, double d) const { return has(key) ? number(key) : d; }
+double Node::number(const std::string& key, double d) const
+{
+	return has(key) ? number(key) : d;
+}
 
 double Node::positive(const std::string& key) const
 {
@@ -671,7 +698,10 @@ double Node::positive(const std::string& key) const
 	if (!(v > 0)) fail(key, "expected a positive number, got '" + scalarText(key) + "'");
 	return v;
 }
-double Node::positive(const std::string& key, double d) const { return has(key) ? positive(key) : d; }
+double Node::positive(const std::string& key, double d) const
+{
+	return has(key) ? positive(key) : d;
+}
 
 double Node::nonNegative(const std::string& key) const
 {
@@ -707,7 +737,10 @@ int Node::integer(const std::string& key) const
 		fail(key, "expected an integer, got '" + scalarText(key) + "'");
 	return static_cast<int>(v);
 }
-int Node::integer(const std::string& key, int d) const { return has(key) ? integer(key) : d; }
+int Node::integer(const std::string& key, int d) const
+{
+	return has(key) ? integer(key) : d;
+}
 
 bool Node::boolean(const std::string& key, bool d) const
 {
@@ -718,7 +751,10 @@ bool Node::boolean(const std::string& key, bool d) const
 	fail(key, "expected true or false, got '" + s + "'");
 }
 
-std::string Node::string(const std::string& key) const { return scalarText(key); }
+std::string Node::string(const std::string& key) const
+{
+	return scalarText(key);
+}
 std::string Node::string(const std::string& key, const std::string& d) const
 {
 	return has(key) ? string(key) : d;

@@ -13,7 +13,10 @@ namespace
 constexpr double kDeg = 180.0 / M_PI;
 }
 
-double rotationRate() { return GeographicLib::Constants::WGS84_omega<double>(); }
+double rotationRate()
+{
+	return GeographicLib::Constants::WGS84_omega<double>();
+}
 
 double normalGravity(double lat_rad, double h_m)
 {
@@ -30,19 +33,19 @@ Eigen::Vector3d earthRateNed(double lat_rad)
 
 struct TangentFrame::Impl
 {
-	GeographicLib::LocalCartesian enu;	// GeographicLib's local frame is ENU
+	GeographicLib::LocalCartesian enu;  // GeographicLib's local frame is ENU
 };
 
 TangentFrame::TangentFrame(const Geodetic& origin)
-	: impl_(std::make_unique<Impl>(Impl{GeographicLib::LocalCartesian(
-		  origin.lat_rad * kDeg, origin.lon_rad * kDeg, origin.h_m)})),
-	  origin_(origin),
-	  omega_ie_n_(earthRateNed(origin.lat_rad))
+    : impl_(std::make_unique<Impl>(
+          Impl{GeographicLib::LocalCartesian(origin.lat_rad * kDeg, origin.lon_rad * kDeg, origin.h_m)})),
+      origin_(origin),
+      omega_ie_n_(earthRateNed(origin.lat_rad))
 {
 }
 TangentFrame::~TangentFrame() = default;
 TangentFrame::TangentFrame(const TangentFrame& o)
-	: impl_(std::make_unique<Impl>(*o.impl_)), origin_(o.origin_), omega_ie_n_(o.omega_ie_n_)
+    : impl_(std::make_unique<Impl>(*o.impl_)), origin_(o.origin_), omega_ie_n_(o.omega_ie_n_)
 {
 }
 TangentFrame& TangentFrame::operator=(const TangentFrame& o)
@@ -80,7 +83,8 @@ Eigen::Vector3d TangentFrame::gravityNed(const Eigen::Vector3d& p_n) const
 	double gy = 0, gz = 0;
 	GeographicLib::NormalGravity::WGS84().Gravity(lat, h, gy, gz);
 	const Eigen::Vector3d g_enu_point(0.0, gy, gz);
-	const Eigen::Matrix3d M_origin_point = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(M.data());
+	const Eigen::Matrix3d M_origin_point =
+	    Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(M.data());
 	const Eigen::Vector3d g_enu0 = M_origin_point * g_enu_point;
 	return {g_enu0.y(), g_enu0.x(), -g_enu0.z()};
 }

@@ -25,7 +25,8 @@ Eigen::Vector2d InitialFixConsensus::median_ne() const
 		std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
 		m[axis] = v[mid];
 		if (v.size() % 2 == 0)
-			m[axis] = 0.5 * (m[axis] + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid)));
+			m[axis] =
+			    0.5 * (m[axis] + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid)));
 	}
 	return m;
 }
@@ -39,7 +40,8 @@ int InitialFixConsensus::agreeing() const
 {
 	if (fixes_.empty()) return 0;
 	const Eigen::Vector2d c = median_ne();
-	return static_cast<int>(std::count_if(fixes_.begin(), fixes_.end(), [&](const Entry& e) { return agrees(e, c); }));
+	return static_cast<int>(
+	    std::count_if(fixes_.begin(), fixes_.end(), [&](const Entry& e) { return agrees(e, c); }));
 }
 
 std::optional<InitialFix> InitialFixConsensus::agreed() const

@@ -20,10 +20,14 @@ const char* navStatusName(NavStatus s)
 {
 	switch (s)
 	{
-		case NavStatus::Ok: return "ok";
-		case NavStatus::Degraded: return "degraded";
-		case NavStatus::NotInitialized: return "not_initialized";
-		case NavStatus::Diverged: return "diverged";
+		case NavStatus::Ok:
+			return "ok";
+		case NavStatus::Degraded:
+			return "degraded";
+		case NavStatus::NotInitialized:
+			return "not_initialized";
+		case NavStatus::Diverged:
+			return "diverged";
 	}
 	return "unknown";
 }
@@ -31,23 +35,26 @@ const char* navStatusName(NavStatus s)
 HealthLimits HealthLimits::fromConfig(const config::Node& h)
 {
 	h.allowOnly({"max_heading_sigma_deg", "max_horizontal_sigma_m", "window_s", "min_updates",
-				 "inconsistent_probability", "inconsistent_nis_ratio", "rejected_fraction", "diverged_rejected_fraction", "diverged_after_s"});
+	             "inconsistent_probability", "inconsistent_nis_ratio", "rejected_fraction",
+	             "diverged_rejected_fraction", "diverged_after_s"});
 	HealthLimits l;
 	l.max_heading_sigma_deg = h.inRange("max_heading_sigma_deg", 0.01, 360, l.max_heading_sigma_deg);
 	l.max_horizontal_sigma_m = h.positive("max_horizontal_sigma_m", l.max_horizontal_sigma_m);
 	l.window_s = h.positive("window_s", l.window_s);
 	l.min_updates = h.inRange("min_updates", 1, 1e6, l.min_updates);
-	l.inconsistent_probability = h.inRange("inconsistent_probability", 0.5, 1.0 - 1e-12, l.inconsistent_probability);
+	l.inconsistent_probability =
+	    h.inRange("inconsistent_probability", 0.5, 1.0 - 1e-12, l.inconsistent_probability);
 	l.inconsistent_nis_ratio = h.inRange("inconsistent_nis_ratio", 1.0, 1e6, l.inconsistent_nis_ratio);
 	l.rejected_fraction = h.inRange("rejected_fraction", 0.0, 1.0, l.rejected_fraction);
-	l.diverged_rejected_fraction = h.inRange("diverged_rejected_fraction", 0.0, 1.0, l.diverged_rejected_fraction);
+	l.diverged_rejected_fraction =
+	    h.inRange("diverged_rejected_fraction", 0.0, 1.0, l.diverged_rejected_fraction);
 	l.diverged_after_s = h.positive("diverged_after_s", l.diverged_after_s);
 	return l;
 }
 
 void HealthMonitor::onUpdate(const std::string& label, double t_s, const UpdateResult& r)
 {
-	if (r.status == UpdateStatus::Invalid) return;	// bad input, counted elsewhere; says nothing of the state
+	if (r.status == UpdateStatus::Invalid) return;  // bad input, counted elsewhere; says nothing of the state
 	SensorWindow& w = sensors_[label];
 	const bool rejected = r.status != UpdateStatus::Accepted;
 	w.entries.push_back({t_s, rejected ? 0.0 : r.nis, rejected ? 0 : r.dim, rejected});
@@ -80,7 +87,7 @@ void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s)
 	if (rejected_fraction > limits_.diverged_rejected_fraction)
 	{
 		if (w.bad_since_s < 0)
-			for (const Entry& e : w.entries)	 // the streak starts at its window's first rejection
+			for (const Entry& e : w.entries)  // the streak starts at its window's first rejection
 				if (e.rejected)
 				{
 					w.bad_since_s = e.t_s;
@@ -93,13 +100,14 @@ void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s)
 	// makes a 5 % excess significant within seconds. The ratio first: the
 	// quantile of a window's every new dim_sum is a root search (~12 k
 	// instructions a call), needed only when the ratio is exceeded.
-	const bool nis_high = w.dim_sum > 0 && w.nis_sum > limits_.inconsistent_nis_ratio * w.dim_sum &&
-						  w.nis_sum > ManifoldUkf::chiSquareQuantile(w.dim_sum, limits_.inconsistent_probability);
+	const bool nis_high =
+	    w.dim_sum > 0 && w.nis_sum > limits_.inconsistent_nis_ratio * w.dim_sum &&
+	    w.nis_sum > ManifoldUkf::chiSquareQuantile(w.dim_sum, limits_.inconsistent_probability);
 	if (w.bad_since_s >= 0 && t_s - w.bad_since_s >= limits_.diverged_after_s)
 	{
 		w.verdict = NavStatus::Diverged;
 		w.why = label + format(": %.0f of %.0f updates rejected in %.0f s, for %.0f s", w.rejected, n, span_s,
-							   t_s - w.bad_since_s);
+		                       t_s - w.bad_since_s);
 	}
 	else if (rejected_fraction > limits_.rejected_fraction)
 	{
@@ -110,7 +118,7 @@ void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s)
 	{
 		w.verdict = NavStatus::Degraded;
 		w.why = label + format(": NIS %.2f per dimension over %.0f s (inconsistent with the state)",
-							   w.nis_sum / w.dim_sum, span_s);
+		                       w.nis_sum / w.dim_sum, span_s);
 	}
 	else
 		w.verdict = NavStatus::Ok;
@@ -127,7 +135,8 @@ void HealthMonitor::onState(double t_s, const NavState& x, const Covariance& P)
 		}
 	const double heading_sigma_deg = std::sqrt(std::max(P(idx::att + 2, idx::att + 2), 0.0)) * 180 / M_PI;
 	const Eigen::Matrix2d P_ne = P.block<2, 2>(idx::pos, idx::pos);
-	const double horizontal_sigma_m = std::sqrt(std::max(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P_ne).eigenvalues()(1), 0.0));
+	const double horizontal_sigma_m =
+	    std::sqrt(std::max(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P_ne).eigenvalues()(1), 0.0));
 	if (!x.allFinite() || !P.allFinite())
 	{
 		state_verdict_ = NavStatus::Diverged;
@@ -136,12 +145,14 @@ void HealthMonitor::onState(double t_s, const NavState& x, const Covariance& P)
 	else if (heading_sigma_deg > limits_.max_heading_sigma_deg)
 	{
 		state_verdict_ = NavStatus::Degraded;
-		state_why_ = format("heading not aligned (sigma %.1f deg > %.1f)", heading_sigma_deg, limits_.max_heading_sigma_deg);
+		state_why_ = format("heading not aligned (sigma %.1f deg > %.1f)", heading_sigma_deg,
+		                    limits_.max_heading_sigma_deg);
 	}
 	else if (horizontal_sigma_m > limits_.max_horizontal_sigma_m)
 	{
 		state_verdict_ = NavStatus::Degraded;
-		state_why_ = format("horizontal position sigma %.1f m > %.1f m", horizontal_sigma_m, limits_.max_horizontal_sigma_m);
+		state_why_ = format("horizontal position sigma %.1f m > %.1f m", horizontal_sigma_m,
+		                    limits_.max_horizontal_sigma_m);
 	}
 	else
 	{

@@ -45,16 +45,16 @@ struct Navigator::Slot
 {
 	SensorStats stats;
 	ModelPtr model;
-	double latency_s = 0;			// sensors[].latency_s: measurement time = stamp − latency
-	double rejecting_since_s = -1;	// start of the current run of rejections
-	RejectionStreak streak;			// its innovations (rejection_streak.h)
-	RejectedFixRun fix_run;			// a position sensor's gate-failing fixes (fix_consensus.h)
-	double last_reinit_t_obs = -1;	// counted once, though re-filtering may redo it
+	double latency_s = 0;           // sensors[].latency_s: measurement time = stamp − latency
+	double rejecting_since_s = -1;  // start of the current run of rejections
+	RejectionStreak streak;         // its innovations (rejection_streak.h)
+	RejectedFixRun fix_run;         // a position sensor's gate-failing fixes (fix_consensus.h)
+	double last_reinit_t_obs = -1;  // counted once, though re-filtering may redo it
 	// Every fix of a position sensor since its run of rejections began (initialFix:
 	// also those the plugin skips): arrival time, fix − the state's sensor point [m].
 	std::deque<std::pair<double, Eigen::Vector2d>> fix_offsets;
 	std::vector<Measurement> buffer;
-	bool profiled = false;	// AUVNAV_CALLGRIND_SENSOR names it (CallgrindStage)
+	bool profiled = false;  // AUVNAV_CALLGRIND_SENSOR names it (CallgrindStage)
 };
 
 namespace
@@ -66,13 +66,13 @@ namespace
  *  no-op instructions, and it only runs for the named sensor. */
 class CallgrindStage
 {
-   public:
+ public:
 	explicit CallgrindStage(bool on) : on_(on) { toggle(); }
 	~CallgrindStage() { toggle(); }
 	CallgrindStage(const CallgrindStage&) = delete;
 	CallgrindStage& operator=(const CallgrindStage&) = delete;
 
-   private:
+ private:
 	void toggle() const
 	{
 #if AUVNAV_HAVE_CALLGRIND_H
@@ -97,11 +97,11 @@ struct Navigator::History
 	struct Event
 	{
 		bool imu = false;  // an IMU sample to predict to, or one observation's prepared measurements
-		double t = 0;	   // IMU: its time; else the filter time it was applied at
+		double t = 0;      // IMU: its time; else the filter time it was applied at
 		Eigen::Vector3d w = Eigen::Vector3d::Zero();  // IMU: gyro sample
 		std::size_t slot = 0;
-		double t_obs = 0;  // measurement time
-		FilterContext ctx;	// as prepared (mean and covariance pointers are re-set)
+		double t_obs = 0;   // measurement time
+		FilterContext ctx;  // as prepared (mean and covariance pointers are re-set)
 		std::vector<Measurement> ms;
 	};
 	struct Gate
@@ -112,7 +112,7 @@ struct Navigator::History
 	};
 	struct Checkpoint
 	{
-		std::size_t event = 0;	// absolute index of the IMU event it precedes
+		std::size_t event = 0;  // absolute index of the IMU event it precedes
 		double t_s = 0;
 		NavState x;
 		Covariance P;
@@ -121,7 +121,7 @@ struct Navigator::History
 		std::optional<SmoothingRecorder::Snapshot> smoother;
 	};
 	std::deque<Event> events;
-	std::size_t first = 0;	// absolute index of events.front()
+	std::size_t first = 0;  // absolute index of events.front()
 	std::deque<Checkpoint> checkpoints;
 
 	Event& at(std::size_t abs) { return events[abs - first]; }
@@ -133,9 +133,9 @@ Navigator::~Navigator() = default;
 Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 {
 	const auto nf = cfg.child("navigation_frame").child("origin");
-	frame_ = std::make_unique<earth::TangentFrame>(earth::Geodetic{nf.inRange("latitude_deg", -85, 85) * kDeg,
-																	 nf.inRange("longitude_deg", -180, 180) * kDeg,
-																	 nf.number("height_m", 0.0)});
+	frame_ = std::make_unique<earth::TangentFrame>(
+	    earth::Geodetic{nf.inRange("latitude_deg", -85, 85) * kDeg,
+	                    nf.inRange("longitude_deg", -180, 180) * kDeg, nf.number("height_m", 0.0)});
 	const auto imu = cfg.child("imu");
 	imu_label_ = imu.string("label");
 	imu_position_b_ = imu.vector3("position_m");
@@ -152,7 +152,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	// The parameter prior: inline `vehicle_model`, or `vehicle_model_file`
 	// (relative to this config file) shared with the model-aiding plugin.
 	const auto vm = f.has("vehicle_model_file") ? config::Node::load(f.filePath("vehicle_model_file"))
-												 : f.child("vehicle_model");
+	                                            : f.child("vehicle_model");
 	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
 	put23(prior_mean_, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));
@@ -229,8 +229,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		stop_on_jump_ = action == "stop";
 	}
 	if (max_gap_s_ > max_forward_jump_s_)
-		imu.fail("max_gap_s", "must not exceed clock.max_forward_jump_s (" + std::to_string(max_forward_jump_s_) +
-								  " s): longer steps are clock jumps, not gaps");
+		imu.fail("max_gap_s", "must not exceed clock.max_forward_jump_s (" +
+		                          std::to_string(max_forward_jump_s_) +
+		                          " s): longer steps are clock jumps, not gaps");
 	if (cfg.has("health")) health_ = HealthMonitor(HealthLimits::fromConfig(cfg.child("health")));
 	if (cfg.has("smoother"))
 	{
@@ -242,17 +243,21 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	if (cfg.has("gates"))
 	{
 		const auto g = cfg.child("gates");
-		g.allowOnly({"recovery_after_s", "consistent_rejections", "consistency_probability", "position_reinit"});
+		g.allowOnly(
+		    {"recovery_after_s", "consistent_rejections", "consistency_probability", "position_reinit"});
 		recovery_after_s_ = g.positive("recovery_after_s", recovery_after_s_);
-		consistent_rejections_ = static_cast<int>(g.inRange("consistent_rejections", 0, 8, consistent_rejections_));
+		consistent_rejections_ =
+		    static_cast<int>(g.inRange("consistent_rejections", 0, 8, consistent_rejections_));
 		if (consistent_rejections_ > 0 && consistent_rejections_ < 3)
 			g.fail("consistent_rejections", "needs at least 3 rejections to fit a drift (0 switches it off)");
-		consistency_probability_ = g.inRange("consistency_probability", 0.5, 1.0 - 1e-9, consistency_probability_);
+		consistency_probability_ =
+		    g.inRange("consistency_probability", 0.5, 1.0 - 1e-9, consistency_probability_);
 		if (g.has("position_reinit"))
 		{
 			const auto r = g.child("position_reinit");
 			reinit_fixes_ = static_cast<int>(r.inRange("rejected_fixes", 0, 16, reinit_fixes_));
-			if (reinit_fixes_ == 1) r.fail("rejected_fixes", "needs at least 2 fixes to agree (0 switches it off)");
+			if (reinit_fixes_ == 1)
+				r.fail("rejected_fixes", "needs at least 2 fixes to agree (0 switches it off)");
 			reinit_probability_ = r.inRange("probability", 0.5, 1.0 - 1e-9, reinit_probability_);
 			reinit_spread_m_ = r.positive("max_spread_m", reinit_spread_m_);
 		}
@@ -278,8 +283,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		s.markFreeForm("config");  // the plugin checks its own keys
 		// Observation libraries the entry declares are the program's to load
 		// before the rawlog is opened (obs_libraries.h); accepted here.
-		if (s.has("obs_libs")) (void)(s.isSequence("obs_libs") ? s.strings("obs_libs").size() : s.string("obs_libs").size());
-		host.load(slot->stats.plugin);	// a plugin that does not load is no config error
+		if (s.has("obs_libs"))
+			(void)(s.isSequence("obs_libs") ? s.strings("obs_libs").size() : s.string("obs_libs").size());
+		host.load(slot->stats.plugin);  // a plugin that does not load is no config error
 		try
 		{
 			slot->model = host.create(slot->stats.plugin, pluginConfigText(s), slot->stats.label);
@@ -287,7 +293,8 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		catch (const PluginError& e)
 		{
 			// Name the file the plugin's configuration came from.
-			throw PluginError((s.has("config_file") ? s.filePath("config_file") : s.where("config")) + ": " + e.what());
+			throw PluginError((s.has("config_file") ? s.filePath("config_file") : s.where("config")) + ": " +
+			                  e.what());
 		}
 		slots_.push_back(std::move(slot));
 	}
@@ -296,8 +303,9 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 		bool found = false;
 		for (const auto& slot : slots_) found = found || slot->stats.label == gps_label_;
 		if (!found)
-			initial_.fail("gps_label", "'" + gps_label_ + "' is not the label of any entry in sensors: (the first fix comes "
-									  "from that sensor's plugin)");
+			initial_.fail("gps_label", "'" + gps_label_ +
+			                               "' is not the label of any entry in sensors: (the first fix comes "
+			                               "from that sensor's plugin)");
 	}
 	// Every key must have been read: a misspelled one is an error, not a default.
 	// plugin_paths and outputs belong to the program (auvnav-run checks them).
@@ -311,22 +319,22 @@ void Navigator::readSigmaLimits(const config::Node& limits)
 {
 	// What a key may name: a block of the paper's state, a plugin's block
 	// ("<label>.<block>") or one state (stateNames()), each [first, count).
-	std::map<std::string, std::pair<int, int>> targets = {
-		{"att", {idx::att, 3}},
-		{"gyro_bias", {idx::gyro_bias, 3}},
-		{"acc", {idx::acc, 3}},
-		{"gravity", {idx::gravity, 1}},
-		{"acc_bias", {idx::acc_bias, 3}},
-		{"vel", {idx::vel, 3}},
-		{"pos", {idx::pos, 3}},
-		{"current", {idx::current_vehicle, 2}},
-		{"current_far", {idx::current_far, 2}},
-		{"adcp_bias", {idx::adcp_bias, 2}},
-		{"M", {idx::inertia, 6}},
-		{"Dl", {idx::damping_lin, 6}},
-		{"Dq", {idx::damping_quad, 6}}};
+	std::map<std::string, std::pair<int, int>> targets = {{"att", {idx::att, 3}},
+	                                                      {"gyro_bias", {idx::gyro_bias, 3}},
+	                                                      {"acc", {idx::acc, 3}},
+	                                                      {"gravity", {idx::gravity, 1}},
+	                                                      {"acc_bias", {idx::acc_bias, 3}},
+	                                                      {"vel", {idx::vel, 3}},
+	                                                      {"pos", {idx::pos, 3}},
+	                                                      {"current", {idx::current_vehicle, 2}},
+	                                                      {"current_far", {idx::current_far, 2}},
+	                                                      {"adcp_bias", {idx::adcp_bias, 2}},
+	                                                      {"M", {idx::inertia, 6}},
+	                                                      {"Dl", {idx::damping_lin, 6}},
+	                                                      {"Dq", {idx::damping_quad, 6}}};
 	for (const auto& b : plugin_blocks_) targets[b.sensor + "." + b.name] = {b.offset, b.dim};
-	for (int i = 0; i < static_cast<int>(state_names_.size()); ++i) targets.emplace(state_names_[i], std::make_pair(i, 1));
+	for (int i = 0; i < static_cast<int>(state_names_.size()); ++i)
+		targets.emplace(state_names_[i], std::make_pair(i, 1));
 	std::vector<std::string> names;
 	for (const auto& [name, range] : targets) names.push_back(name);
 	limits.allowOnly(names);
@@ -349,8 +357,8 @@ void Navigator::readSigmaLimits(const config::Node& limits)
 	for (int i = 0; i < n; ++i)
 		if (std::sqrt(P0_(i, i)) < lo[i] || std::sqrt(P0_(i, i)) > hi[i])
 			limits.fail(state_names_[i], "its initial sigma " + std::to_string(std::sqrt(P0_(i, i))) +
-											 " (filter.initial) is outside its limits [" + std::to_string(lo[i]) +
-											 ", " + std::to_string(hi[i]) + "]");
+			                                 " (filter.initial) is outside its limits [" +
+			                                 std::to_string(lo[i]) + ", " + std::to_string(hi[i]) + "]");
 	ukf_->setSigmaLimits(lo, hi);
 }
 
@@ -369,7 +377,7 @@ void Navigator::appendPluginStates(ProcessModel& pm)
 		catch (const std::exception& e)
 		{
 			throw PluginError("sensor '" + label + "' (plugin " + slot->stats.plugin +
-							  "): stateBlocks() failed: " + e.what());
+			                  "): stateBlocks() failed: " + e.what());
 		}
 		if (blocks.empty()) continue;
 		const int first_extra = pm.dim() - idx::core_dim;
@@ -391,7 +399,8 @@ void Navigator::appendPluginStates(ProcessModel& pm)
 			{
 				const double sigma = b.sigma.size() == 1 ? b.sigma[0] : b.sigma[i];
 				P0_(at + i, at + i) = sigma * sigma;
-				const std::string name = label + "." + b.name + (b.components[i].empty() ? "" : "_" + b.components[i]);
+				const std::string name =
+				    label + "." + b.name + (b.components[i].empty() ? "" : "_" + b.components[i]);
 				state_names_.push_back(name);
 				stored_names_.push_back(name);
 			}
@@ -405,9 +414,9 @@ std::string pluginConfigText(const config::Node& s)
 {
 	// Inline `config`, or `config_file` relative to the navigator's file.
 	if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
-	config::Node plugin_cfg = s.has("config")		   ? s.child("config")
-							  : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
-													   : config::Node::fromText("{}", s.file());
+	config::Node plugin_cfg = s.has("config")        ? s.child("config")
+	                          : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
+	                                                 : config::Node::fromText("{}", s.file());
 	// Plugins receive YAML text: tell them where relative paths in it start.
 	const std::string origin = s.has("config_file") ? s.filePath("config_file") : s.file();
 	if (!plugin_cfg.has("config_dir"))
@@ -482,7 +491,8 @@ void Navigator::process(const mrpt::obs::CObservation& obs)
 			if (slot->stats.label == gps_label_)
 			{
 				InitialFix fix;
-				if (slot->model->initialFix(obs, context(t), fix) && fix.p_n.allFinite() && fix.r_b.allFinite())
+				if (slot->model->initialFix(obs, context(t), fix) && fix.p_n.allFinite() &&
+				    fix.r_b.allFinite())
 				{
 					fix_consensus_.add(t, fix);
 					gps_fix_ = fix_consensus_.agreed();
@@ -498,7 +508,8 @@ void Navigator::recordFixOffset(const mrpt::obs::CObservation& obs, double t)
 	{
 		if (slot->stats.label != obs.sensorLabel || !slot->model->reportsPositionFix()) continue;
 		InitialFix fix;
-		if (!slot->model->initialFix(obs, context(t), fix) || !fix.p_n.allFinite() || !fix.r_b.allFinite()) continue;
+		if (!slot->model->initialFix(obs, context(t), fix) || !fix.p_n.allFinite() || !fix.r_b.allFinite())
+			continue;
 		const NavState& x = ukf_->state();
 		const Eigen::Vector3d predicted_n = x.p_n + x.R_nb * (fix.r_b - imu_position_b_);
 		auto& offsets = slot->fix_offsets;
@@ -519,7 +530,7 @@ bool Navigator::mostFixesAgreeWith(const Slot& slot, const Eigen::Vector2d& offs
 			++all;
 			agreeing += (d - offset_m).norm() <= reinit_spread_m_;
 		}
-	return all == 0 || 2 * agreeing > all;	// no record (a plugin without initialFix): the run decides
+	return all == 0 || 2 * agreeing > all;  // no record (a plugin without initialFix): the run decides
 }
 
 bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
@@ -557,7 +568,7 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 	if (dt > max_forward_jump_s_ || dt < -max_backward_jump_s_)
 	{
 		clockJump(t, dt);
-		return handleImu(obs);	// the first sample of the new initialisation
+		return handleImu(obs);  // the first sample of the new initialisation
 	}
 	if (dt <= 0)
 	{
@@ -593,11 +604,12 @@ bool Navigator::handleImu(const mrpt::obs::CObservation& obs)
 void Navigator::clockJump(double t, double dt)
 {
 	char what[256];
-	std::snprintf(what, sizeof what, "IMU '%s' clock jumped by %+.3f s at %.3f s from the start (%.3f -> %.3f s)",
-				  imu_label_.c_str(), dt, t_s_ - t0_s_, t_s_, t);
+	std::snprintf(what, sizeof what,
+	              "IMU '%s' clock jumped by %+.3f s at %.3f s from the start (%.3f -> %.3f s)",
+	              imu_label_.c_str(), dt, t_s_ - t0_s_, t_s_, t);
 	if (stop_on_jump_)
-		throw std::runtime_error(std::string(what) +
-								 "; not predicted through (clock.on_jump: stop; 'reinitialize' starts again)");
+		throw std::runtime_error(
+		    std::string(what) + "; not predicted through (clock.on_jump: stop; 'reinitialize' starts again)");
 	// Start again from this sample: levelling, then the first fix, as at the start.
 	++clock_jumps_;
 	imu_stats_.last_problem = std::string(what) + "; re-initialised";
@@ -606,13 +618,13 @@ void Navigator::clockJump(double t, double dt)
 		smoother_->endSegment(*ukf_, t_s_);
 		// After the history is reset below nothing rewinds: write all.
 		try
-			{
-				smoother_->commit(std::numeric_limits<std::size_t>::max());
-			}
-			catch (const std::exception& e)
-			{
-				stopSmoothing(e.what());
-			}
+		{
+			smoother_->commit(std::numeric_limits<std::size_t>::max());
+		}
+		catch (const std::exception& e)
+		{
+			stopSmoothing(e.what());
+		}
 	}
 	initialized_ = false;
 	leveling_samples_ = 0;
@@ -672,7 +684,8 @@ void Navigator::trimHistory()
 	// Keep the newest checkpoint at or before t − max_delay and all after it:
 	// a measurement up to max_delay_s old finds one before it.
 	auto& H = *history_;
-	while (H.checkpoints.size() >= 2 && H.checkpoints[1].t_s <= t_s_ - max_delay_s_) H.checkpoints.pop_front();
+	while (H.checkpoints.size() >= 2 && H.checkpoints[1].t_s <= t_s_ - max_delay_s_)
+		H.checkpoints.pop_front();
 	const std::size_t keep_from = H.checkpoints.empty() ? H.end() : H.checkpoints.front().event;
 	while (H.first < keep_from && !H.events.empty())
 	{
@@ -686,11 +699,12 @@ void Navigator::commitSmoother()
 {
 	if (!smoother_) return;
 	// Records from before the oldest checkpoint can no longer be rewound.
-	const bool can_rewind = history_ && !history_->checkpoints.empty() && history_->checkpoints.front().smoother;
+	const bool can_rewind =
+	    history_ && !history_->checkpoints.empty() && history_->checkpoints.front().smoother;
 	try
 	{
 		smoother_->commit(can_rewind ? history_->checkpoints.front().smoother->emitted
-									 : std::numeric_limits<std::size_t>::max());
+		                             : std::numeric_limits<std::size_t>::max());
 	}
 	catch (const std::exception& e)
 	{
@@ -794,9 +808,10 @@ void Navigator::initialize()
 	const double pitch = std::atan2(fm.x(), std::hypot(fm.y(), fm.z()));
 	const double heading = initial_.inRange("heading_deg", -360, 360) * kDeg;
 	NavState x0;
-	x0.R_nb = (Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-			   Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-				  .toRotationMatrix();
+	x0.R_nb = (Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) *
+	           Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+	           Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+	              .toRotationMatrix();
 	x0.g = earth::normalGravity(frame_->origin().lat_rad, frame_->origin().h_m);
 	Eigen::Vector3d p_body(initial_.number("north_m", 0.0), initial_.number("east_m", 0.0), 0.0);
 	// A fix is of its sensor point (e.g. the antenna): the body origin is
@@ -817,15 +832,17 @@ void Navigator::initialize()
 	{
 		const int n = fix_consensus_.fixes(), agree = fix_consensus_.agreeing();
 		char what[200];
-		std::snprintf(what, sizeof what,
-					  "initialised at N %.2f E %.2f m from the newest of %d agreeing fixes (%d in the last %.0f s, "
-					  "%d outliers)",
-					  p_body.x(), p_body.y(), agree, n, fix_consensus_.params().window_s, n - agree);
+		std::snprintf(
+		    what, sizeof what,
+		    "initialised at N %.2f E %.2f m from the newest of %d agreeing fixes (%d in the last %.0f s, "
+		    "%d outliers)",
+		    p_body.x(), p_body.y(), agree, n, fix_consensus_.params().window_s, n - agree);
 		on_event(t_s_ - t0_s_, gps_label_, what);
 	}
 }
 
-bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, const UpdateResult& r, double t_obs)
+bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, const UpdateResult& r,
+                                            double t_obs)
 {
 	if (reinit_fixes_ < 2 || r.innovation.size() < 2 || m.R.rows() < 2) return false;
 	const Eigen::Vector2d nu = r.innovation.head<2>();
@@ -846,7 +863,8 @@ bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, co
 	x.p_n.head<2>() += nu;
 	P.middleRows<2>(idx::pos).setZero();
 	P.middleCols<2>(idx::pos).setZero();
-	for (int i = 0; i < 2; ++i) P(idx::pos + i, idx::pos + i) = std::max(P0_(idx::pos + i, idx::pos + i), R(i, i));
+	for (int i = 0; i < 2; ++i)
+		P(idx::pos + i, idx::pos + i) = std::max(P0_(idx::pos + i, idx::pos + i), R(i, i));
 	ukf_->restore(x, P);
 	const Eigen::Vector2d mean = slot.fix_run.meanOffset_m(reinit_fixes_);
 	slot.fix_run.clear();
@@ -861,10 +879,11 @@ bool Navigator::reinitializeFromRejectedFix(Slot& slot, const Measurement& m, co
 		if (on_event)
 		{
 			char what[220];
-			std::snprintf(what, sizeof what,
-						  "position re-initialised: moved N %+.2f E %+.2f m onto the newest of %d agreeing fixes "
-						  "rejected by the gate (their mean offset N %+.2f E %+.2f m)",
-						  nu.x(), nu.y(), reinit_fixes_, mean.x(), mean.y());
+			std::snprintf(
+			    what, sizeof what,
+			    "position re-initialised: moved N %+.2f E %+.2f m onto the newest of %d agreeing fixes "
+			    "rejected by the gate (their mean offset N %+.2f E %+.2f m)",
+			    nu.x(), nu.y(), reinit_fixes_, mean.x(), mean.y());
 			on_event(t_obs - t0_s_, slot.stats.label, what);
 		}
 	}
@@ -875,15 +894,16 @@ std::string Navigator::waitingFor() const
 {
 	if (initialized_) return "";
 	if (leveling_samples_ == 0)
-		return t0_s_ < 0 ? "no observations at all" : "no valid IMU sample with label '" + imu_label_ + "' (imu.label)";
+		return t0_s_ < 0 ? "no observations at all"
+		                 : "no valid IMU sample with label '" + imu_label_ + "' (imu.label)";
 	if (t_s_ - leveling_start_s_ < leveling_s_)
 		return "IMU data for levelling: " + std::to_string(t_s_ - leveling_start_s_) + " s of " +
-			   std::to_string(leveling_s_) + " s (imu.leveling_s)";
+		       std::to_string(leveling_s_) + " s (imu.leveling_s)";
 	if (position_from_gps_ && !gps_fix_)
-		return std::to_string(fix_consensus_.params().min_fixes) + " agreeing GPS fixes on label '" + gps_label_ +
-			   "' (filter.initial.position: gps, filter.initial.fix_consensus): " +
-			   std::to_string(fix_consensus_.agreeing()) + " of " + std::to_string(fix_consensus_.fixes()) +
-			   " agree; set filter.initial.position: config to start without them";
+		return std::to_string(fix_consensus_.params().min_fixes) + " agreeing GPS fixes on label '" +
+		       gps_label_ + "' (filter.initial.position: gps, filter.initial.fix_consensus): " +
+		       std::to_string(fix_consensus_.agreeing()) + " of " + std::to_string(fix_consensus_.fixes()) +
+		       " agree; set filter.initial.position: config to start without them";
 	return "initialisation";
 }
 
@@ -894,7 +914,7 @@ void Navigator::finish()
 		{
 			smoother_->finish(*ukf_, t_s_);
 		}
-		catch (const std::exception& e)	 // a full disk: the filter's run stands, the smoothing cannot
+		catch (const std::exception& e)  // a full disk: the filter's run stands, the smoothing cannot
 		{
 			stopSmoothing(e.what());
 		}
@@ -944,7 +964,8 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 		{
 			// Not a measurement to apply now: a sensor on another clock, or a jump.
 			++st.invalid;
-			st.last_problem = "timestamp " + std::to_string(t_m - t_s_) + " s ahead of the IMU (clock.max_forward_jump_s)";
+			st.last_problem =
+			    "timestamp " + std::to_string(t_m - t_s_) + " s ahead of the IMU (clock.max_forward_jump_s)";
 			continue;
 		}
 		if (t_m < t_s_ - apply_now_within_s_)
@@ -959,7 +980,8 @@ void Navigator::dispatch(const mrpt::obs::CObservation& obs, double stamp_s)
 	}
 }
 
-bool Navigator::prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m, std::size_t at)
+bool Navigator::prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m,
+                                std::size_t at)
 {
 	Slot& slot = *slots_[slot_index];
 	const CallgrindStage profile(slot.profiled);
@@ -993,7 +1015,7 @@ bool Navigator::prepareAndApply(std::size_t slot_index, const mrpt::obs::CObserv
 }
 
 void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx,
-								  double t_obs, bool record)
+                                  double t_obs, bool record)
 {
 	SensorStats& st = slot.stats;
 	for (const Measurement& m : ms)
@@ -1003,7 +1025,8 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 			if (record) ++st.skipped;
 			continue;
 		}
-		const bool recovery = slot.rejecting_since_s >= 0 && t_obs - slot.rejecting_since_s > recovery_after_s_;
+		const bool recovery =
+		    slot.rejecting_since_s >= 0 && t_obs - slot.rejecting_since_s > recovery_after_s_;
 		// Gated as usual first: a position fix that fails the gate may be one
 		// of a run that re-initialises the position (reinitializeFromRejectedFix).
 		UpdateResult r = ukf_->update(*slot.model, m, ctx, Recovery::None);
@@ -1063,7 +1086,9 @@ void Navigator::applyMeasurements(Slot& slot, const std::vector<Measurement>& ms
 				st.nis_sum += r.nis;
 				st.nis_dim_sum += r.dim;
 				break;
-			case UpdateStatus::Rejected: ++st.rejected; break;
+			case UpdateStatus::Rejected:
+				++st.rejected;
+				break;
 			case UpdateStatus::Invalid:
 				++st.invalid;
 				st.last_problem = r.why;

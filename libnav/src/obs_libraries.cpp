@@ -11,7 +11,10 @@ namespace auvnav
 {
 namespace
 {
-bool isPath(const std::string& lib) { return lib.find('/') != std::string::npos; }
+bool isPath(const std::string& lib)
+{
+	return lib.find('/') != std::string::npos;
+}
 
 /** Where `lib` is loaded from: an absolute path, or a bare name for dlopen's own search. */
 std::string locate(const std::string& lib, const std::vector<std::string>& search_dirs)
@@ -58,7 +61,8 @@ std::string loadObservationLibrary(const std::string& lib, const std::vector<std
 	return where;
 }
 
-void loadObservationLibraries(const std::vector<std::string>& libs, const std::vector<std::string>& search_dirs)
+void loadObservationLibraries(const std::vector<std::string>& libs,
+                              const std::vector<std::string>& search_dirs)
 {
 	for (const auto& lib : libs) loadObservationLibrary(lib, search_dirs);
 }
@@ -71,11 +75,13 @@ std::vector<std::string> declaredObservationLibraries(const config::Node& nav_cf
 	for (const auto& s : nav_cfg.sequence("sensors"))
 	{
 		if (!s.has("obs_libs")) continue;
-		const auto libs = s.isSequence("obs_libs") ? s.strings("obs_libs") : std::vector<std::string>{s.string("obs_libs")};
+		const auto libs =
+		    s.isSequence("obs_libs") ? s.strings("obs_libs") : std::vector<std::string>{s.string("obs_libs")};
 		for (const auto& lib : libs)
 		{
 			if (lib.empty()) s.fail("obs_libs", "empty library name");
-			out.push_back(isPath(lib) && fs::path(lib).is_relative() ? (base / lib).lexically_normal().string() : lib);
+			out.push_back(
+			    isPath(lib) && fs::path(lib).is_relative() ? (base / lib).lexically_normal().string() : lib);
 		}
 	}
 	return out;

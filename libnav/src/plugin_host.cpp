@@ -113,7 +113,8 @@ PluginHost::PluginHost(std::vector<std::string> search_paths) : paths_(std::move
 #ifdef AUVNAV_PLUGIN_RELDIR
 		defaults.push_back((fs::path(exe_dir) / AUVNAV_PLUGIN_RELDIR).lexically_normal().string());
 #endif
-		defaults.push_back((fs::path(exe_dir) / ".." / "lib" / "auvnav" / "plugins").lexically_normal().string());
+		defaults.push_back(
+		    (fs::path(exe_dir) / ".." / "lib" / "auvnav" / "plugins").lexically_normal().string());
 		for (const auto& d : defaults)
 			if (std::find(paths_.begin(), paths_.end(), d) == paths_.end()) paths_.push_back(d);
 	}
@@ -122,7 +123,7 @@ PluginHost::PluginHost(std::vector<std::string> search_paths) : paths_(std::move
 std::string PluginHost::resolve(const std::string& plugin) const
 {
 	const bool is_path = plugin.find('/') != std::string::npos ||
-						 (plugin.size() > 3 && plugin.compare(plugin.size() - 3, 3, ".so") == 0);
+	                     (plugin.size() > 3 && plugin.compare(plugin.size() - 3, 3, ".so") == 0);
 	if (is_path)
 	{
 		if (!fs::exists(plugin)) throw PluginError("plugin file not found: " + plugin);
@@ -153,48 +154,57 @@ std::shared_ptr<PluginHost::Library> PluginHost::open(const std::string& plugin)
 	if (!lib->handle)
 	{
 		const char* e = dlerror();
-		throw PluginError("cannot load plugin '" + plugin + "' from " + path + ": " + (e ? e : "unknown error"));
+		throw PluginError("cannot load plugin '" + plugin + "' from " + path + ": " +
+		                  (e ? e : "unknown error"));
 	}
 	dlerror();
 	void* sym = dlsym(lib->handle, AUVNAV_PLUGIN_ENTRY_SYMBOL);
 	if (!sym)
-		throw PluginError(path + " is not an auvnav plugin: it has no entry point " AUVNAV_PLUGIN_ENTRY_SYMBOL);
+		throw PluginError(path +
+		                  " is not an auvnav plugin: it has no entry point " AUVNAV_PLUGIN_ENTRY_SYMBOL);
 	const auto entry_fn = reinterpret_cast<AuvnavEntryFn>(sym);
 	lib->entry = entry_fn();
 	if (!lib->entry) throw PluginError(path + ": entry point returned no plugin description");
 	const AuvnavPluginHeader& h = lib->entry->header;
 	const std::string name = h.name ? h.name : "?";
 	if (h.abi_version != AUVNAV_PLUGIN_ABI_VERSION)
-		throw PluginError("plugin '" + name + "' (" + path + ") has ABI version " + std::to_string(h.abi_version) +
-						  "; this navigator needs ABI version " + std::to_string(AUVNAV_PLUGIN_ABI_VERSION) +
-						  ": rebuild the plugin against this auvnav");
+		throw PluginError("plugin '" + name + "' (" + path + ") has ABI version " +
+		                  std::to_string(h.abi_version) + "; this navigator needs ABI version " +
+		                  std::to_string(AUVNAV_PLUGIN_ABI_VERSION) +
+		                  ": rebuild the plugin against this auvnav");
 	if (h.api_version > AUVNAV_PLUGIN_API_VERSION)
 		throw PluginError("plugin '" + name + "' (" + path + ") needs plugin API version " +
-						  std::to_string(h.api_version) + "; this navigator provides " +
-						  std::to_string(AUVNAV_PLUGIN_API_VERSION) + ": update auvnav");
+		                  std::to_string(h.api_version) + "; this navigator provides " +
+		                  std::to_string(AUVNAV_PLUGIN_API_VERSION) + ": update auvnav");
 	const std::string fp = h.fingerprint ? h.fingerprint : "";
 	if (fp != AUVNAV_BUILD_FINGERPRINT)
 		throw PluginError("plugin '" + name + "' (" + path + ") was built with '" + fp +
-						  "' but this navigator with '" AUVNAV_BUILD_FINGERPRINT
-						  "': C++ objects cannot cross safely; rebuild the plugin");
+		                  "' but this navigator with '" AUVNAV_BUILD_FINGERPRINT
+		                  "': C++ objects cannot cross safely; rebuild the plugin");
 	if (!lib->entry->create || !lib->entry->destroy)
 		throw PluginError("plugin '" + name + "' (" + path + ") lacks a factory or destroy function");
-	lib->info = {name, h.version ? h.version : "", h.description ? h.description : "", fp, path,
-				 h.abi_version, h.api_version};
+	lib->info = {
+	    name,         h.version ? h.version : "", h.description ? h.description : "", fp, path, h.abi_version,
+	    h.api_version};
 	libraries_.push_back(lib);
 	return lib;
 }
 
-PluginInfo PluginHost::load(const std::string& plugin) { return open(plugin)->info; }
+PluginInfo PluginHost::load(const std::string& plugin)
+{
+	return open(plugin)->info;
+}
 
-ModelPtr PluginHost::create(const std::string& plugin, const std::string& config_yaml, const std::string& label)
+ModelPtr PluginHost::create(const std::string& plugin, const std::string& config_yaml,
+                            const std::string& label)
 {
 	auto lib = open(plugin);
 	char error[1024] = {0};
 	MeasurementModel* m = lib->entry->create(config_yaml.c_str(), label.c_str(), error, sizeof error);
 	if (!m)
-		throw PluginError("plugin '" + lib->info.name + "' (" + lib->path + ") refused its configuration for sensor '" +
-						  label + "': " + (error[0] ? error : "no reason given"));
+		throw PluginError("plugin '" + lib->info.name + "' (" + lib->path +
+		                  ") refused its configuration for sensor '" + label +
+		                  "': " + (error[0] ? error : "no reason given"));
 	// The deleter keeps the library alive until the model is destroyed.
 	return ModelPtr(m, [lib](MeasurementModel* p) { lib->entry->destroy(p); });
 }

@@ -7,7 +7,10 @@
 
 namespace auvnav
 {
-double GaussMarkov::phi(double dt_s) const { return std::exp(-dt_s / tau_s); }
+double GaussMarkov::phi(double dt_s) const
+{
+	return std::exp(-dt_s / tau_s);
+}
 double GaussMarkov::variance(double dt_s) const
 {
 	const double p = phi(dt_s);
@@ -37,8 +40,9 @@ void ProcessModel::appendBlock(const StateBlockSpec& b)
 	if (!why.empty()) throw std::invalid_argument(why);
 	const int d = b.dimension();
 	if (dim() + d > idx::max_dim)
-		throw std::invalid_argument("state block '" + b.name + "': no room (" + std::to_string(dim() - idx::core_dim) +
-									" plugin states already, at most " + std::to_string(idx::max_extra) + ")");
+		throw std::invalid_argument(
+		    "state block '" + b.name + "': no room (" + std::to_string(dim() - idx::core_dim) +
+		    " plugin states already, at most " + std::to_string(idx::max_extra) + ")");
 	const int at = dim();
 	TangentVector mean = prior_mean;
 	mean.conservativeResize(at + d);
@@ -51,13 +55,13 @@ void ProcessModel::appendBlock(const StateBlockSpec& b)
 }
 
 NavState ProcessModel::propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
-								 const Eigen::Vector3d& omega_ie_n, double dt) const
+                                 const Eigen::Vector3d& omega_ie_n, double dt) const
 {
 	return propagateTurned(x, omega_ib_b, so3::Exp(-omega_ie_n * dt), decay(dt));
 }
 
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
-									   const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const
+                                       const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const
 {
 	return propagateTurned(x, R_earth_turn, so3::Exp((omega_ib_b - x.b_w) * step.dt_s), step);
 }
@@ -82,7 +86,7 @@ TangentVector ProcessModel::diagonalTailFactors(const StepDecay& step) const
 	a.segment<idx::core_dim - idx::inertia>(idx::inertia - idx::adcp_bias).setConstant(step.parameters);
 	for (std::size_t i = 0; i < extra.size(); ++i)
 		a[idx::core_dim - idx::adcp_bias + static_cast<int>(i)] =
-			extra[i].kind == StateProcess::GaussMarkov ? step.extra[i] : 1.0;
+		    extra[i].kind == StateProcess::GaussMarkov ? step.extra[i] : 1.0;
 	return a;
 }
 
@@ -99,18 +103,19 @@ template <typename V, typename M>
 }  // namespace
 
 NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-									   const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const
+                                       const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const
 {
 	if (x.dim() != dim())
-		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) + "-state, the model has " +
-									std::to_string(dim()) + " coordinates");
+		throw std::invalid_argument("ProcessModel::propagate: a " + std::to_string(x.dim()) +
+		                            "-state, the model has " + std::to_string(dim()) + " coordinates");
 	NavState y;
 	y.extra.resize(x.extra.size());
 	propagateInertialInto(x, R_earth_turn, R_body_turn, step, y);
 	// Member by member (this runs per sigma point), the same sums as
 	// applyLinearRows on the flat state followed by the prior-mean terms.
 	y.b_adcp = relaxToPriorMean(x.b_adcp, step.adcp_bias, prior_mean.segment<2>(idx::adcp_bias));
-	const auto relax23 = [&](const Eigen::Matrix<double, 2, 3>& m, int at) {
+	const auto relax23 = [&](const Eigen::Matrix<double, 2, 3>& m, int at)
+	{
 		Eigen::Matrix<double, 2, 3> out;
 		for (int r = 0; r < 2; ++r)
 			for (int c = 0; c < 3; ++c)
@@ -122,14 +127,16 @@ NavState ProcessModel::propagateTurned(const NavState& x, const Eigen::Matrix3d&
 	y.Dq_sub = relax23(x.Dq_sub, idx::damping_quad);
 	for (int i = 0; i < static_cast<int>(x.extra.size()); ++i)
 	{
-		const double decayed = extra[i].kind == StateProcess::GaussMarkov ? x.extra[i] * step.extra[i] : x.extra[i];
+		const double decayed =
+		    extra[i].kind == StateProcess::GaussMarkov ? x.extra[i] * step.extra[i] : x.extra[i];
 		y.extra[i] = decayed + (1 - step.extra[i]) * prior_mean[idx::extra + i];
 	}
 	return y;
 }
 
 void ProcessModel::propagateInertialInto(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-										 const Eigen::Matrix3d& R_body_turn, const StepDecay& step, NavState& y) const
+                                         const Eigen::Matrix3d& R_body_turn, const StepDecay& step,
+                                         NavState& y) const
 {
 	// Body rotation relative to inertial space, then undo the turn of the
 	// Earth-fixed navigation frame.
@@ -142,15 +149,17 @@ void ProcessModel::propagateInertialInto(const NavState& x, const Eigen::Matrix3
 	y.g = x.g;
 	y.b_a = relaxToPriorMean(x.b_a, step.accel_bias, prior_mean.segment<3>(idx::acc_bias));
 	y.current_vehicle_ne =
-		relaxToPriorMean(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
-	y.current_far_ne = relaxToPriorMean(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
+	    relaxToPriorMean(x.current_vehicle_ne, step.current, prior_mean.segment<2>(idx::current_vehicle));
+	y.current_far_ne =
+	    relaxToPriorMean(x.current_far_ne, step.current, prior_mean.segment<2>(idx::current_far));
 	if (current_far_distance_m > 0)
 	{
 		// The vehicle (and the far point D below it) moved Δz along the linear
 		// profile the ADCP observes: both currents shift by Δz times its
 		// gradient, which stays; exact for any step.
 		const double dz_m = y.p_n.z() - x.p_n.z();
-		const Eigen::Vector2d shift = (dz_m / current_far_distance_m) * (y.current_far_ne - y.current_vehicle_ne);
+		const Eigen::Vector2d shift =
+		    (dz_m / current_far_distance_m) * (y.current_far_ne - y.current_vehicle_ne);
 		y.current_vehicle_ne += shift;
 		y.current_far_ne += shift;
 	}
@@ -160,7 +169,7 @@ void ProcessModel::propagateInertialInto(const NavState& x, const Eigen::Matrix3
 
 template <typename AddEntry>
 void ProcessModel::forEachNoiseEntry(double dt, double speed_through_water_mps, double vertical_speed_mps,
-									 AddEntry&& add) const
+                                     AddEntry&& add) const
 {
 	const double arw_var = noise.gyro_arw * noise.gyro_arw * dt, gyro_bias_var = noise.gyro_bias.variance(dt);
 	for (int k = 0; k < 3; ++k)
@@ -188,36 +197,42 @@ void ProcessModel::forEachNoiseEntry(double dt, double speed_through_water_mps, 
 	add(idx::gravity, idx::gravity, noise.gravity_psd * dt);
 	const double accel_bias_var = noise.accel_bias.variance(dt);
 	for (int k = 0; k < 3; ++k) add(idx::acc_bias + k, idx::acc_bias + k, accel_bias_var);
-	double current_var = noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
+	double current_var =
+	    noise.current.variance(dt) + noise.current_spatial_var_per_m * speed_through_water_mps * dt;
 	current_var += noise.current_vertical_var_per_m * std::abs(vertical_speed_mps) * dt;
 	for (int k = 0; k < 4; ++k) add(idx::current_vehicle + k, idx::current_vehicle + k, current_var);
 	const double adcp_bias_var = noise.adcp_bias.variance(dt);
 	for (int k = 0; k < 2; ++k) add(idx::adcp_bias + k, idx::adcp_bias + k, adcp_bias_var);
 	const double phi_p = std::exp(-dt / noise.parameter_tau_s);
 	for (int i = 0; i < 18; ++i)
-		add(idx::inertia + i, idx::inertia + i, noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p));
+		add(idx::inertia + i, idx::inertia + i,
+		    noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p));
 	for (std::size_t i = 0; i < extra.size(); ++i)
 		add(idx::extra + static_cast<int>(i), idx::extra + static_cast<int>(i), extra[i].variance(dt));
 }
 
-Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps, double vertical_speed_mps) const
+Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps,
+                                         double vertical_speed_mps) const
 {
 	Covariance Q = Covariance::Zero(dim(), dim());
-	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps, [&](int i, int j, double q) { Q(i, j) = q; });
+	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps,
+	                  [&](int i, int j, double q) { Q(i, j) = q; });
 	return Q;
 }
 
 void ProcessModel::addNoiseCovariance(Covariance& P, double dt, double speed_through_water_mps,
-									  double vertical_speed_mps) const
+                                      double vertical_speed_mps) const
 {
-	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps, [&](int i, int j, double q) { P(i, j) += q; });
+	forEachNoiseEntry(dt, speed_through_water_mps, vertical_speed_mps,
+	                  [&](int i, int j, double q) { P(i, j) += q; });
 }
 
 ProcessModel ProcessModel::fromConfig(const config::Node& n, const TangentVector& prior_mean)
 {
 	ProcessModel m;
 	m.prior_mean = prior_mean;
-	auto gm = [&](const std::string& key, double unit) {
+	auto gm = [&](const std::string& key, double unit)
+	{
 		const auto c = n.child(key);
 		GaussMarkov g;
 		g.sigma = c.nonNegative("sigma") * unit;

@@ -18,14 +18,15 @@ std::string uselessLogReason(const Navigator& nav, const std::string& path, cons
 		const auto bytes = std::filesystem::file_size(path, ec);
 		if (ec || bytes == 0) return path + ": no observations (an empty rawlog)";
 		return path + ": no observations in its " + std::to_string(bytes) +
-			   " bytes (an empty rawlog, or one cut short or not a rawlog)";
+		       " bytes (an empty rawlog, or one cut short or not a rawlog)";
 	}
 	const SensorStats& imu = nav.imuStats();
 	if (imu.accepted + imu.before_init + imu.invalid > 0) return "";
 	std::string seen;
-	for (const auto& [label, n] : s.labels) seen += (seen.empty() ? "" : ", ") + label + " " + std::to_string(n);
+	for (const auto& [label, n] : s.labels)
+		seen += (seen.empty() ? "" : ", ") + label + " " + std::to_string(n);
 	return path + ": no IMU observation with label '" + imu.label + "' (imu.label) among " +
-		   std::to_string(s.observations) + " observations (" + seen + ")";
+	       std::to_string(s.observations) + " observations (" + seen + ")";
 }
 }  // namespace
 

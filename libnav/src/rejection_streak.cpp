@@ -34,7 +34,8 @@ bool RejectionStreak::consistentBias(int count, double probability) const
 	w_mean /= count;
 	if (stt > 0)
 	{
-		for (int k = first; k < first + count; ++k) slope += (entries_[k].t_s - t_mean) * (entries_[k].w - w_mean);
+		for (int k = first; k < first + count; ++k)
+			slope += (entries_[k].t_s - t_mean) * (entries_[k].w - w_mean);
 		slope /= stt;
 	}
 	double rss = 0;

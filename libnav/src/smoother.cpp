@@ -14,7 +14,8 @@ namespace
 /** The smoothed estimate x_f ⊞ dx with covariance P (symmetrised) into the
  *  outputs, or false (outputs untouched: the caller's filtered estimate) if
  *  it is not finite or a variance is not positive. */
-bool acceptSmoothed(const NavState& x_f, const TangentVector& dx, Covariance& P, NavState& x_out, Covariance& P_out)
+bool acceptSmoothed(const NavState& x_f, const TangentVector& dx, Covariance& P, NavState& x_out,
+                    Covariance& P_out)
 {
 	P = 0.5 * (P + P.transpose());
 	if (!dx.allFinite() || !P.allFinite() || !(P.diagonal().array() > 0).all()) return false;
@@ -31,8 +32,8 @@ Covariance rtsGain(const Eigen::LLT<Covariance>& llt_P_predicted, const Covarian
 }
 }  // namespace
 
-RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
-						double dt_s, double t_s)
+RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
+                        const Eigen::Vector3d& omega_ie_n, double dt_s, double t_s)
 {
 	RtsStep step;
 	step.t_s = t_s;
@@ -45,7 +46,7 @@ RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, con
 }
 
 bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covariance& P_next, NavState& x_out,
-					 Covariance& P_out)
+                     Covariance& P_out)
 {
 	x_out = step.x_filtered;
 	P_out = step.P_filtered;
@@ -59,7 +60,7 @@ bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covarian
 }
 
 std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const NavState& x_end,
-										const Covariance& P_end, double t_end_s)
+                                        const Covariance& P_end, double t_end_s)
 {
 	std::vector<SmoothedEstimate> out(steps.size() + 1);
 	out.back() = SmoothedEstimate{t_end_s, x_end, P_end, true};
@@ -79,8 +80,8 @@ namespace
 //! accelerometer bias (kept in IMU axes).
 //! The prediction's nonlinear (sigma-point) block: the states before the ADCP bias (ukf.cpp).
 constexpr int kNonlinearStates = idx::adcp_bias;
-constexpr std::array<int, 6> kTransportColumns{idx::att,	  idx::att + 1,		 idx::att + 2,
-											   idx::acc_bias, idx::acc_bias + 1, idx::acc_bias + 2};
+constexpr std::array<int, 6> kTransportColumns{idx::att,      idx::att + 1,      idx::att + 2,
+                                               idx::acc_bias, idx::acc_bias + 1, idx::acc_bias + 2};
 }  // namespace
 
 void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
@@ -93,7 +94,7 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 	current_.sum_dx = TangentVector::Zero(n);
 	current_.sum_dP = Covariance::Zero(n, n);
 	XX_.resize(2 * n, n);
-	XX_.topRows(n) = ukf.covariance();	// M = I
+	XX_.topRows(n) = ukf.covariance();  // M = I
 	XX_.bottomRows(n) = ukf.covariance();
 	MW_pending_.resize(2 * n, kMaxPending);
 	W_pending_.resize(n, kMaxPending);
@@ -108,14 +109,14 @@ void RtsStretchRecorder::begin(const ManifoldUkf& ukf, double t_s)
 }
 
 void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
-								   const ProcessModel& model, const StepDecay& step)
+                                   const ProcessModel& model, const StepDecay& step)
 {
 	if (!open_ || current_.broken) return;
 	flushUpdates();
 	const int k = static_cast<int>(D.rows()), n = static_cast<int>(L.rows());
 	if (k != kNonlinearStates || (transport_pending_ && !full))
 	{
-		current_.broken = true;	// P not positive definite: no gain
+		current_.broken = true;  // P not positive definite: no gain
 		return;
 	}
 	if (transport_pending_)
@@ -142,10 +143,10 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 		const Eigen::Index xs = XX_.outerStride();
 		for (int j = 0; j < 6; ++j)
 			subtractAllColumns<false, true>(ME_.col(j).data(), 0, n, X_mean, xs, n,
-											[&](Eigen::Index l) { return -S(l, j); });
+			                                [&](Eigen::Index l) { return -S(l, j); });
 		for (int c = 0; c < n; ++c)
 			subtractAllColumns(X_mean + c * xs, 0, n, ME_.data(), ME_.outerStride(), 6,
-							   [&](Eigen::Index j) { return -P_rows(j, c); });
+			                   [&](Eigen::Index j) { return -P_rows(j, c); });
 		transport_pending_ = false;
 	}
 	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
@@ -158,12 +159,13 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 	// X_{:,1:k} ← X_{:,1:k} Fᵀ in place (eight-row panels, column_kernels.h).
 	rightMultiplyTransposed<kNonlinearStates>(XX_.data(), 2 * n, XX_.outerStride(), F.data());
 	TangentVector a = TangentVector::Ones(n);
-	model.applyLinearRows(a, step);	 // rows k… only scale: their factors
+	model.applyLinearRows(a, step);  // rows k… only scale: their factors
 	XX_.rightCols(n - k) *= a.tail(n - k).asDiagonal();
 }
 
-void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
-								  const Eigen::Ref<const Eigen::MatrixXd>& W)
+void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                                  const Eigen::Ref<const Eigen::VectorXd>& u,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	if (!open_ || current_.broken) return;
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows()), m = static_cast<int>(B.cols());
@@ -179,16 +181,16 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 	auto MW = MW_pending_.middleCols(pending_, m);
 	for (int j = 0; j < m; ++j)
 		subtractAllColumns<false, true>(MW.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
-										[&](Eigen::Index l) { return -B(l, j); });
+		                                [&](Eigen::Index l) { return -B(l, j); });
 	if (pending_ > 0)
 	{
 		// Coefficient-wise and by column axpys: Eigen's blocked products
 		// cost more in set-up than these few multiply-adds.
 		const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPending, kMaxPending> C =
-			W_pending_.topLeftCorner(k, pending_).transpose().lazyProduct(B);
+		    W_pending_.topLeftCorner(k, pending_).transpose().lazyProduct(B);
 		for (int j = 0; j < m; ++j)
-			subtractAllColumns(MW.col(j).data(), 0, 2 * n, MW_pending_.data(), MW_pending_.outerStride(), pending_,
-							   [&](Eigen::Index l) { return C(l, j); });
+			subtractAllColumns(MW.col(j).data(), 0, 2 * n, MW_pending_.data(), MW_pending_.outerStride(),
+			                   pending_, [&](Eigen::Index l) { return C(l, j); });
 	}
 	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
 	W_pending_.middleCols(pending_, m) = W;
@@ -196,8 +198,8 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, co
 }
 
 void RtsStretchRecorder::applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
-										 const Eigen::Ref<const Eigen::VectorXd>& u,
-										 const Eigen::Ref<const Eigen::MatrixXd>& W)
+                                         const Eigen::Ref<const Eigen::VectorXd>& u,
+                                         const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
 	flushUpdates();
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
@@ -218,8 +220,8 @@ void RtsStretchRecorder::flushUpdates()
 	dP_pending_ += pending_;
 	// XX −= MW Wᵀ column by column (r ≈ 5 columns of MW per column of XX).
 	for (int c = 0; c < n; ++c)
-		subtractAllColumns(XX_.col(c).data(), 0, XX_.rows(), MW_pending_.data(), MW_pending_.outerStride(), pending_,
-						   [&](Eigen::Index l) { return W_pending_(c, l); });
+		subtractAllColumns(XX_.col(c).data(), 0, XX_.rows(), MW_pending_.data(), MW_pending_.outerStride(),
+		                   pending_, [&](Eigen::Index l) { return W_pending_(c, l); });
 	pending_ = 0;
 }
 
@@ -234,7 +236,8 @@ void RtsStretchRecorder::flushDp()
 	dP_pending_ = 0;
 }
 
-void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx)
+void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covariance& P_after,
+                                       const TangentVector& dx)
 {
 	if (!open_ || current_.broken) return;
 	flushUpdates();
@@ -248,10 +251,10 @@ void RtsStretchRecorder::onOtherChange(const Covariance& P_before, const Covaria
 		return;
 	}
 	const Covariance M = llt.solve(XX_.topRows(n).transpose()).transpose(),
-					 Mm = llt.solve(XX_.bottomRows(n).transpose()).transpose();
+	                 Mm = llt.solve(XX_.bottomRows(n).transpose()).transpose();
 	current_.sum_dx.noalias() += Mm * dx;
 	scratch_.noalias() = M * (P_before - P_after);
-	current_.sum_dP.noalias() -= scratch_ * M.transpose();	// − Σ while open (flushDp)
+	current_.sum_dP.noalias() -= scratch_ * M.transpose();  // − Σ while open (flushDp)
 	XX_.topRows(n).noalias() = M * P_after;
 	XX_.bottomRows(n).noalias() = Mm * P_after;
 }
@@ -276,7 +279,8 @@ void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf, bool now)
 	// x⁻ with x⁻ ⊞ Σ dx = x (the inverse of the tick's own ⊟ at N = 1), by
 	// fixed-point steps from x ⊞ (−Σ dx): ⊞ is not its own inverse here.
 	NavState x_before = x.boxplus(-dx_since_transport_);
-	for (int it = 0; it < 3; ++it) x_before = x_before.boxplus(-x_before.boxplus(dx_since_transport_).boxminus(x));
+	for (int it = 0; it < 3; ++it)
+		x_before = x_before.boxplus(-x_before.boxplus(dx_since_transport_).boxminus(x));
 	const int n = x.dim();
 	E_.resize(n, 6);
 	TangentVector e = TangentVector::Zero(n);
@@ -294,7 +298,7 @@ void RtsStretchRecorder::takeTransport(const ManifoldUkf& ukf, bool now)
 }
 
 bool RtsStretchRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
-								 const Eigen::Vector3d& omega_ie_n, double dt_s)
+                                 const Eigen::Vector3d& omega_ie_n, double dt_s)
 {
 	if (!open_)
 	{
@@ -326,8 +330,8 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 	const int n = ukf.dim();
 	checkRepairs(ukf);
 	RtsStretch done = std::move(current_);
-	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();	// the lower triangle rules
-	done.sum_dP = -done.sum_dP;	 // −Σ M ΔP Mᵀ while open (flushDp)
+	done.sum_dP.triangularView<Eigen::StrictlyUpper>() = done.sum_dP.transpose();  // the lower triangle rules
+	done.sum_dP = -done.sum_dP;  // −Σ M ΔP Mᵀ while open (flushDp)
 	const Eigen::LLT<Covariance> llt(ukf.covariance());
 	if (llt.info() != Eigen::Success) done.broken = true;
 	if (!done.broken)
@@ -336,9 +340,10 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 		{
 			const Covariance& P = ukf.covariance();
 			const SixColumns ME = XX_.bottomRows(n) * llt.solve(E_);
-			for (int j = 0; j < 6; ++j) XX_.bottomRows(n).noalias() += ME.col(j) * P.row(kTransportColumns[j]);
+			for (int j = 0; j < 6; ++j)
+				XX_.bottomRows(n).noalias() += ME.col(j) * P.row(kTransportColumns[j]);
 		}
-		done.M = llt.solve(XX_.topRows(n).transpose()).transpose();	 // M = X P⁻¹ (P symmetric)
+		done.M = llt.solve(XX_.topRows(n).transpose()).transpose();  // M = X P⁻¹ (P symmetric)
 		done.M_mean = llt.solve(XX_.bottomRows(n).transpose()).transpose();
 	}
 	begin(ukf, t_s);
@@ -346,8 +351,8 @@ RtsStretch RtsStretchRecorder::close(const ManifoldUkf& ukf, double t_s)
 }
 
 bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, const Covariance& P_end_filtered,
-						const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
-						Covariance& P_out)
+                        const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
+                        Covariance& P_out)
 {
 	x_out = s.x_filtered;
 	P_out = s.P_filtered;

@@ -13,9 +13,12 @@ namespace
 {
 constexpr char kMagic[8] = {'A', 'U', 'V', 'N', 'V', 'R', 'T', 'S'};
 constexpr std::uint32_t kVersion = 1;
-constexpr int kMetaDoubles = 6;	// t, ticks, flags, repairs, limit hits, spare
+constexpr int kMetaDoubles = 6;  // t, ticks, flags, repairs, limit hits, spare
 
-std::size_t triangle(int n) { return static_cast<std::size_t>(n) * (n + 1) / 2; }
+std::size_t triangle(int n)
+{
+	return static_cast<std::size_t>(n) * (n + 1) / 2;
+}
 
 /** Doubles in one record: meta, attitude, euclidean part, P and ΣΔP as
  *  lower triangles, M and M_mean, Σ M dx. */
@@ -26,7 +29,8 @@ std::size_t recordDoubles(int n)
 
 std::runtime_error ioError(const std::string& path, const std::string& what)
 {
-	return std::runtime_error(path + ": " + what + (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
+	return std::runtime_error(path + ": " + what +
+	                          (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
 }
 
 void putLower(double*& p, const Covariance& A)
@@ -64,26 +68,32 @@ void writeString(std::FILE* f, const std::string& s, const std::string& path)
 }
 void readAll(std::FILE* f, void* data, std::size_t bytes, const std::string& path)
 {
-	if (bytes && std::fread(data, 1, bytes, f) != bytes) throw ioError(path, "truncated or unreadable stretch file");
+	if (bytes && std::fread(data, 1, bytes, f) != bytes)
+		throw ioError(path, "truncated or unreadable stretch file");
 }
 std::string readString(std::FILE* f, const std::string& path)
 {
 	std::uint32_t len = 0;
 	readAll(f, &len, sizeof len, path);
-	if (len > 4096) throw std::runtime_error(path + ": not a stretch file (a name of " + std::to_string(len) + " bytes)");
+	if (len > 4096)
+		throw std::runtime_error(path + ": not a stretch file (a name of " + std::to_string(len) + " bytes)");
 	std::string s(len, '\0');
 	readAll(f, s.data(), len, path);
 	return s;
 }
 }  // namespace
 
-std::uint64_t stretchRecordBytes(int n) { return sizeof(double) * recordDoubles(n); }
+std::uint64_t stretchRecordBytes(int n)
+{
+	return sizeof(double) * recordDoubles(n);
+}
 
 StretchWriter::StretchWriter(const std::string& path, const StretchFileHeader& h) : path_(path), n_(h.n)
 {
-	if (h.n < idx::core_dim || h.n > idx::max_dim) throw std::invalid_argument(path + ": bad state dimension");
+	if (h.n < idx::core_dim || h.n > idx::max_dim)
+		throw std::invalid_argument(path + ": bad state dimension");
 	f_ = io::openCFile(path, "wb", "cannot create the smoother's stretch file");
-	writeHeader(h);	 // a throw closes f_ (c_file.h)
+	writeHeader(h);  // a throw closes f_ (c_file.h)
 }
 
 void StretchWriter::writeHeader(const StretchFileHeader& h)
@@ -93,7 +103,7 @@ void StretchWriter::writeHeader(const StretchFileHeader& h)
 	writeAll(f_.get(), v, sizeof v, path_);
 	writeAll(f_.get(), h.imu_position_b.data(), 3 * sizeof(double), path_);
 	const std::uint32_t counts[2] = {static_cast<std::uint32_t>(h.tangent_names.size()),
-									 static_cast<std::uint32_t>(h.stored_names.size())};
+	                                 static_cast<std::uint32_t>(h.stored_names.size())};
 	writeAll(f_.get(), counts, sizeof counts, path_);
 	for (const auto& s : h.tangent_names) writeString(f_.get(), s, path_);
 	for (const auto& s : h.stored_names) writeString(f_.get(), s, path_);
@@ -110,7 +120,8 @@ void StretchWriter::writeHeader(const StretchFileHeader& h)
 void StretchWriter::write(const StretchRecord& r)
 {
 	const RtsStretch& s = r.stretch;
-	if (s.x_filtered.dim() != n_ || s.P_filtered.rows() != n_) throw std::invalid_argument(path_ + ": record of another dimension");
+	if (s.x_filtered.dim() != n_ || s.P_filtered.rows() != n_)
+		throw std::invalid_argument(path_ + ": record of another dimension");
 	double* p = buf_.data();
 	*p++ = s.t_s;
 	*p++ = static_cast<double>(s.ticks);
@@ -146,12 +157,16 @@ void StretchWriter::flush()
 	if (std::fflush(f_.get()) != 0) throw ioError(path_, "write failed");
 }
 
-std::uint64_t StretchWriter::bytes() const { return records_ * stretchRecordBytes(n_); }
+std::uint64_t StretchWriter::bytes() const
+{
+	return records_ * stretchRecordBytes(n_);
+}
 
 StretchReader::StretchReader(const std::string& path) : path_(path)
 {
 	f_ = io::openCFile(path, "rb", "cannot open the smoother's stretch file");
-	readHeader();  // a refused file is closed by f_'s destructor (fuzz_stretch once found a handle left per refused file)
+	readHeader();  // a refused file is closed by f_'s destructor (fuzz_stretch once found a handle left per
+	               // refused file)
 }
 
 void StretchReader::readHeader()
@@ -159,26 +174,30 @@ void StretchReader::readHeader()
 	const std::string& path = path_;
 	char magic[8];
 	readAll(f_.get(), magic, sizeof magic, path_);
-	if (std::memcmp(magic, kMagic, sizeof magic) != 0) throw std::runtime_error(path + ": not an auvnav stretch file");
+	if (std::memcmp(magic, kMagic, sizeof magic) != 0)
+		throw std::runtime_error(path + ": not an auvnav stretch file");
 	std::uint32_t v[2];
 	readAll(f_.get(), v, sizeof v, path_);
 	if (v[0] != kVersion)
-		throw std::runtime_error(path + ": stretch file format " + std::to_string(v[0]) + ", this build reads " +
-								 std::to_string(kVersion));
+		throw std::runtime_error(path + ": stretch file format " + std::to_string(v[0]) +
+		                         ", this build reads " + std::to_string(kVersion));
 	header_.n = static_cast<int>(v[1]);
 	if (header_.n < idx::core_dim || header_.n > idx::max_dim)
 		throw std::runtime_error(path + ": state dimension " + std::to_string(v[1]) + " out of range");
 	readAll(f_.get(), header_.imu_position_b.data(), 3 * sizeof(double), path_);
 	std::uint32_t counts[2];
 	readAll(f_.get(), counts, sizeof counts, path_);
-	if (counts[0] != v[1] || counts[1] != v[1]) throw std::runtime_error(path + ": name lists do not match the dimension");
-	for (std::uint32_t i = 0; i < counts[0]; ++i) header_.tangent_names.push_back(readString(f_.get(), path_));
+	if (counts[0] != v[1] || counts[1] != v[1])
+		throw std::runtime_error(path + ": name lists do not match the dimension");
+	for (std::uint32_t i = 0; i < counts[0]; ++i)
+		header_.tangent_names.push_back(readString(f_.get(), path_));
 	for (std::uint32_t i = 0; i < counts[1]; ++i) header_.stored_names.push_back(readString(f_.get(), path_));
 	readAll(f_.get(), &data_offset_, sizeof data_offset_, path_);
 	record_bytes_ = stretchRecordBytes(header_.n);
 	if (fseeko(f_.get(), 0, SEEK_END) != 0) throw ioError(path, "cannot seek");
 	const off_t end = ftello(f_.get());
-	if (end < 0 || static_cast<std::uint64_t>(end) < data_offset_) throw std::runtime_error(path + ": truncated header");
+	if (end < 0 || static_cast<std::uint64_t>(end) < data_offset_)
+		throw std::runtime_error(path + ": truncated header");
 	const std::uint64_t body = static_cast<std::uint64_t>(end) - data_offset_;
 	records_ = static_cast<std::size_t>(body / record_bytes_);
 	partial_tail_ = body % record_bytes_ != 0;
@@ -187,20 +206,22 @@ void StretchReader::readHeader()
 
 StretchRecord StretchReader::read(std::size_t i)
 {
-	if (i >= records_) throw std::out_of_range(path_ + ": record " + std::to_string(i) + " of " + std::to_string(records_));
+	if (i >= records_)
+		throw std::out_of_range(path_ + ": record " + std::to_string(i) + " of " + std::to_string(records_));
 	errno = 0;
-	if (fseeko(f_.get(), static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0) throw ioError(path_, "cannot seek");
+	if (fseeko(f_.get(), static_cast<off_t>(data_offset_ + i * record_bytes_), SEEK_SET) != 0)
+		throw ioError(path_, "cannot seek");
 	readAll(f_.get(), buf_.data(), buf_.size() * sizeof(double), path_);
 	const int n = header_.n;
 	// A damaged file is refused here, naming the record, never converted:
 	// a double out of an integer's range is undefined behaviour to cast.
-	auto refuse = [&](const std::string& what) {
-		throw std::runtime_error(path_ + ": record " + std::to_string(i) + ": " + what);
-	};
+	auto refuse = [&](const std::string& what)
+	{ throw std::runtime_error(path_ + ": record " + std::to_string(i) + ": " + what); };
 	for (const double v : buf_)
 		if (!std::isfinite(v)) refuse("a number that is not finite");
 	const double* p = buf_.data();
-	auto count = [&](double v, double max, const char* what) {
+	auto count = [&](double v, double max, const char* what)
+	{
 		if (!(v >= 0 && v <= max && v == std::floor(v))) refuse(std::string("bad ") + what);
 		return v;
 	};
@@ -233,8 +254,9 @@ StretchRecord StretchReader::read(std::size_t i)
 	return r;
 }
 
-SmoothingRecorder::SmoothingRecorder(const std::string& path, const StretchFileHeader& header, double keep_every_s)
-	: writer_(path, header), keep_every_s_(keep_every_s)
+SmoothingRecorder::SmoothingRecorder(const std::string& path, const StretchFileHeader& header,
+                                     double keep_every_s)
+    : writer_(path, header), keep_every_s_(keep_every_s)
 {
 	if (!(keep_every_s > 0)) throw std::invalid_argument("smoother: keep_every_s must be positive");
 }
@@ -253,8 +275,8 @@ void SmoothingRecorder::emit(StretchRecord r)
 	++s_.emitted;
 }
 
-void SmoothingRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
-								double dt_s, double t_s)
+void SmoothingRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
+                                const Eigen::Vector3d& omega_ie_n, double dt_s, double t_s)
 {
 	noteFilterCounters(ukf);
 	if (!s_.recorder.open())
@@ -269,7 +291,7 @@ void SmoothingRecorder::predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_i
 		r.repairs = s_.repairs;
 		r.limit_hits = s_.limit_hits;
 		r.stretch = s_.recorder.close(ukf, t_s);
-		if (r.repairs) r.stretch.broken = true;	// P was replaced inside: not a Bayesian step
+		if (r.repairs) r.stretch.broken = true;  // P was replaced inside: not a Bayesian step
 		emit(std::move(r));
 		s_.repairs = s_.limit_hits = 0;
 		// The next kept tick on the grid, or one period on after a gap.
@@ -341,16 +363,19 @@ const char* smoothedKindName(SmoothedKind k)
 {
 	switch (k)
 	{
-		case SmoothedKind::Smoothed: return "smoothed";
-		case SmoothedKind::SegmentEnd: return "segment_end";
-		case SmoothedKind::Kept: return "filtered_kept";
+		case SmoothedKind::Smoothed:
+			return "smoothed";
+		case SmoothedKind::SegmentEnd:
+			return "segment_end";
+		case SmoothedKind::Kept:
+			return "filtered_kept";
 	}
 	return "?";
 }
 
 BackwardPassSummary smoothStretchFile(
-	const std::string& path,
-	const std::function<void(double t_s, const NavState& x, const Covariance& P, SmoothedKind kind)>& out)
+    const std::string& path,
+    const std::function<void(double t_s, const NavState& x, const Covariance& P, SmoothedKind kind)>& out)
 {
 	StretchReader reader(path);
 	BackwardPassSummary sum;
@@ -379,7 +404,8 @@ BackwardPassSummary smoothStretchFile(
 			kind = SmoothedKind::SegmentEnd;
 			++sum.segment_ends;
 		}
-		else if (rtsStretchBackward(r.stretch, next.stretch.x_filtered, next.stretch.P_filtered, x_next, P_next, x, P))
+		else if (rtsStretchBackward(r.stretch, next.stretch.x_filtered, next.stretch.P_filtered, x_next,
+		                            P_next, x, P))
 		{
 			kind = SmoothedKind::Smoothed;
 			++sum.smoothed;

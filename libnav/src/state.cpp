@@ -14,14 +14,19 @@ struct BlockSpan
 	uint32_t bit;
 	int begin, size;
 };
-constexpr BlockSpan kBlocks[] = {
-	{kAttitude, idx::att, 3},		   {kGyroBias, idx::gyro_bias, 3},
-	{kAcceleration, idx::acc, 3},	   {kGravity, idx::gravity, 1},
-	{kAccelBias, idx::acc_bias, 3},	   {kVelocity, idx::vel, 3},
-	{kPosition, idx::pos, 3},		   {kCurrentVehicle, idx::current_vehicle, 2},
-	{kCurrentFar, idx::current_far, 2}, {kAdcpBias, idx::adcp_bias, 2},
-	{kInertia, idx::inertia, 6},	   {kDampingLinear, idx::damping_lin, 6},
-	{kDampingQuadratic, idx::damping_quad, 6}};
+constexpr BlockSpan kBlocks[] = {{kAttitude, idx::att, 3},
+                                 {kGyroBias, idx::gyro_bias, 3},
+                                 {kAcceleration, idx::acc, 3},
+                                 {kGravity, idx::gravity, 1},
+                                 {kAccelBias, idx::acc_bias, 3},
+                                 {kVelocity, idx::vel, 3},
+                                 {kPosition, idx::pos, 3},
+                                 {kCurrentVehicle, idx::current_vehicle, 2},
+                                 {kCurrentFar, idx::current_far, 2},
+                                 {kAdcpBias, idx::adcp_bias, 2},
+                                 {kInertia, idx::inertia, 6},
+                                 {kDampingLinear, idx::damping_lin, 6},
+                                 {kDampingQuadratic, idx::damping_quad, 6}};
 
 // Row-major copies of the 2x3 parameter blocks.
 void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
@@ -56,7 +61,7 @@ uint32_t blockOfCoordinate(int i, int dim)
 
 TangentVector NavState::euclidean() const
 {
-	TangentVector t(dim());	 // every entry is written below
+	TangentVector t(dim());  // every entry is written below
 	t.segment<3>(idx::att).setZero();
 	t.segment<3>(idx::gyro_bias) = b_w;
 	t.segment<3>(idx::acc) = a_n;
@@ -99,7 +104,7 @@ void checkTangentSize(Eigen::Index size, int dim)
 {
 	if (size != dim)
 		throw std::invalid_argument("NavState::boxplus: a " + std::to_string(size) + "-vector on a " +
-									std::to_string(dim) + "-state");
+		                            std::to_string(dim) + "-state");
 }
 }  // namespace
 
@@ -118,13 +123,14 @@ NavState NavState::boxplus(const Eigen::Ref<const TangentVector>& delta) const
 	return y;
 }
 
-void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus, NavState& minus) const
+void NavState::boxplusPair(const Eigen::Ref<const TangentVector>& delta, NavState& plus,
+                           NavState& minus) const
 {
 	boxplusPairBlocks(delta, 1.0, kAllBlocks, plus, minus);
 }
 
-void NavState::boxplusPairBlocks(const Eigen::Ref<const TangentVector>& direction, double step, uint32_t blocks,
-								 NavState& plus, NavState& minus) const
+void NavState::boxplusPairBlocks(const Eigen::Ref<const TangentVector>& direction, double step,
+                                 uint32_t blocks, NavState& plus, NavState& minus) const
 {
 	checkTangentSize(direction.size(), dim());
 	if (&plus == this || &minus == this || &plus == &minus)
@@ -160,7 +166,7 @@ auto plusOrMinus(const A& a, const D& d)
 }
 template <bool kMinus>
 void add23Signed(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2, 3>& m,
-				 const Eigen::Ref<const TangentVector>& dir, double step, int at)
+                 const Eigen::Ref<const TangentVector>& dir, double step, int at)
 {
 	for (int r = 0; r < 2; ++r)
 		for (int c = 0; c < 3; ++c) out(r, c) = plusOrMinus<kMinus>(m(r, c), step * dir[at + 3 * r + c]);
@@ -168,8 +174,8 @@ void add23Signed(Eigen::Matrix<double, 2, 3>& out, const Eigen::Matrix<double, 2
 }  // namespace
 
 template <bool kMinus>
-void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double step, const Eigen::Matrix3d* dR_turn,
-						   uint32_t blocks, NavState& y) const
+void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double step,
+                           const Eigen::Matrix3d* dR_turn, uint32_t blocks, NavState& y) const
 {
 	// Member by member (no flat round trip through euclidean(): this runs per
 	// sigma point); members of blocks not asked for are left as they are.
@@ -203,8 +209,10 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double st
 		if (wants(kAcceleration)) y.a_n = plusOrMinus<kMinus>(a_n, delta3(idx::acc));
 		if (wants(kCurrentVehicle))
 			y.current_vehicle_ne = plusOrMinus<kMinus>(current_vehicle_ne, delta2(idx::current_vehicle));
-		if (wants(kCurrentFar)) y.current_far_ne = plusOrMinus<kMinus>(current_far_ne, delta2(idx::current_far));
-		if (wants(kAccelBias)) y.b_a = plusOrMinus<kMinus>(b_a, (R_nb.transpose() * delta3(idx::acc_bias)).eval());
+		if (wants(kCurrentFar))
+			y.current_far_ne = plusOrMinus<kMinus>(current_far_ne, delta2(idx::current_far));
+		if (wants(kAccelBias))
+			y.b_a = plusOrMinus<kMinus>(b_a, (R_nb.transpose() * delta3(idx::acc_bias)).eval());
 		return;
 	}
 	const Eigen::Matrix3d& dR = *dR_turn;
@@ -217,13 +225,13 @@ void NavState::boxplusInto(const Eigen::Ref<const TangentVector>& dir, double st
 	// The water currents too (horizontal part of the turned vector): they are
 	// inferred from body-frame measurements just like the velocity.
 	if (wants(kCurrentVehicle))
-		y.current_vehicle_ne =
-			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>().eval(),
-								delta2(idx::current_vehicle));
+		y.current_vehicle_ne = plusOrMinus<kMinus>(
+		    (dR * Eigen::Vector3d(current_vehicle_ne.x(), current_vehicle_ne.y(), 0)).head<2>().eval(),
+		    delta2(idx::current_vehicle));
 	if (wants(kCurrentFar))
-		y.current_far_ne =
-			plusOrMinus<kMinus>((dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>().eval(),
-								delta2(idx::current_far));
+		y.current_far_ne = plusOrMinus<kMinus>(
+		    (dR * Eigen::Vector3d(current_far_ne.x(), current_far_ne.y(), 0)).head<2>().eval(),
+		    delta2(idx::current_far));
 	// The accelerometer bias is stored in IMU axes but perturbed in NED axes.
 	if (wants(kAccelBias))
 		y.b_a = plusOrMinus<kMinus>(b_a, (y.R_nb.transpose() * delta3(idx::acc_bias)).eval());
@@ -240,15 +248,24 @@ NavState NavState::boxplusCoordinate(int i, double h) const
 	}
 	NavState y = *this;
 	auto at = [&](int block) { return i - block; };
-	if (i < idx::acc) y.b_w[at(idx::gyro_bias)] += h;
-	else if (i < idx::gravity) y.a_n[at(idx::acc)] += h;
-	else if (i == idx::gravity) y.g += h;
-	else if (i < idx::vel) y.b_a += R_nb.row(at(idx::acc_bias)).transpose() * h;	// R_nbᵀ (h e_i), as boxplus
-	else if (i < idx::pos) y.v_n[at(idx::vel)] += h;
-	else if (i < idx::current_vehicle) y.p_n[at(idx::pos)] += h;
-	else if (i < idx::current_far) y.current_vehicle_ne[at(idx::current_vehicle)] += h;
-	else if (i < idx::adcp_bias) y.current_far_ne[at(idx::current_far)] += h;
-	else y.b_adcp[at(idx::adcp_bias)] += h;
+	if (i < idx::acc)
+		y.b_w[at(idx::gyro_bias)] += h;
+	else if (i < idx::gravity)
+		y.a_n[at(idx::acc)] += h;
+	else if (i == idx::gravity)
+		y.g += h;
+	else if (i < idx::vel)
+		y.b_a += R_nb.row(at(idx::acc_bias)).transpose() * h;  // R_nbᵀ (h e_i), as boxplus
+	else if (i < idx::pos)
+		y.v_n[at(idx::vel)] += h;
+	else if (i < idx::current_vehicle)
+		y.p_n[at(idx::pos)] += h;
+	else if (i < idx::current_far)
+		y.current_vehicle_ne[at(idx::current_vehicle)] += h;
+	else if (i < idx::adcp_bias)
+		y.current_far_ne[at(idx::current_far)] += h;
+	else
+		y.b_adcp[at(idx::adcp_bias)] += h;
 	return y;
 }
 
@@ -256,8 +273,8 @@ TangentVector NavState::boxminus(const NavState& y) const
 {
 	if (y.dim() != dim())
 		throw std::invalid_argument("NavState::boxminus: states of " + std::to_string(dim()) + " and " +
-									std::to_string(y.dim()) + " coordinates");
-	TangentVector d(dim());	 // every entry is written below
+		                            std::to_string(y.dim()) + " coordinates");
+	TangentVector d(dim());  // every entry is written below
 	d.head<idx::adcp_bias>() = boxminusHead(y);
 	d.segment<2>(idx::adcp_bias) = b_adcp - y.b_adcp;
 	put23(d, idx::inertia, M_sub - y.M_sub);
@@ -286,13 +303,17 @@ void NavState::boxminusHeadInto(const NavState& y, Eigen::Matrix<double, idx::ad
 	d.segment<3>(idx::vel) = v_n - dR * y.v_n;
 	d.segment<3>(idx::acc) = a_n - dR * y.a_n;
 	d.segment<2>(idx::current_vehicle) =
-		current_vehicle_ne - (dR * Eigen::Vector3d(y.current_vehicle_ne.x(), y.current_vehicle_ne.y(), 0)).head<2>();
+	    current_vehicle_ne -
+	    (dR * Eigen::Vector3d(y.current_vehicle_ne.x(), y.current_vehicle_ne.y(), 0)).head<2>();
 	d.segment<2>(idx::current_far) =
-		current_far_ne - (dR * Eigen::Vector3d(y.current_far_ne.x(), y.current_far_ne.y(), 0)).head<2>();
+	    current_far_ne - (dR * Eigen::Vector3d(y.current_far_ne.x(), y.current_far_ne.y(), 0)).head<2>();
 	d.segment<3>(idx::acc_bias) = R_nb * (b_a - y.b_a);
 }
 
-bool NavState::allFinite() const { return R_nb.allFinite() && euclidean().allFinite(); }
+bool NavState::allFinite() const
+{
+	return R_nb.allFinite() && euclidean().allFinite();
+}
 
 Eigen::Matrix<double, 2, 3> physicalSub(const Eigen::Matrix<double, 2, 3>& stored)
 {
@@ -322,7 +343,8 @@ std::string StateBlockSpec::problem() const
 		if (!finite(v)) return "state block '" + name + "': non-finite mean";
 	for (double v : sigma)
 		if (!finite(v) || !(v > 0)) return "state block '" + name + "': initial sigma must be positive";
-	if (!finite(process_sigma) || process_sigma < 0) return "state block '" + name + "': negative process sigma";
+	if (!finite(process_sigma) || process_sigma < 0)
+		return "state block '" + name + "': negative process sigma";
 	if (process == StateProcess::GaussMarkov && !(tau_s > 0 && std::isfinite(tau_s)))
 		return "state block '" + name + "': Gauss-Markov needs tau_s > 0";
 	return "";
@@ -330,9 +352,11 @@ std::string StateBlockSpec::problem() const
 
 const std::vector<std::string>& tangentNames()
 {
-	static const std::vector<std::string> names = [] {
+	static const std::vector<std::string> names = []
+	{
 		std::vector<std::string> n;
-		auto add3 = [&](const std::string& b, const char* a, const char* c, const char* d) {
+		auto add3 = [&](const std::string& b, const char* a, const char* c, const char* d)
+		{
 			n.push_back(b + a);
 			n.push_back(b + c);
 			n.push_back(b + d);
@@ -352,7 +376,8 @@ const std::vector<std::string>& tangentNames()
 		n.push_back("adcp_bias_y");
 		// Diagonal entries are stored as logarithms (see state.h).
 		for (const char* m : {"M", "Dl", "Dq"})
-			for (const char* rc : {"ln_xx", "xy", "xpsi", "yx", "ln_yy", "ypsi"}) n.push_back(std::string(m) + "_" + rc);
+			for (const char* rc : {"ln_xx", "xy", "xpsi", "yx", "ln_yy", "ypsi"})
+				n.push_back(std::string(m) + "_" + rc);
 		return n;
 	}();
 	return names;
@@ -360,7 +385,8 @@ const std::vector<std::string>& tangentNames()
 
 const std::vector<std::string>& storedNames()
 {
-	static const std::vector<std::string> names = [] {
+	static const std::vector<std::string> names = []
+	{
 		std::vector<std::string> n = tangentNames();
 		n[idx::acc_bias] = "acc_bias_x";
 		n[idx::acc_bias + 1] = "acc_bias_y";

@@ -3,8 +3,8 @@
 
 #include "column_kernels.h"
 
-#include <limits>
 #include <boost/math/distributions/chi_squared.hpp>
+#include <limits>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -26,8 +26,8 @@ namespace
 // model parameters are affine and independent of them.
 constexpr int kNonlinear = idx::adcp_bias;
 // Their blocks (the first kNonlinear coordinates).
-constexpr uint32_t kInertialBlocks = kAttitude | kGyroBias | kAcceleration | kGravity | kAccelBias | kVelocity |
-									 kPosition | kCurrentVehicle | kCurrentFar;
+constexpr uint32_t kInertialBlocks = kAttitude | kGyroBias | kAcceleration | kGravity | kAccelBias |
+                                     kVelocity | kPosition | kCurrentVehicle | kCurrentFar;
 // Of those, attitude and gyro bias turn the attitude; along every other
 // direction the retraction is a plain difference (InertialStepMap).
 constexpr int kTurning = idx::acc;
@@ -73,19 +73,19 @@ bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int r
  *  same 2-vector added to both currents. */
 class InertialStepMap
 {
-   public:
+ public:
 	/** x: the centre before the step, R_nb_next its attitude after. */
 	InertialStepMap(const ProcessModel& model, const NavState& x, const Eigen::Matrix3d& R_nb_next,
-					const StepDecay& step)
-		: model_(model), step_(step), R_turn_(R_nb_next * x.R_nb.transpose())
+	                const StepDecay& step)
+	    : model_(model), step_(step), R_turn_(R_nb_next * x.R_nb.transpose())
 	{
 		const double D = model.current_far_distance_m, dt = step.dt_s;
 		inv_D_ = D > 0 ? 1.0 / D : 0.0;
 		// The centre's depth change and far-minus-vehicle current after the
 		// decay, as ProcessModel::propagateTurned forms them.
 		dz0_m_ = dt * x.v_n.z() + 0.5 * dt * dt * x.a_n.z();
-		const Eigen::Vector2d mu = model.prior_mean.segment<2>(idx::current_far) -
-								   model.prior_mean.segment<2>(idx::current_vehicle);
+		const Eigen::Vector2d mu =
+		    model.prior_mean.segment<2>(idx::current_far) - model.prior_mean.segment<2>(idx::current_vehicle);
 		shear0_ = step.current * (x.current_far_ne - x.current_vehicle_ne) + (1 - step.current) * mu;
 	}
 	/** M ← J M for kNonlinear rows (columns: departures; M's rows of
@@ -97,8 +97,9 @@ class InertialStepMap
 		const double dt = step_.dt_s;
 		M.template topRows<kTurning>().setZero();
 		// Δz before the position rows change: the velocity and acceleration's part.
-		const Eigen::Matrix<double, 1, Derived::ColsAtCompileTime, Eigen::RowMajor, 1, Derived::MaxColsAtCompileTime> dz =
-			dt * M.row(idx::vel + 2) + (0.5 * dt * dt) * M.row(idx::acc + 2);
+		const Eigen::Matrix<double, 1, Derived::ColsAtCompileTime, Eigen::RowMajor, 1,
+		                    Derived::MaxColsAtCompileTime>
+		    dz = dt * M.row(idx::vel + 2) + (0.5 * dt * dt) * M.row(idx::acc + 2);
 		model_.applyLinearRows(M, step_);
 		// The accelerometer bias is held in body axes and its tangent in
 		// navigation axes (state.h): a departure turns with the body.
@@ -119,7 +120,7 @@ class InertialStepMap
 		}
 	}
 
-   private:
+ private:
 	const ProcessModel& model_;
 	const StepDecay& step_;
 	Eigen::Matrix3d R_turn_;  // R_nb after the step times R_nb before, transposed
@@ -163,8 +164,11 @@ bool allFiniteEntries(const Eigen::Map<Plain, Options, Stride>& a)
  *  which cost more than the arithmetic at m ≤ 3), else the model's own. */
 class Residuals
 {
-   public:
-	Residuals(const MeasurementModel& model, int m) : model_(model), plain_(model.residualIsDifference()), m_(m) {}
+ public:
+	Residuals(const MeasurementModel& model, int m)
+	    : model_(model), plain_(model.residualIsDifference()), m_(m)
+	{
+	}
 	__attribute__((always_inline)) void into(const double* a, const double* b, double* out) const
 	{
 		if (plain_)
@@ -173,7 +177,7 @@ class Residuals
 			modelResidual(a, b, out);
 	}
 
-   private:
+ private:
 	void modelResidual(const double* a, const double* b, double* out) const
 	{
 		using ConstMapV = Eigen::Map<const Eigen::VectorXd>;
@@ -191,16 +195,17 @@ class Residuals
  *  coordinates of blocks h does not read. z0 = h(x); z_scratch and dz are
  *  overwritten. False, with `why`, if h fails or is not finite. */
 bool affineSlopes(const MeasurementModel& model, const Residuals& residuals, const Measurement& meas,
-				  const FilterContext& ctx, const NavState& x, const Covariance& P, double gamma, int kn, int k,
-				  const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
-				  Eigen::Ref<Eigen::VectorXd> dz, Eigen::Ref<Eigen::MatrixXd> At, const char*& why)
+                  const FilterContext& ctx, const NavState& x, const Covariance& P, double gamma, int kn,
+                  int k, const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
+                  Eigen::Ref<Eigen::VectorXd> dz, Eigen::Ref<Eigen::MatrixXd> At, const char*& why)
 {
 	const int n = static_cast<int>(P.rows());
 	At.setZero();
 	if (model.affineSlopes(x, meas, ctx, kn, k, At))
 	{
 		bool finite = true;
-		for (Eigen::Index c = 0; c < At.cols(); ++c) finite = finite && allFiniteEntries(At.col(c).data(), At.rows());
+		for (Eigen::Index c = 0; c < At.cols(); ++c)
+			finite = finite && allFiniteEntries(At.col(c).data(), At.rows());
 		if (finite) return true;
 		why = "model returned non-finite affine slopes";
 		return false;
@@ -225,7 +230,10 @@ bool affineSlopes(const MeasurementModel& model, const Residuals& residuals, con
 
 }  // namespace
 
-bool wideKernels() { return g_wide_kernels.load(); }
+bool wideKernels()
+{
+	return g_wide_kernels.load();
+}
 
 bool setWideKernels(bool on)
 {
@@ -269,7 +277,7 @@ double ManifoldUkf::chiSquareQuantile(int dof, double p)
 }
 
 ManifoldUkf::ManifoldUkf(const ProcessModel& model, const UtParams& ut)
-	: model_(model), ut_(ut), w_(UtWeights::make(model.dim(), ut)), n_(model.dim())
+    : model_(model), ut_(ut), w_(UtWeights::make(model.dim(), ut)), n_(model.dim())
 {
 }
 
@@ -277,8 +285,9 @@ void ManifoldUkf::initialize(const NavState& x0, const Covariance& P0)
 {
 	if (P0.rows() != x0.dim() || P0.cols() != x0.dim() || x0.dim() != model_.dim())
 		throw std::invalid_argument("ManifoldUkf::initialize: state of " + std::to_string(x0.dim()) +
-									" coordinates, covariance " + std::to_string(P0.rows()) + "x" +
-									std::to_string(P0.cols()) + ", process model " + std::to_string(model_.dim()));
+		                            " coordinates, covariance " + std::to_string(P0.rows()) + "x" +
+		                            std::to_string(P0.cols()) + ", process model " +
+		                            std::to_string(model_.dim()));
 	n_ = x0.dim();
 	w_ = UtWeights::make(n_, ut_);
 	variance_floor_ = (1e-12 * P0.diagonal()).cwiseMax(1e-30);
@@ -292,10 +301,10 @@ void ManifoldUkf::restore(const NavState& x, const Covariance& P)
 {
 	if (x.dim() != n_ || P.rows() != n_ || P.cols() != n_)
 		throw std::invalid_argument("ManifoldUkf::restore: a state of " + std::to_string(x.dim()) +
-									" coordinates for a filter of " + std::to_string(n_));
+		                            " coordinates for a filter of " + std::to_string(n_));
 	x_ = x;
 	P_ = P;
-	symmetrize(P_);	 // the prediction relies on it (a checkpoint's P already is)
+	symmetrize(P_);  // the prediction relies on it (a checkpoint's P already is)
 }
 
 void repairCovariance(Covariance& P, const TangentVector& variance_floor)
@@ -340,7 +349,8 @@ bool anySigmaLimitHit(const Covariance& P, const TangentVector& min_sigma, const
 	for (int i = 0; i < P.rows(); ++i)
 	{
 		const double var = P(i, i);
-		if (var > 0 && std::isfinite(var) && limitedVariance(var, min_sigma[i], max_sigma[i]) != var) return true;
+		if (var > 0 && std::isfinite(var) && limitedVariance(var, min_sigma[i], max_sigma[i]) != var)
+			return true;
 	}
 	return false;
 }
@@ -357,7 +367,7 @@ int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVect
 		if (target == var) continue;
 		const double s = std::sqrt(target / var);
 		P.row(i) *= s;
-		P.col(i) *= s;	// P(i, i) scaled by s² in all: exactly the target (to rounding)
+		P.col(i) *= s;  // P(i, i) scaled by s² in all: exactly the target (to rounding)
 		P(i, i) = target;
 		++moved;
 	}
@@ -373,13 +383,13 @@ void ManifoldUkf::setSigmaLimits(const TangentVector& min_sigma, const TangentVe
 		return;
 	}
 	if (min_sigma.size() != n_ || max_sigma.size() != n_)
-		throw std::invalid_argument("ManifoldUkf::setSigmaLimits: bounds of " + std::to_string(min_sigma.size()) +
-									" and " + std::to_string(max_sigma.size()) + " states for a filter of " +
-									std::to_string(n_));
+		throw std::invalid_argument(
+		    "ManifoldUkf::setSigmaLimits: bounds of " + std::to_string(min_sigma.size()) + " and " +
+		    std::to_string(max_sigma.size()) + " states for a filter of " + std::to_string(n_));
 	for (int i = 0; i < n_; ++i)
 		if (!(min_sigma[i] >= 0) || !(max_sigma[i] >= min_sigma[i]))
 			throw std::invalid_argument("ManifoldUkf::setSigmaLimits: state " + std::to_string(i) +
-										": need 0 <= min_sigma <= max_sigma");
+			                            ": need 0 <= min_sigma <= max_sigma");
 	min_sigma_ = min_sigma;
 	max_sigma_ = max_sigma;
 }
@@ -421,7 +431,7 @@ void ManifoldUkf::leadingCholeskyColumns(int k, int whole_columns)
 }
 
 void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
-						  Covariance* P_cross)
+                          Covariance* P_cross)
 {
 	constexpr int k = kNonlinear, ks = kTurning;
 	const int n = n_, nl = n - k;
@@ -446,7 +456,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	const StepDecay step = model_.decay(dt);  // the Gauss–Markov φ once, not per point
 	// The points' inertial members only, straight into X (their affine rest
 	// is never read: it comes from X[0]).
-	auto propagate = [&](const NavState& x, NavState& y) {
+	auto propagate = [&](const NavState& x, NavState& y)
+	{
 		if (x.b_w == x_.b_w)
 			model_.propagateInertialInto(x, R_earth_turn, R_body_turn, step, y);
 		else
@@ -473,10 +484,10 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	const InertialStepMap step_map(model_, x_, X[0].R_nb, step);
 	const int lumped_pairs = n - ks;
 	Eigen::Matrix<double, k, k - ks> JL_rest;
-	for (int c = 0; c < k - ks; ++c) JL_rest.col(c) = L_.col(ks + c).head<k>();	 // fixed-size column copies
+	for (int c = 0; c < k - ks; ++c) JL_rest.col(c) = L_.col(ks + c).head<k>();  // fixed-size column copies
 	Eigen::Matrix<double, 2, k - ks> q_rest;
 	step_map.apply(JL_rest, &q_rest);
-	const Eigen::Vector2d q_each = (g * g) * q_rest.rowwise().sum();	 // Σ_j q(γ L_j), both currents
+	const Eigen::Vector2d q_each = (g * g) * q_rest.rowwise().sum();  // Σ_j q(γ L_j), both currents
 	Eigen::Matrix<double, k, 1> q_sum = Eigen::Matrix<double, k, 1>::Zero();
 	q_sum.segment<2>(idx::current_vehicle) = q_each;
 	q_sum.segment<2>(idx::current_far) = q_each;
@@ -496,14 +507,15 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 		{
 			any_scaled = true;
 			const Eigen::Matrix<double, k, 1> yp = X[1 + 2 * j].boxminusHead(X[0]),
-											  ym = X[2 + 2 * j].boxminusHead(X[0]);
+			                                  ym = X[2 + 2 * j].boxminusHead(X[0]);
 			const Eigen::Matrix<double, k, 1> a = 0.5 * (yp - ym) / scale[j], m = 0.5 * (yp + ym);
 			y[1 + 2 * j] = m + a;
 			y[2 + 2 * j] = m - a;
 		}
-	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1>& d) {
-		const Eigen::Matrix<double, k, 1> mu = any_scaled ? mean.boxminusHead(X[0])
-														  : Eigen::Matrix<double, k, 1>::Zero().eval();
+	auto deviations = [&](const NavState& mean, std::array<Eigen::Matrix<double, k, 1>, 2 * ks + 1>& d)
+	{
+		const Eigen::Matrix<double, k, 1> mu =
+		    any_scaled ? mean.boxminusHead(X[0]) : Eigen::Matrix<double, k, 1>::Zero().eval();
 		X[0].boxminusHeadInto(mean, d[0]);
 		for (int i = 1; i < 2 * ks + 1; ++i)
 			if (scale[(i - 1) / 2] < 1.0)
@@ -525,7 +537,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	{
 		deviations(mean, d);  // at the mean that leaves the loop: the ones used below
 		if (iter == 10) break;
-		Eigen::Matrix<double, k, 1> step_head = (2 * w_.wi) * q_sum;	// fixed size: the sums in registers
+		Eigen::Matrix<double, k, 1> step_head = (2 * w_.wi) * q_sum;  // fixed size: the sums in registers
 		for (int i = 0; i < 2 * ks + 1; ++i) step_head += wm[i] * d[i];
 		if (step_head.squaredNorm() < 1e-24) break;
 		TangentVector mean_step = TangentVector::Zero(n);
@@ -543,7 +555,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// The centre's cross terms with the q sums, d₀ q_crossᵀ + q_cross d₀ᵀ,
 	// ride along as two more columns.
 	constexpr int points = 2 * ks + 1, rows = points + (k - ks) + 2;
-	constexpr int kp = (k + 3) / 4 * 4;	 // k padded with zero rows to the Gram kernel's 4-row blocks
+	constexpr int kp = (k + 3) / 4 * 4;  // k padded with zero rows to the Gram kernel's 4-row blocks
 	const Eigen::Matrix<double, k, 1> q_cross = (2 * w_.wi) * q_sum;
 	Eigen::Matrix<double, kp, rows> Dc, DWc;
 	for (int i = 0; i < points; ++i) Dc.col(i).head<k>() = d[i];
@@ -556,7 +568,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	DWc.middleCols<k - ks>(points) = Dc.middleCols<k - ks>(points);
 	DWc.col(rows - 2) = Dc.col(rows - 1);
 	DWc.col(rows - 1) = Dc.col(rows - 2);
-	Eigen::Matrix<double, kp, kp> P_NN;	 // its blocks on and below the diagonal; the first k rows and columns
+	Eigen::Matrix<double, kp, kp> P_NN;  // its blocks on and below the diagonal; the first k rows and columns
 	// Dc's columns of the lumped pairs and q_cross are zero in the rows of
 	// attitude and gyro bias (InertialStepMap zeroes them; q lives in the
 	// currents), and J L_j above the rows J reaches from L_j's diagonal on:
@@ -584,7 +596,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
 	// Column axpys (a blocked product's set-up costs more here).
 	addColumnCombinations(P_NL.data(), k, P_NL.outerStride(), nl, D_less_JL.data(), k, ks, &L_(k, 0),
-						  L_.outerStride(), a.data());
+	                      L_.outerStride(), a.data());
 	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
 	if (observer_ || P_cross)
 	{
@@ -630,21 +642,21 @@ namespace
  *  needed (never S_x⁻¹, which is near singular when the state hardly moves
  *  the measurement), and the added covariance is bounded by the innovation. */
 double inflationAlongCorrection(const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>>& llt_S,
-								const Eigen::Ref<const Eigen::VectorXd>& nu,
-								const Eigen::Ref<const Eigen::VectorXd>& Si_nu,
-								const Eigen::Ref<const Eigen::VectorXd>& u, double gate)
+                                const Eigen::Ref<const Eigen::VectorXd>& nu,
+                                const Eigen::Ref<const Eigen::VectorXd>& Si_nu,
+                                const Eigen::Ref<const Eigen::VectorXd>& u, double gate)
 {
 	const Eigen::VectorXd Si_u = llt_S.solve(u);
 	const double q = nu.dot(Si_nu), a = nu.dot(Si_u), b = u.dot(Si_u);
-	const double excess = q - gate;	 // > 0: the update failed the gate
+	const double excess = q - gate;  // > 0: the update failed the gate
 	const double denom = a * a - excess * b;
 	if (!(b > 0) || !(denom > 1e-12 * a * a)) return -1;  // q − a²/b ≥ gate: out of reach
 	return excess / denom;
 }
 }  // namespace
 
-UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas, const FilterContext& ctx,
-								 Recovery recovery)
+UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas,
+                                 const FilterContext& ctx, Recovery recovery)
 {
 	UpdateResult res;
 	const int m = static_cast<int>(meas.z.size());
@@ -678,20 +690,22 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	using MapM = Eigen::Map<Eigen::MatrixXd>;
 	using MapV = Eigen::Map<Eigen::VectorXd>;
 	const std::size_t scratch_size =
-		static_cast<std::size_t>(m) * (16 + 3 * count + 2 * m + k + 2 * kn + 2 * n + 2 * (k - kn) + kn);
+	    static_cast<std::size_t>(m) * (16 + 3 * count + 2 * m + k + 2 * kn + 2 * n + 2 * (k - kn) + kn);
 	if (update_scratch_.size() < scratch_size) update_scratch_.resize(scratch_size);
 	double* cursor = update_scratch_.data();
-	auto takeM = [&](int rows, int cols) {
+	auto takeM = [&](int rows, int cols)
+	{
 		MapM out(cursor, rows, cols);
 		cursor += static_cast<std::ptrdiff_t>(rows) * cols;
 		return out;
 	};
-	auto takeV = [&](int rows) {
+	auto takeV = [&](int rows)
+	{
 		MapV out(cursor, rows);
 		cursor += rows;
 		return out;
 	};
-	MapM z_sigma = takeM(m, count + 1);	 // h at the sigma points; the last column h's scratch
+	MapM z_sigma = takeM(m, count + 1);  // h at the sigma points; the last column h's scratch
 	// Sigma points that move the first k coordinates; the rest evaluate like the centre.
 	if (!model.predict(x_, meas, ctx, z_sigma.col(0)))
 	{
@@ -756,17 +770,17 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		else
 		{
 			residuals.into(z_sigma.col(i).data(), z0, r.data());
-			for (int q = 0; q < m; ++q) acc[q] += w_.wi * r[q];	 // acc += W r, entry by entry
+			for (int q = 0; q < m; ++q) acc[q] += w_.wi * r[q];  // acc += W r, entry by entry
 		}
 	}
-	z_mean += acc;	// centre residual is zero; its weight does not matter
+	z_mean += acc;  // centre residual is zero; its weight does not matter
 	MapM E = takeM(m, count);
 	for (int i = 0; i < count; ++i)
 	{
 		if (isScaled(i))
 			E.col(i) = D_scaled.col(i - 1) - acc;
 		else
-			residuals.into(z_sigma.col(i).data(), z_mean.data(), E.col(i).data());	 // straight into E
+			residuals.into(z_sigma.col(i).data(), z_mean.data(), E.col(i).data());  // straight into E
 	}
 	// S = Σ W_i e_i e_iᵀ + R and Pxz = Σ_j W γ L_j (e₊ⱼ − e₋ⱼ)ᵀ, each as one
 	// product (not 2k+1 small outer products).
@@ -785,8 +799,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	MapM M = takeM(m, kn);
 	M = D;
 	MapM Pxz = takeM(n, m);
-	const double c_lin = 2 * w_.wi * g * g;	 // 1 up to rounding
-	const double* At_data = nullptr;		 // Aᵀ below (k − kn × m), for a smoother's B
+	const double c_lin = 2 * w_.wi * g * g;  // 1 up to rounding
+	const double* At_data = nullptr;         // Aᵀ below (k − kn × m), for a smoother's B
 	if (kn < k)
 	{
 		// The affine pairs (j ≥ kn): e± = e₀ ± γ A L_{kn:k,j}, so they add
@@ -795,10 +809,10 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// (C is never formed). A is h's slope along each read coordinate (a
 		// difference: exact for an affine h), at the sigma points' own step.
 		const int nk = k - kn;
-		MapM At = takeM(nk, m);	 // Aᵀ: columns contiguous for the dot products
+		MapM At = takeM(nk, m);  // Aᵀ: columns contiguous for the dot products
 		At_data = At.data();
-		if (!affineSlopes(model, residuals, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count), takeV(m), At,
-						  res.why))
+		if (!affineSlopes(model, residuals, meas, ctx, x_, P_, g, kn, k, z_sigma.col(0), z_sigma.col(count),
+		                  takeV(m), At, res.why))
 			return res;
 		// P_{:,kn:k} Aᵀ as axpys of P's contiguous columns (short dot
 		// products per entry cost more in set-up than in arithmetic).
@@ -817,7 +831,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 				int end = l;
 				while (end < nk && a[end] != 0) ++end;
 				subtractAllColumns(&Pxz(0, i), 0, n, &P_(0, kn + l), P_.outerStride(), end - l,
-								   [&](Eigen::Index c) { return -c_lin * a[l + c]; });
+				                   [&](Eigen::Index c) { return -c_lin * a[l + c]; });
 				l = end;
 			}
 		}
@@ -827,7 +841,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		if (kn > 0)
 		{
 			MapM AL = takeM(m, kn);
-			AL.noalias() = At.transpose().lazyProduct(L_.block(kn, 0, nk, kn));	 // m × kn
+			AL.noalias() = At.transpose().lazyProduct(L_.block(kn, 0, nk, kn));  // m × kn
 			M.noalias() -= c_lin * AL;
 			GAt.noalias() -= c_lin * L_.block(kn, 0, nk, kn).lazyProduct(AL.transpose());
 		}
@@ -838,9 +852,9 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// n × kn × m, small: a matrix-vector product per measurement coordinate.
 	// (kn = 0: h affine in all it reads, no sigma point; M has no storage.)
 	if (kn > 0)
-		for (int i = 0; i < m; ++i)	 // axpys of L's columns (a gemv's set-up costs more at these sizes)
+		for (int i = 0; i < m; ++i)  // axpys of L's columns (a gemv's set-up costs more at these sizes)
 			subtractAllColumns(&Pxz(0, i), 0, n, L_.data(), L_.outerStride(), kn,
-							   [&](Eigen::Index j) { return -M(i, j); });
+			                   [&](Eigen::Index j) { return -M(i, j); });
 
 	MapV nu = takeV(m);
 	residuals.into(meas.z.data(), z_mean.data(), nu.data());
@@ -881,14 +895,14 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 			if (beta > 0 && std::isfinite(beta) && dx0.allFinite())
 			{
 				// P' = P + β dx dxᵀ; then Pxz' = Pxz + β dx uᵀ, S' = S + β u uᵀ.
-				const TangentVector v = std::sqrt(beta) * dx0;	 // v vᵀ: exactly symmetric
+				const TangentVector v = std::sqrt(beta) * dx0;  // v vᵀ: exactly symmetric
 				P_.noalias() += v * v.transpose();
 				Pxz.noalias() += beta * dx0 * u.transpose();
 				S.noalias() += beta * u * u.transpose();
 				widened = true;
 			}
 		}
-		if (!widened) S *= res.nis / gate;	// the aid blamed: the innovation on the gate boundary
+		if (!widened) S *= res.nis / gate;  // the aid blamed: the innovation on the gate boundary
 		llt.compute(S);
 		if (llt.info() != Eigen::Success)
 		{
@@ -906,7 +920,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	W = Pxz;
 	// W Lᵀ = Pxz column by column (forward substitution as axpys: the
 	// blocked triangular solver packs its operands, costly for m ≤ 6).
-	const auto& L_S = llt.matrixLLT();	// L in its lower triangle
+	const auto& L_S = llt.matrixLLT();  // L in its lower triangle
 	solveRightLowerTransposed(W.data(), n, W.outerStride(), m, L_S);
 	MapV u = takeV(m);
 	u = nu;

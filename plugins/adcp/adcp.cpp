@@ -31,30 +31,30 @@ double adcpFarWeight(double d_m, double d_max_m)
 	return d_m / d_max_m;
 }
 
-Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne, const Eigen::Vector2d& current_far_ne,
-								double w)
+Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne,
+                                const Eigen::Vector2d& current_far_ne, double w)
 {
 	const Eigen::Vector2d c = (1.0 - w) * current_vehicle_ne + w * current_far_ne;
 	return {c.x(), c.y(), 0.0};
 }
 
 AdcpModel::AdcpModel(const config::Node& cfg, const std::string& label)
-	: label_(label),
-	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
-	  R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
-	  use_observation_pose_(cfg.boolean("use_observation_pose", false)),
-	  sigma_mps_(cfg.has("sigma_mps") ? cfg.positive("sigma_mps") : 0.0),
-	  extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.02)),
-	  min_correlation_(cfg.inRange("min_correlation", 0.0, 1.0, 0.5)),
-	  max_distance_m_(cfg.has("max_distance_m") ? cfg.positive("max_distance_m")
-												: std::numeric_limits<double>::infinity()),
-	  gate_probability_(gateProbabilityFrom(cfg))
+    : label_(label),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
+      R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
+      use_observation_pose_(cfg.boolean("use_observation_pose", false)),
+      sigma_mps_(cfg.has("sigma_mps") ? cfg.positive("sigma_mps") : 0.0),
+      extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.02)),
+      min_correlation_(cfg.inRange("min_correlation", 0.0, 1.0, 0.5)),
+      max_distance_m_(cfg.has("max_distance_m") ? cfg.positive("max_distance_m")
+                                                : std::numeric_limits<double>::infinity()),
+      gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
 
 PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-								   std::vector<Measurement>& out, std::string& why)
+                                   std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	const auto* adcp = dynamic_cast<const auvnav::obs::CObservationADCP*>(&obs);
@@ -81,9 +81,10 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 	// The far-current state belongs to the navigator when it fixes its distance
 	// (the vehicle current then follows the profile with depth); otherwise the
 	// profile's own range.
-	const double d_max = ctx.current_far_distance_m > 0
-							 ? ctx.current_far_distance_m
-							 : adcp->blank_distance_m + static_cast<double>(adcp->cells.size()) * adcp->cell_size_m;
+	const double d_max =
+	    ctx.current_far_distance_m > 0
+	        ? ctx.current_far_distance_m
+	        : adcp->blank_distance_m + static_cast<double>(adcp->cells.size()) * adcp->cell_size_m;
 	if (!std::isfinite(d_max))
 	{
 		why = "profile range not finite";
@@ -107,8 +108,9 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 	// the profile's representation error in quadrature on top.
 	double sigma = sigma_mps_;
 	if (!(sigma > 0))
-		sigma = (std::isfinite(adcp->velocity_sigma_mps) && adcp->velocity_sigma_mps > 0) ? adcp->velocity_sigma_mps
-																						   : kDefaultSigmaMps;
+		sigma = (std::isfinite(adcp->velocity_sigma_mps) && adcp->velocity_sigma_mps > 0)
+		            ? adcp->velocity_sigma_mps
+		            : kDefaultSigmaMps;
 	const double var = sigma * sigma + extra_sigma_mps_ * extra_sigma_mps_;
 
 	out.reserve(adcp->cells.size());
@@ -150,7 +152,7 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 }
 
 bool AdcpModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-						  Eigen::Ref<Eigen::VectorXd> z_pred) const
+                          Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 3) return false;
 	const AdcpCell& cell = m.payload<AdcpCell>();
@@ -169,8 +171,8 @@ bool AdcpModel::doPredict(const NavState& x, const Measurement& m, const FilterC
 	return true;
 }
 
-bool AdcpModel::doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-							   Eigen::Ref<Eigen::MatrixXd> At) const
+bool AdcpModel::doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from,
+                               int to, Eigen::Ref<Eigen::MatrixXd> At) const
 {
 	if (At.cols() != 3 || At.rows() != to - from) return false;
 	const AdcpCell& cell = m.payload<AdcpCell>();
@@ -183,7 +185,8 @@ bool AdcpModel::doAffineSlopes(const NavState& x, const Measurement& m, const Fi
 	// along b_w,i: R_sb (e_i × ℓ); along v_n,i: −R_sb R_bn e_i; along the
 	// currents: (1 − w) and w times R_sb R_bn e_i; along b_adcp,i: e_i.
 	const Eigen::Matrix3d R_sn = R_bs.transpose() * x.R_nb.transpose();
-	auto put = [&](int i, const Eigen::Vector3d& slope) {
+	auto put = [&](int i, const Eigen::Vector3d& slope)
+	{
 		if (i >= from && i < to) At.row(i - from) = slope.transpose();
 	};
 	for (int i = 0; i < 3; ++i)

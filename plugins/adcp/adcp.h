@@ -48,10 +48,10 @@ namespace auvnav::plugins
  *  and would otherwise take an exponential each time. */
 struct AdcpCell
 {
-	double distance_m;		//!< d_i, cell centre along the profile
-	double max_distance_m;	//!< d_max, the profile's far end (far-layer weight)
-	double r_s[3];			//!< sensor position [m, body FRD]
-	double R_bs[9];			//!< sensor-to-body rotation, column-major
+	double distance_m;      //!< d_i, cell centre along the profile
+	double max_distance_m;  //!< d_max, the profile's far end (far-layer weight)
+	double r_s[3];          //!< sensor position [m, body FRD]
+	double R_bs[9];         //!< sensor-to-body rotation, column-major
 };
 
 /** Interpolation weight of the far current for a cell at distance `d_m` from
@@ -61,12 +61,12 @@ double adcpFarWeight(double d_m, double d_max_m);
 
 /** The water current at weight `w` of the linear two-state profile, NED
  *  (vertical 0): (1 − w) current_vehicle + w current_far. */
-Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne, const Eigen::Vector2d& current_far_ne,
-								double w);
+Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne,
+                                const Eigen::Vector2d& current_far_ne, double w);
 
 class AdcpModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	AdcpModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override
@@ -96,21 +96,21 @@ class AdcpModel final : public SafeMeasurementModel
 	static constexpr const char* kSkipDistance = "skipped_beyond_max_distance";
 	static constexpr const char* kSkipNonFinite = "skipped_non_finite";
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 	/** h's slopes in closed form (MeasurementModel::affineSlopes). */
 	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-						Eigen::Ref<Eigen::MatrixXd> At) const override;
+	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
-   private:
+ private:
 	std::string label_;
 	Eigen::Vector3d position_b_;
 	Eigen::Matrix3d R_bs_;
 	bool use_observation_pose_ = false;
-	double sigma_mps_ = 0;	// 0: from the observation
+	double sigma_mps_ = 0;  // 0: from the observation
 	double extra_sigma_mps_ = 0.02;
 	double min_correlation_ = 0.5;
 	double max_distance_m_;

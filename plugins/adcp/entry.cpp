@@ -3,5 +3,6 @@
 
 #include "adcp.h"
 
-AUVNAV_PLUGIN(auvnav::plugins::AdcpModel, "adcp", "1.0.0",
-			  "ADCP current-profile aiding: per-cell water velocity, two-state linear current profile, ADCP bias")
+AUVNAV_PLUGIN(
+    auvnav::plugins::AdcpModel, "adcp", "1.0.0",
+    "ADCP current-profile aiding: per-cell water velocity, two-state linear current profile, ADCP bias")

@@ -16,19 +16,22 @@
 
 using namespace auvnav;
 using auvnav::obs::CObservationADCP;
-using auvnav::plugins::AdcpModel;
 using auvnav::plugins::AdcpCell;
+using auvnav::plugins::AdcpModel;
 namespace at = auvnav::testing;
 namespace pt = auvnav::plugins::test;
 
 namespace
 {
 constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
+const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);   // flatfish_sensors.yaml imu.position_m
 const Eigen::Vector3d kAdcpPos(0.659, -0.141, 0.206);  // flatfish_sensors.yaml adcp.position_m
 constexpr uint32_t kUses = kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
 
-Eigen::Matrix3d nominalRbs() { return at::rotationYpr(-22.5 * kDeg, 0, 0); }
+Eigen::Matrix3d nominalRbs()
+{
+	return at::rotationYpr(-22.5 * kDeg, 0, 0);
+}
 
 /** Profile geometry; the default is the FlatFish ADCP (20 cells of 0.5 m after a 0.5 m blank). */
 struct Geometry
@@ -43,14 +46,16 @@ struct Geometry
  *  form of the simulator): water relative to the sensor point, rotated by
  *  R_ns = R_nb R_bs, plus the horizontal bias. */
 Eigen::Vector3d trueCellVelocity(const NavState& x, const FilterContext& ctx, double d, double d_max,
-								 const Eigen::Matrix3d& R_bs = nominalRbs(), const Eigen::Vector3d& r_s = kAdcpPos)
+                                 const Eigen::Matrix3d& R_bs = nominalRbs(),
+                                 const Eigen::Vector3d& r_s = kAdcpPos)
 {
 	const Eigen::Vector3d w_eb_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
 	const Eigen::Vector3d v_s_n = x.v_n + x.R_nb * w_eb_b.cross(r_s - ctx.imu_position_b);
 	const double w = d / d_max;
 	const Eigen::Vector2d c = x.current_vehicle_ne + w * (x.current_far_ne - x.current_vehicle_ne);
 	const Eigen::Matrix3d R_ns = x.R_nb * R_bs;
-	return R_ns.transpose() * (Eigen::Vector3d(c.x(), c.y(), 0) - v_s_n) + Eigen::Vector3d(x.b_adcp.x(), x.b_adcp.y(), 0);
+	return R_ns.transpose() * (Eigen::Vector3d(c.x(), c.y(), 0) - v_s_n) +
+	       Eigen::Vector3d(x.b_adcp.x(), x.b_adcp.y(), 0);
 }
 
 CObservationADCP::Ptr emptyObs(const Geometry& g = {}, double sigma = 0.03)
@@ -70,7 +75,7 @@ CObservationADCP::Ptr emptyObs(const Geometry& g = {}, double sigma = 0.03)
  *  `first_invalid` on are flagged invalid (cut by the seabed) and carry the
  *  bottom echo instead of the water. */
 CObservationADCP::Ptr profileOf(const NavState& truth, const FilterContext& ctx, const Geometry& g = {},
-								double sigma_noise = 0, uint32_t seed = 1, int first_invalid = 1 << 30)
+                                double sigma_noise = 0, uint32_t seed = 1, int first_invalid = 1 << 30)
 {
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> n01(0.0, 1.0);
@@ -100,44 +105,45 @@ CObservationADCP::Ptr profileOf(const NavState& truth, const FilterContext& ctx,
  *  (model_checks.h predates Measurement::skipped.) */
 class AppliedCellsOnly final : public MeasurementModel
 {
-   public:
+ public:
 	explicit AppliedCellsOnly(MeasurementModel& m) : m_(m) {}
 	uint32_t uses() const noexcept override { return m_.uses(); }
-	PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx, std::vector<Measurement>& out,
-						  std::string& why) noexcept override
+	PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                      std::vector<Measurement>& out, std::string& why) noexcept override
 	{
 		const PrepareStatus st = m_.prepare(obs, ctx, out, why);
-		const auto it = std::remove_if(out.begin(), out.end(), [](const Measurement& m) { return m.skipped; });
+		const auto it =
+		    std::remove_if(out.begin(), out.end(), [](const Measurement& m) { return m.skipped; });
 		skipped = static_cast<std::size_t>(out.end() - it);
 		out.erase(it, out.end());
 		applied = out.size();
 		return st;
 	}
 	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				 Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept override
 	{
 		return m_.predict(x, m, ctx, z_pred);
 	}
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
 		m_.residual(z, z_pred, r);
 	}
 	double gateProbability() const noexcept override { return m_.gateProbability(); }
 	uint32_t affineIn() const noexcept override { return m_.affineIn(); }
 	bool affineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-					  Eigen::Ref<Eigen::MatrixXd> At) const noexcept override
+	                  Eigen::Ref<Eigen::MatrixXd> At) const noexcept override
 	{
 		return m_.affineSlopes(x, m, ctx, from, to, At);
 	}
 	std::size_t skipped = 0, applied = 0;
 
-   private:
+ private:
 	MeasurementModel& m_;
 };
 
-std::vector<Measurement> prepareAll(AdcpModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx,
-									PrepareStatus expected = PrepareStatus::Ok)
+std::vector<Measurement> prepareAll(AdcpModel& model, const mrpt::obs::CObservation& o,
+                                    const FilterContext& ctx, PrepareStatus expected = PrepareStatus::Ok)
 {
 	std::vector<Measurement> out;
 	std::string why;
@@ -147,7 +153,8 @@ std::vector<Measurement> prepareAll(AdcpModel& model, const mrpt::obs::CObservat
 
 std::size_t countSkipped(const std::vector<Measurement>& out)
 {
-	return static_cast<std::size_t>(std::count_if(out.begin(), out.end(), [](const Measurement& m) { return m.skipped; }));
+	return static_cast<std::size_t>(
+	    std::count_if(out.begin(), out.end(), [](const Measurement& m) { return m.skipped; }));
 }
 
 /** As the navigator does: skipped cells are counted, the others updated one by one. */
@@ -155,14 +162,15 @@ struct CellUpdates
 {
 	PrepareStatus status = PrepareStatus::Invalid;
 	std::size_t skipped = 0;
-	std::vector<std::pair<int, UpdateResult>> updates;	// (cell index, result)
+	std::vector<std::pair<int, UpdateResult>> updates;  // (cell index, result)
 	int count(UpdateStatus s) const
 	{
-		return static_cast<int>(
-			std::count_if(updates.begin(), updates.end(), [s](const auto& u) { return u.second.status == s; }));
+		return static_cast<int>(std::count_if(updates.begin(), updates.end(),
+		                                      [s](const auto& u) { return u.second.status == s; }));
 	}
 };
-CellUpdates applyCells(ManifoldUkf& ukf, AdcpModel& model, const CObservationADCP& o, const FilterContext& ctx)
+CellUpdates applyCells(ManifoldUkf& ukf, AdcpModel& model, const CObservationADCP& o,
+                       const FilterContext& ctx)
 {
 	CellUpdates r;
 	std::vector<Measurement> out;
@@ -201,8 +209,8 @@ TEST(Adcp, DefaultConfigMatchesFlatfishMounting)
 	EXPECT_DOUBLE_EQ(m.gateProbability(), 0.999);
 	EXPECT_DOUBLE_EQ(m.minCorrelation(), 0.5);
 	EXPECT_DOUBLE_EQ(m.extraSigma_mps(), 0.02);
-	EXPECT_EQ(m.sigma_mps(), 0.0);					 // from the observation
-	EXPECT_TRUE(std::isinf(m.maxDistance_m()));	 // no limit
+	EXPECT_EQ(m.sigma_mps(), 0.0);               // from the observation
+	EXPECT_TRUE(std::isinf(m.maxDistance_m()));  // no limit
 	// The empty configuration gives the same defaults as the shipped file.
 	const AdcpModel e(pt::configText("{}"), "ADCP");
 	EXPECT_TRUE(e.R_bs().isApprox(m.R_bs(), 1e-15));
@@ -212,8 +220,9 @@ TEST(Adcp, DefaultConfigMatchesFlatfishMounting)
 	EXPECT_EQ(e.sigma_mps(), m.sigma_mps());
 	EXPECT_EQ(e.maxDistance_m(), m.maxDistance_m());
 	EXPECT_EQ(e.gateProbability(), m.gateProbability());
-	const AdcpModel c(pt::configText("{sigma_mps: 0.1, max_distance_m: 6, min_correlation: 0.7, gate_probability: 1}"),
-					  "ADCP");
+	const AdcpModel c(
+	    pt::configText("{sigma_mps: 0.1, max_distance_m: 6, min_correlation: 0.7, gate_probability: 1}"),
+	    "ADCP");
 	EXPECT_EQ(c.sigma_mps(), 0.1);
 	EXPECT_EQ(c.maxDistance_m(), 6.0);
 	EXPECT_EQ(c.minCorrelation(), 0.7);
@@ -256,11 +265,13 @@ TEST(Adcp, WellFormedOnRealisticObservationsAndRandomStates)
 			tc.ctx().omega_ib_b = Eigen::Vector3d(0.02, -0.01, 0.1 * std::sin(seed));
 			// The profile of another random state (a wrong filter state is
 			// the normal case), noisy, the far cells cut by the seabed.
-			const auto o = profileOf(at::RandomNavState(seed + 50), tc.ctx(), Geometry{}, 0.03, seed, 12 + seed % 8);
+			const auto o =
+			    profileOf(at::RandomNavState(seed + 50), tc.ctx(), Geometry{}, 0.03, seed, 12 + seed % 8);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
 			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(applied, *o, tc.ctx(), at::RandomNavState(seed), opt)) << cfg << ", seed " << seed;
+			EXPECT_TRUE(at::IsWellFormed(applied, *o, tc.ctx(), at::RandomNavState(seed), opt))
+			    << cfg << ", seed " << seed;
 			EXPECT_EQ(applied.applied + applied.skipped, o->cells.size());
 			EXPECT_GE(applied.applied, 10u);
 		}
@@ -278,7 +289,7 @@ TEST(Adcp, FarWeightIsDistanceOverProfileEnd)
 	EXPECT_EQ(adcpFarWeight(5.25, 10.5), 0.5);
 	EXPECT_TRUE(std::isnan(adcpFarWeight(1.0, 0.0)));
 	const Eigen::Vector2d cv(0.2, -0.07), cf(-0.05, 0.13);
-	EXPECT_EQ(adcpCellCurrent(cv, cf, 0.0), Eigen::Vector3d(0.2, -0.07, 0));  // exactly current_vehicle
+	EXPECT_EQ(adcpCellCurrent(cv, cf, 0.0), Eigen::Vector3d(0.2, -0.07, 0));   // exactly current_vehicle
 	EXPECT_EQ(adcpCellCurrent(cv, cf, 1.0), Eigen::Vector3d(-0.05, 0.13, 0));  // exactly current_far
 	const Eigen::Vector3d mid = adcpCellCurrent(cv, cf, 0.5);
 	EXPECT_NEAR(mid.x(), 0.075, 1e-16);
@@ -321,12 +332,15 @@ TEST(Adcp, NavigatorFixedFarDistanceOverridesTheGeometry)
 	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
 	ASSERT_EQ(out.size(), 20u);
 	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.payload<AdcpCell>().max_distance_m, 6.0);
-	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 0.75);	// distances still from the observation
+	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 0.75);  // distances still from the observation
 	// A cell beyond that distance extrapolates the same linear profile.
 	NavState x;
 	x.current_vehicle_ne = Eigen::Vector2d(0.1, 0.0);
 	x.current_far_ne = Eigen::Vector2d(0.0, 0.0);
-	EXPECT_NEAR(plugins::adcpCellCurrent(x.current_vehicle_ne, x.current_far_ne, plugins::adcpFarWeight(9.0, 6.0)).x(), -0.05, 1e-15);
+	EXPECT_NEAR(
+	    plugins::adcpCellCurrent(x.current_vehicle_ne, x.current_far_ne, plugins::adcpFarWeight(9.0, 6.0))
+	        .x(),
+	    -0.05, 1e-15);
 }
 
 TEST(Adcp, CellsAtTheEndsSeeExactlyTheTwoCurrentStates)
@@ -346,7 +360,8 @@ TEST(Adcp, CellsAtTheEndsSeeExactlyTheTwoCurrentStates)
 	ASSERT_EQ(out.size(), 3u);
 	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().distance_m, 1.5);
 	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().max_distance_m, 3.0);
-	EXPECT_TRUE(at::Predict(model, out[1], tc.ctx(), x).isApprox(at::Predict(model, out[1], tc.ctx(), uni_mid), 1e-15));
+	EXPECT_TRUE(at::Predict(model, out[1], tc.ctx(), x)
+	                .isApprox(at::Predict(model, out[1], tc.ctx(), uni_mid), 1e-15));
 
 	// A cell centred at the transducer (d = 0) and one at the far end (d = d_max):
 	// no real geometry has them, so the carried distance is set directly.
@@ -377,7 +392,7 @@ TEST(Adcp, HandComputedLevelHeading90Through22_5DegreeMount)
 	const NavState x = eastbound();
 	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
 	ASSERT_EQ(out.size(), 3u);
-	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);	// 0.92388, 0.38268
+	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);  // 0.92388, 0.38268
 	// Sensor frame = body yawed −22.5°: z_s = Rz(+22.5°) z_b.
 	auto toSensor = [&](double bx, double by) { return Eigen::Vector2d(c * bx - s * by, s * bx + c * by); };
 
@@ -427,7 +442,8 @@ TEST(Adcp, AdcpBiasAppearsInSensorXYOnly)
 	biased.b_adcp = Eigen::Vector2d(0.1, -0.2);
 	for (const auto& m : out)
 	{
-		const Eigen::VectorXd d = at::Predict(model, m, tc.ctx(), biased) - at::Predict(model, m, tc.ctx(), x);
+		const Eigen::VectorXd d =
+		    at::Predict(model, m, tc.ctx(), biased) - at::Predict(model, m, tc.ctx(), x);
 		EXPECT_NEAR(d[0], 0.1, 1e-14);
 		EXPECT_NEAR(d[1], -0.2, 1e-14);
 		EXPECT_EQ(d[2], 0.0);
@@ -479,7 +495,7 @@ TEST(Adcp, SimulatorConventionsTranscribed)
 	const Eigen::Vector2d adcp_bias(0.012, -0.007);
 	const Geometry g;
 	const double d_max = g.dMax();
-	const Eigen::Vector2d c_top(0.15, 0.05), c_bottom(0.05, -0.03);	 // at the sensor depth and d_max below
+	const Eigen::Vector2d c_top(0.15, 0.05), c_bottom(0.05, -0.03);  // at the sensor depth and d_max below
 	const Eigen::Matrix3d R_nb = q_nb.toRotationMatrix();
 	// pointOnVehicle(x, mount.position_b)
 	const Eigen::Vector3d w_b = nu_b.tail<3>();
@@ -487,7 +503,8 @@ TEST(Adcp, SimulatorConventionsTranscribed)
 	const Eigen::Vector3d s_p_n = p_n + R_nb * kAdcpPos;
 	const Eigen::Matrix3d R_ns = R_nb * nominalRbs();  // R_bs_true = nominal (no misalignment here)
 	const Eigen::Vector3d axis_n = R_ns.col(2);
-	auto current = [&](double depth) {
+	auto current = [&](double depth)
+	{
 		const double w = (depth - s_p_n.z()) / d_max;
 		const Eigen::Vector2d c = c_top + w * (c_bottom - c_top);
 		return Eigen::Vector3d(c.x(), c.y(), 0.0);
@@ -523,8 +540,8 @@ TEST(Adcp, SimulatorConventionsTranscribed)
 	{
 		ASSERT_FALSE(m.skipped);
 		const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
-		EXPECT_LT((h - m.z).cwiseAbs().maxCoeff(), 1e-14) << "cell " << m.tag << ": h " << h.transpose()
-														   << ", z " << m.z.transpose();
+		EXPECT_LT((h - m.z).cwiseAbs().maxCoeff(), 1e-14)
+		    << "cell " << m.tag << ": h " << h.transpose() << ", z " << m.z.transpose();
 	}
 }
 
@@ -542,20 +559,20 @@ TEST(Adcp, InvalidCellsAreSkippedAndCounted)
 	o->cells[5].valid = false;  // invalid and NaN: counted as invalid
 	o->cells[5].velocity_s_mps[0] = std::nan("");
 	o->cells[6].correlation = std::nan("");
-	o->cells[7].correlation = 0.5;	// exactly at the threshold: used
+	o->cells[7].correlation = 0.5;  // exactly at the threshold: used
 	auto out = prepareAll(model, *o, tc.ctx());
-	ASSERT_EQ(out.size(), 10u);	// every cell accounted for
+	ASSERT_EQ(out.size(), 10u);  // every cell accounted for
 	EXPECT_EQ(countSkipped(out), 6u);
 	const char* expected[10] = {"cell",
-								AdcpModel::kSkipInvalid,
-								AdcpModel::kSkipCorrelation,
-								AdcpModel::kSkipNonFinite,
-								AdcpModel::kSkipNonFinite,
-								AdcpModel::kSkipInvalid,
-								AdcpModel::kSkipCorrelation,
-								"cell",
-								"cell",
-								"cell"};
+	                            AdcpModel::kSkipInvalid,
+	                            AdcpModel::kSkipCorrelation,
+	                            AdcpModel::kSkipNonFinite,
+	                            AdcpModel::kSkipNonFinite,
+	                            AdcpModel::kSkipInvalid,
+	                            AdcpModel::kSkipCorrelation,
+	                            "cell",
+	                            "cell",
+	                            "cell"};
 	for (int i = 0; i < 10; ++i)
 	{
 		EXPECT_EQ(out[i].tag, i);
@@ -569,7 +586,7 @@ TEST(Adcp, InvalidCellsAreSkippedAndCounted)
 
 	// A stricter threshold and a range limit (cell centres at 0.75 + 0.5 i).
 	AdcpModel strict(pt::configText("{min_correlation: 0.78, max_distance_m: 4.0}"), "ADCP");
-	auto clean = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 10});	// correlations 0.95 − 0.02 i
+	auto clean = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 10});  // correlations 0.95 − 0.02 i
 	out = prepareAll(strict, *clean, tc.ctx());
 	ASSERT_EQ(out.size(), 10u);
 	// Cells 0..6 are within 4 m (cell 6 at 3.75 m), 7..9 beyond; cell 9 (0.77) is also
@@ -618,7 +635,8 @@ TEST(Adcp, MalformedObservationIsInvalid)
 	EXPECT_EQ(obs_pose.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
 	EXPECT_EQ(obs_pose.prepare(*good, tc.ctx(), out, why), PrepareStatus::Ok);
 	// Wrong class.
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why),
+	          PrepareStatus::Invalid);
 	EXPECT_NE(why.find("CObservationADCP"), std::string::npos) << why;
 	// No cells at all: nothing to apply, not an error.
 	auto empty = emptyObs();
@@ -633,7 +651,8 @@ TEST(Adcp, NoiseFromObservationOrConfigPlusRepresentationError)
 	auto o = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 4});
 	const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
 	o->velocity_sigma_mps = 0.03;  // the observation's own σ
-	for (const auto& m : prepareAll(model, *o, tc.ctx())) EXPECT_TRUE(m.R.isApprox((0.03 * 0.03 + 0.02 * 0.02) * I, 1e-15));
+	for (const auto& m : prepareAll(model, *o, tc.ctx()))
+		EXPECT_TRUE(m.R.isApprox((0.03 * 0.03 + 0.02 * 0.02) * I, 1e-15));
 	EXPECT_DOUBLE_EQ(prepareAll(model, *o, tc.ctx())[0].R(0, 0), 0.0013);
 	for (double unusable : {0.0, -0.1, std::nan(""), HUGE_VAL})
 	{
@@ -658,7 +677,8 @@ Covariance covarianceAfterDvl(double current_sigma = 0.2)
 	Covariance P = at::TypicalCovariance();
 	P.block<3, 3>(idx::att, idx::att) = std::pow(0.5 * kDeg, 2) * Eigen::Matrix3d::Identity();
 	P.block<3, 3>(idx::vel, idx::vel) = 0.01 * 0.01 * Eigen::Matrix3d::Identity();
-	P.block<4, 4>(idx::current_vehicle, idx::current_vehicle) = current_sigma * current_sigma * Eigen::Matrix4d::Identity();
+	P.block<4, 4>(idx::current_vehicle, idx::current_vehicle) =
+	    current_sigma * current_sigma * Eigen::Matrix4d::Identity();
 	P.block<2, 2>(idx::adcp_bias, idx::adcp_bias) = 0.01 * 0.01 * Eigen::Matrix2d::Identity();
 	return P;
 }
@@ -702,7 +722,8 @@ TEST(Adcp, UpdatePullsCurrentsTowardTruth)
 		EXPECT_LT(ev, 0.15 * ev0) << "current_vehicle " << ukf.state().current_vehicle_ne.transpose();
 		EXPECT_LT(ef, 0.15 * ef0 + 0.01) << "current_far " << ukf.state().current_far_ne.transpose();
 		// Both current blocks became much more certain.
-		EXPECT_LT((ukf.covariance().block<2, 2>(idx::current_vehicle, idx::current_vehicle).trace()), 0.1 * 0.08);
+		EXPECT_LT((ukf.covariance().block<2, 2>(idx::current_vehicle, idx::current_vehicle).trace()),
+		          0.1 * 0.08);
 		EXPECT_LT((ukf.covariance().block<2, 2>(idx::current_far, idx::current_far).trace()), 0.1 * 0.08);
 		EXPECT_EQ(ukf.choleskyRepairs(), 0u);
 	}
@@ -727,7 +748,7 @@ TEST(Adcp, GrossOutlierCellRejectedByTheGateOthersAccepted)
 	ASSERT_EQ(res.updates.size(), 20u);
 	for (const auto& [cell, r] : res.updates)
 		EXPECT_EQ(r.status, cell == 7 ? UpdateStatus::Rejected : UpdateStatus::Accepted)
-			<< "cell " << cell << " NIS " << r.nis;
+		    << "cell " << cell << " NIS " << r.nis;
 	EXPECT_EQ(res.count(UpdateStatus::Rejected), 1);
 	EXPECT_EQ(res.count(UpdateStatus::Accepted), 19);
 	EXPECT_GT(res.updates[7].second.nis, ManifoldUkf::chiSquareQuantile(3, 0.999));

@@ -197,7 +197,8 @@ bool AhrsModel::doPredict(const NavState& x, const Measurement& m, const FilterC
 	{
 		if (z_pred.size() != 3) return false;
 		const double* q = m.payload<AhrsReference>().v;
-		const Eigen::Matrix3d R_meas = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+		const Eigen::Matrix3d R_meas =
+		    Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
 		z_pred = so3::Log(x.R_nb * R_meas.transpose());
 	}
 	return z_pred.allFinite();

@@ -14,8 +14,8 @@ namespace
 enum class Flaw
 {
 	None,
-	UndeclaredVelocity,	 //!< h reads v_n, uses() omits kVelocity
-	UndeclaredGyroBias,	 //!< reads a block inside the tangent prefix but not declared
+	UndeclaredVelocity,  //!< h reads v_n, uses() omits kVelocity
+	UndeclaredGyroBias,  //!< reads a block inside the tangent prefix but not declared
 	AsymmetricR,
 	IndefiniteR,
 	WrongSizeR,
@@ -26,14 +26,14 @@ enum class Flaw
 	NonDeterministic,
 	SkipWithMeasurements,
 	Invalid,
-	NotAffine,	//!< declares affineIn() = position + velocity, but h is quadratic in the position
+	NotAffine,  //!< declares affineIn() = position + velocity, but h is quadratic in the position
 	WrapsButClaimsDifference  //!< residual wraps the second entry; residualIsDifference() says it does not
 };
 
 /** z = north position + 0.1·north velocity (2 numbers), with injectable flaws. */
 class TestModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	explicit TestModel(Flaw f) : flaw_(f) {}
 	uint32_t uses() const noexcept override
 	{
@@ -42,7 +42,7 @@ class TestModel final : public SafeMeasurementModel
 	//! h is linear in the position and velocity (true unless NotAffine).
 	uint32_t affineIn() const noexcept override { return kPosition | kVelocity; }
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
 		r = z - zp;
 		if (flaw_ == Flaw::ResidualOffset) r.array() += 1e-3;
@@ -51,9 +51,9 @@ class TestModel final : public SafeMeasurementModel
 	//! The residual above is z − zp (but for the flaws that change it).
 	bool residualIsDifference() const noexcept override { return true; }
 
-   protected:
-	PrepareStatus doPrepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-							std::string& why) override
+ protected:
+	PrepareStatus doPrepare(const mrpt::obs::CObservation&, const FilterContext&,
+	                        std::vector<Measurement>& out, std::string& why) override
 	{
 		out.clear();
 		Measurement m;
@@ -74,7 +74,7 @@ class TestModel final : public SafeMeasurementModel
 		return PrepareStatus::Ok;
 	}
 	bool doPredict(const NavState& x, const Measurement&, const FilterContext&,
-				   Eigen::Ref<Eigen::VectorXd> z) const override
+	               Eigen::Ref<Eigen::VectorXd> z) const override
 	{
 		if (flaw_ == Flaw::PredictFails) return false;
 		z[0] = x.p_n.x() + 0.1 * x.v_n.x();
@@ -86,7 +86,7 @@ class TestModel final : public SafeMeasurementModel
 		return true;
 	}
 
-   private:
+ private:
 	Flaw flaw_;
 	mutable int calls_ = 0;
 };
@@ -97,11 +97,14 @@ class TestModel final : public SafeMeasurementModel
 	TestModel model(f);
 	at::WellFormedOptions opt;
 	opt.seed = seed;
-	return at::IsWellFormed(model, *auvnav::obs::CObservationPressure::Create(), tc.ctx(), at::RandomNavState(seed),
-							opt);
+	return at::IsWellFormed(model, *auvnav::obs::CObservationPressure::Create(), tc.ctx(),
+	                        at::RandomNavState(seed), opt);
 }
 
-std::string message(const ::testing::AssertionResult& r) { return r.message(); }
+std::string message(const ::testing::AssertionResult& r)
+{
+	return r.message();
+}
 }  // namespace
 
 TEST(ModelChecks, CorrectModelPasses)
@@ -187,5 +190,5 @@ TEST(ModelChecks, StateComparisonsAndRoundTrip)
 	NavState nan = x;
 	nan.g = NAN;
 	EXPECT_FALSE(at::NavStateNear(nan, x, 1e9));
-	EXPECT_FALSE(at::NavStateIdentical(nan, nan));	// NaN is never equal
+	EXPECT_FALSE(at::NavStateIdentical(nan, nan));  // NaN is never equal
 }

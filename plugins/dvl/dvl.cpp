@@ -40,10 +40,11 @@ bool usableCovariance(const std::array<double, 9>& cov_rowmajor, double extra_va
 {
 	C = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cov_rowmajor.data());
 	if (!(C.allFinite() && C.cwiseAbs().maxCoeff() > 0 &&
-		  (C - C.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * C.cwiseAbs().maxCoeff()))
+	      (C - C.transpose()).cwiseAbs().maxCoeff() <= 1e-9 * C.cwiseAbs().maxCoeff()))
 		return false;
 	C = 0.5 * (C + C.transpose()).eval();
-	const double min_ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C, Eigen::EigenvaluesOnly).eigenvalues()[0];
+	const double min_ev =
+	    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C, Eigen::EigenvaluesOnly).eigenvalues()[0];
 	return min_ev >= 0 && min_ev + extra_var > 0;
 }
 
@@ -52,11 +53,10 @@ std::string frameLabel(DvlFrame f)
 	return f == DvlFrame::Instrument ? "velocity" : "velocity_" + std::string(obs::dvlFrameName(f));
 }
 
-
 /** v_s_b: the DVL point's velocity over ground in body axes, seen through
  *  the misalignment state δ (if any; not in the Earth frames, dvl.h). */
 Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, const FilterContext& ctx,
-								 int misalignment_at, DvlFrame frame)
+                                 int misalignment_at, DvlFrame frame)
 {
 	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
 	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
@@ -69,17 +69,17 @@ Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, 
 }  // namespace
 
 DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
-	: label_(label),
-	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
-	  R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
-	  use_observation_pose_(cfg.boolean("use_observation_pose", false)),
-	  sigma_mps_(cfg.positive("sigma_mps", 0.02)),
-	  extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.005)),
-	  beam_sigma_mps_(cfg.positive("beam_sigma_mps", 0.01)),
-	  earth_heading_sigma_rad_(cfg.inRange("earth_heading_sigma_deg", 0, 90, 2.0) * kDeg),
-	  earth_tilt_sigma_rad_(cfg.inRange("earth_tilt_sigma_deg", 0, 90, 0.5) * kDeg),
-	  gate_probability_(gateProbabilityFrom(cfg)),
-	  scale_reference_lag_s_(cfg.inRange("scale_reference_lag_s", 0, 600, 10.0))
+    : label_(label),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
+      R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
+      use_observation_pose_(cfg.boolean("use_observation_pose", false)),
+      sigma_mps_(cfg.positive("sigma_mps", 0.02)),
+      extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.005)),
+      beam_sigma_mps_(cfg.positive("beam_sigma_mps", 0.01)),
+      earth_heading_sigma_rad_(cfg.inRange("earth_heading_sigma_deg", 0, 90, 2.0) * kDeg),
+      earth_tilt_sigma_rad_(cfg.inRange("earth_tilt_sigma_deg", 0, 90, 0.5) * kDeg),
+      gate_probability_(gateProbabilityFrom(cfg)),
+      scale_reference_lag_s_(cfg.inRange("scale_reference_lag_s", 0, 600, 10.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 	if (cfg.has("states"))
@@ -93,7 +93,8 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 		}
 		if (st.has("misalignment"))
 		{
-			blocks_.push_back(stateBlockFromConfig(st.child("misalignment"), "misalignment", {"x", "y", "z"}, "_deg", kDeg));
+			blocks_.push_back(stateBlockFromConfig(st.child("misalignment"), "misalignment", {"x", "y", "z"},
+			                                       "_deg", kDeg));
 			has_misalignment_ = true;
 		}
 	}
@@ -112,7 +113,7 @@ void DvlModel::bindStates(int first) noexcept
 }
 
 PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& ctx,
-								  std::vector<Measurement>& out, std::string& why)
+                                  std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	const auto* dvl = dynamic_cast<const obs::CObservationDVL*>(&o);
@@ -142,18 +143,27 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const Filter
 	double sign = 1;
 	switch (dvl->sign)
 	{
-		case obs::DvlSign::VehicleOverBottom: sign = 1; break;
-		case obs::DvlSign::BottomOverInstrument: sign = -1; break;
-		default: why = "unknown DVL sign code"; return PrepareStatus::Invalid;
+		case obs::DvlSign::VehicleOverBottom:
+			sign = 1;
+			break;
+		case obs::DvlSign::BottomOverInstrument:
+			sign = -1;
+			break;
+		default:
+			why = "unknown DVL sign code";
+			return PrepareStatus::Invalid;
 	}
-	const PrepareStatus status = [&] {
+	const PrepareStatus status = [&]
+	{
 		switch (dvl->frame)
 		{
 			case DvlFrame::Instrument:
 			case DvlFrame::Vehicle:
 			case DvlFrame::EarthNed:
-			case DvlFrame::EarthEnu: return prepareVelocity(*dvl, mount, sign, out, why);
-			case DvlFrame::Beam: return prepareBeams(*dvl, mount, sign, out, why);
+			case DvlFrame::EarthEnu:
+				return prepareVelocity(*dvl, mount, sign, out, why);
+			case DvlFrame::Beam:
+				return prepareBeams(*dvl, mount, sign, out, why);
 		}
 		why = "unknown DVL frame code " + std::to_string(static_cast<unsigned>(dvl->frame));
 		return PrepareStatus::Invalid;
@@ -163,7 +173,7 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const Filter
 }
 
 void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, const FilterContext& ctx,
-								 std::vector<Measurement>& out)
+                                 std::vector<Measurement>& out)
 {
 	if (!has_scale_) return;
 	Eigen::Vector3d ref_b = Eigen::Vector3d::Zero();
@@ -185,7 +195,7 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 		// The newest entry at least `lag` old, if it is not older than 2 lag
 		// (after a gap in bottom lock the velocity may have changed).
 		const auto newer = std::upper_bound(history.begin(), history.end(), t - lag,
-											[](double tt, const auto& e) { return tt < e.first; });
+		                                    [](double tt, const auto& e) { return tt < e.first; });
 		if (newer != history.begin())
 		{
 			const auto& [t_ref, r] = *std::prev(newer);
@@ -205,7 +215,7 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 }
 
 PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
-										std::vector<Measurement>& out, std::string& why) const
+                                        std::vector<Measurement>& out, std::string& why) const
 {
 	const Eigen::Vector3d v(dvl.velocity_s_mps[0], dvl.velocity_s_mps[1], dvl.velocity_s_mps[2]);
 	if (!v.allFinite())
@@ -229,14 +239,15 @@ PrepareStatus DvlModel::prepareVelocity(const obs::CObservationDVL& dvl, const M
 	}
 	m.tag = static_cast<int>(dvl.frame);
 	m.label = frameLabel(dvl.frame) + (cov_ok ? "" : "_default_cov");
-	DvlPing& ping = m.setPayload(DvlPing{{mount.r_s.x(), mount.r_s.y(), mount.r_s.z()}, {0, 0, 0}, sign, 0, {0, 0, 0}, 0});
+	DvlPing& ping = m.setPayload(
+	    DvlPing{{mount.r_s.x(), mount.r_s.y(), mount.r_s.z()}, {0, 0, 0}, sign, 0, {0, 0, 0}, 0});
 	if (dvl.frame == DvlFrame::Instrument) Eigen::Map<Eigen::Vector3d>(ping.axis) = so3::Log(mount.R_bs);
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;
 }
 
 PrepareStatus DvlModel::prepareBeams(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
-									 std::vector<Measurement>& out, std::string& why) const
+                                     std::vector<Measurement>& out, std::string& why) const
 {
 	const double incl = dvl.beam_inclination_rad;
 	if (!(incl > 0 && incl < M_PI / 2))
@@ -251,15 +262,15 @@ PrepareStatus DvlModel::prepareBeams(const obs::CObservationDVL& dvl, const Moun
 	for (std::size_t i = 0; i < dvl.beams.size(); ++i)
 	{
 		const auto& b = dvl.beams[i];
-		if (!b.valid) continue;	 // no bottom return: nothing measured along this beam
+		if (!b.valid) continue;  // no bottom return: nothing measured along this beam
 		if (!std::isfinite(b.velocity_mps) || !std::isfinite(b.azimuth_rad))
 		{
 			out.clear();
 			why = "non-finite velocity or azimuth of valid beam " + std::to_string(i);
 			return PrepareStatus::Invalid;
 		}
-		const Eigen::Vector3d u_s(std::sin(incl) * std::cos(b.azimuth_rad), std::sin(incl) * std::sin(b.azimuth_rad),
-								  std::cos(incl));
+		const Eigen::Vector3d u_s(std::sin(incl) * std::cos(b.azimuth_rad),
+		                          std::sin(incl) * std::sin(b.azimuth_rad), std::cos(incl));
 		const Eigen::Vector3d u_b = mount.R_bs * u_s;
 		Measurement m;
 		m.z = Eigen::VectorXd::Constant(1, b.velocity_mps);
@@ -267,11 +278,11 @@ PrepareStatus DvlModel::prepareBeams(const obs::CObservationDVL& dvl, const Moun
 		m.tag = static_cast<int>(DvlFrame::Beam);
 		m.label = sigma_ok ? "beam" : "beam_default_sigma";
 		m.setPayload(DvlPing{{mount.r_s.x(), mount.r_s.y(), mount.r_s.z()},
-							 {u_b.x(), u_b.y(), u_b.z()},
-							 sign,
-							 static_cast<double>(i),
-							 {0, 0, 0},
-							 0});
+		                     {u_b.x(), u_b.y(), u_b.z()},
+		                     sign,
+		                     static_cast<double>(i),
+		                     {0, 0, 0},
+		                     0});
 		out.push_back(std::move(m));
 	}
 	// Three beams fix the 3-D velocity; fewer would let one bad beam pass unchecked.
@@ -288,14 +299,14 @@ Eigen::Matrix3d DvlModel::earthAttitudeCovariance(const Eigen::Vector3d& v_n) co
 {
 	// δv = δθ × v = −[v]× δθ, δθ = (roll/pitch-like tilt about N and E, heading about D).
 	const Eigen::Vector3d var(earth_tilt_sigma_rad_ * earth_tilt_sigma_rad_,
-							  earth_tilt_sigma_rad_ * earth_tilt_sigma_rad_,
-							  earth_heading_sigma_rad_ * earth_heading_sigma_rad_);
+	                          earth_tilt_sigma_rad_ * earth_tilt_sigma_rad_,
+	                          earth_heading_sigma_rad_ * earth_heading_sigma_rad_);
 	const Eigen::Matrix3d S = skew(v_n);
 	return S * var.asDiagonal() * S.transpose();
 }
 
 bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-						 Eigen::Ref<Eigen::VectorXd> z_pred) const
+                         Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (x.extra.size() < extra_needed_) return false;  // states declared but not in this state
 	const DvlPing& ping = m.payload<DvlPing>();

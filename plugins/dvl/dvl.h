@@ -84,19 +84,19 @@ namespace auvnav::obs
 {
 class CObservationDVL;
 enum class DvlFrame : uint8_t;
-}
+}  // namespace auvnav::obs
 
 namespace auvnav::plugins
 {
 /** What h needs of one DVL measurement (Measurement::payload<DvlPing>()). */
 struct DvlPing
 {
-	double r_s[3];	//!< sensor position [m, body FRD]
+	double r_s[3];  //!< sensor position [m, body FRD]
 	//! Instrument: rotation vector of R_bs [rad]; Beam: R_bs u_i, the beam's
 	//! unit vector in body axes; other frames: 0 (unused).
 	double axis[3];
-	double sign;		//!< +1 VehicleOverBottom, −1 BottomOverInstrument
-	double beam_index;	//!< Beam: index of the beam in the observation; else 0
+	double sign;        //!< +1 VehicleOverBottom, −1 BottomOverInstrument
+	double beam_index;  //!< Beam: index of the beam in the observation; else 0
 	//! The scale factor's reference velocity r_b (above) and whether there is
 	//! one (0: none, h uses (1 + s) v_s_b).
 	double scale_reference_b[3];
@@ -105,12 +105,13 @@ struct DvlPing
 
 class DvlModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	DvlModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override
 	{
-		return kAttitude | kGyroBias | kVelocity | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
+		return kAttitude | kGyroBias | kVelocity |
+		       (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
 	}
 	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
 	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
@@ -124,13 +125,13 @@ class DvlModel final : public SafeMeasurementModel
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	/** The DVL's mounting for one observation (config or its sensorPose). */
 	struct Mount
 	{
@@ -138,13 +139,13 @@ class DvlModel final : public SafeMeasurementModel
 		Eigen::Matrix3d R_bs;
 	};
 	PrepareStatus prepareVelocity(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
-								  std::vector<Measurement>& out, std::string& why) const;
+	                              std::vector<Measurement>& out, std::string& why) const;
 	PrepareStatus prepareBeams(const obs::CObservationDVL& dvl, const Mount& mount, double sign,
-							   std::vector<Measurement>& out, std::string& why) const;
+	                           std::vector<Measurement>& out, std::string& why) const;
 	/** Records the filter's mean sensor velocity for this ping and writes the
 	 *  scale factor's reference (dvl.h) into every measurement of `out`. */
 	void setScaleReference(const Eigen::Vector3d& r_s, obs::DvlFrame frame, const FilterContext& ctx,
-						   std::vector<Measurement>& out);
+	                       std::vector<Measurement>& out);
 	/** Covariance of the reported velocity from the DVL's own attitude error
 	 *  (Earth frames), for the reported velocity v_n in NED. */
 	Eigen::Matrix3d earthAttitudeCovariance(const Eigen::Vector3d& v_n) const;
@@ -165,7 +166,7 @@ class DvlModel final : public SafeMeasurementModel
 	//! scale state, oldest first: the scale's reference velocity (see above).
 	std::deque<std::pair<double, Eigen::Vector3d>> scale_reference_history_;
 	bool has_scale_ = false, has_misalignment_ = false;
-	int scale_at_ = -1, misalignment_at_ = -1;	// in NavState::extra, after bindStates
-	int extra_needed_ = 0;						// extra.size() h needs
+	int scale_at_ = -1, misalignment_at_ = -1;  // in NavState::extra, after bindStates
+	int extra_needed_ = 0;                      // extra.size() h needs
 };
 }  // namespace auvnav::plugins

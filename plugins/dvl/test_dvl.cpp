@@ -25,8 +25,8 @@ namespace pt = auvnav::plugins::test;
 namespace
 {
 constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);   // flatfish_sensors.yaml imu.position_m
-const Eigen::Vector3d kDvlPos(0.659, -0.141, 0.206);	 // dvl.position_m
+const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
+const Eigen::Vector3d kDvlPos(0.659, -0.141, 0.206);  // dvl.position_m
 
 /** Covariance of a 4-beam Janus DVL (30°, 0.01 m/s per beam), as the simulator computes it. */
 Eigen::Matrix3d janusCovariance(double beam_sigma = 0.01, double incl = 30 * kDeg)
@@ -41,7 +41,7 @@ Eigen::Matrix3d janusCovariance(double beam_sigma = 0.01, double incl = 30 * kDe
 }
 
 CObservationDVL::Ptr dvlObs(const Eigen::Vector3d& v_s, const Eigen::Matrix3d& cov = janusCovariance(),
-							bool lock = true)
+                            bool lock = true)
 {
 	auto o = CObservationDVL::Create();
 	o->sensorLabel = "DVL";
@@ -60,14 +60,17 @@ CObservationDVL::Ptr dvlObs(const Eigen::Vector3d& v_s, const Eigen::Matrix3d& c
 /** The simulator's DVL, inverted independently: the sensor point's velocity
  *  over ground from the body rate relative to the Earth, in sensor axes. */
 Eigen::Vector3d trueSensorVelocity(const NavState& x, const FilterContext& ctx, const Eigen::Matrix3d& R_bs,
-								   const Eigen::Vector3d& r_s)
+                                   const Eigen::Vector3d& r_s)
 {
 	const Eigen::Vector3d w_eb_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
 	const Eigen::Vector3d v_s_n = x.v_n + x.R_nb * w_eb_b.cross(r_s - ctx.imu_position_b);
 	return (x.R_nb * R_bs).transpose() * v_s_n;
 }
 
-Eigen::Matrix3d nominalRbs() { return at::rotationYpr(-22.5 * kDeg, 0, 0); }
+Eigen::Matrix3d nominalRbs()
+{
+	return at::rotationYpr(-22.5 * kDeg, 0, 0);
+}
 
 Measurement prepareOne(DvlModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
 {
@@ -77,7 +80,8 @@ Measurement prepareOne(DvlModel& model, const mrpt::obs::CObservation& o, const 
 	return out.empty() ? Measurement{} : out[0];
 }
 
-std::vector<Measurement> prepareAll(DvlModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
+std::vector<Measurement> prepareAll(DvlModel& model, const mrpt::obs::CObservation& o,
+                                    const FilterContext& ctx)
 {
 	std::vector<Measurement> out;
 	std::string why;
@@ -85,8 +89,8 @@ std::vector<Measurement> prepareAll(DvlModel& model, const mrpt::obs::CObservati
 	return out;
 }
 
-constexpr DvlFrame kAllFrames[] = {DvlFrame::Instrument, DvlFrame::Vehicle, DvlFrame::EarthNed, DvlFrame::EarthEnu,
-								   DvlFrame::Beam};
+constexpr DvlFrame kAllFrames[] = {DvlFrame::Instrument, DvlFrame::Vehicle, DvlFrame::EarthNed,
+                                   DvlFrame::EarthEnu, DvlFrame::Beam};
 
 /** Unit vector of a beam in the sensor frame (CObservationDVL.h). */
 Eigen::Vector3d beamUnit(double incl, double az)
@@ -100,7 +104,7 @@ Eigen::Vector3d beamUnit(double incl, double az)
  *  or [E, N, −D], beams u_iᵀ R_nsᵀ v (azimuths 45° + 90° i, the first
  *  `valid_beams` valid). */
 CObservationDVL::Ptr modeObs(DvlFrame frame, const NavState& x, const FilterContext& ctx,
-							 DvlSign sign = DvlSign::VehicleOverBottom, int valid_beams = 4)
+                             DvlSign sign = DvlSign::VehicleOverBottom, int valid_beams = 4)
 {
 	const Eigen::Vector3d w_eb_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
 	const Eigen::Vector3d v_dvl_n = x.v_n + x.R_nb * w_eb_b.cross(kDvlPos - ctx.imu_position_b);
@@ -119,7 +123,8 @@ CObservationDVL::Ptr modeObs(DvlFrame frame, const NavState& x, const FilterCont
 		auto& b = o->beams[i];
 		b.azimuth_rad = (45.0 + 90.0 * i) * kDeg;
 		b.valid = i < valid_beams;
-		b.velocity_mps = frame == DvlFrame::Beam && b.valid ? sgn * beamUnit(30 * kDeg, b.azimuth_rad).dot(v_s) : 0;
+		b.velocity_mps =
+		    frame == DvlFrame::Beam && b.valid ? sgn * beamUnit(30 * kDeg, b.azimuth_rad).dot(v_s) : 0;
 	}
 	if (frame == DvlFrame::Beam)
 	{
@@ -133,8 +138,8 @@ CObservationDVL::Ptr modeObs(DvlFrame frame, const NavState& x, const FilterCont
 }
 
 /** All measurements' z stacked, and all h(x) stacked. */
-void stackZH(const DvlModel& model, const std::vector<Measurement>& ms, const FilterContext& ctx, const NavState& x,
-			 Eigen::VectorXd& z, Eigen::VectorXd& h)
+void stackZH(const DvlModel& model, const std::vector<Measurement>& ms, const FilterContext& ctx,
+             const NavState& x, Eigen::VectorXd& z, Eigen::VectorXd& h)
 {
 	Eigen::Index n = 0;
 	for (const auto& m : ms) n += m.z.size();
@@ -176,7 +181,7 @@ TEST(Dvl, RejectsBadConfigNamingTheKey)
 TEST(Dvl, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("dvl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
-										  kAttitude | kGyroBias | kVelocity));
+	                                      kAttitude | kGyroBias | kVelocity));
 }
 
 TEST(Dvl, WellFormedOnRandomStates)
@@ -190,7 +195,8 @@ TEST(Dvl, WellFormedOnRandomStates)
 		{
 			const NavState x = at::RandomNavState(seed);
 			tc.ctx().omega_ib_b = Eigen::Vector3d(0.02, -0.01, 0.1 * std::sin(seed));
-			const Eigen::Vector3d v_s = trueSensorVelocity(at::RandomNavState(seed + 50), tc.ctx(), nominalRbs(), kDvlPos);
+			const Eigen::Vector3d v_s =
+			    trueSensorVelocity(at::RandomNavState(seed + 50), tc.ctx(), nominalRbs(), kDvlPos);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
 			opt.accept_skip = false;
@@ -202,12 +208,12 @@ TEST(Dvl, WellFormedOnRandomStates)
 TEST(Dvl, ForwardMotionAtHeading90SeenThroughThe22_5DegreeMount)
 {
 	at::TestContext tc;
-	tc.ctx().omega_ie_n.setZero();	// no rotation at all
+	tc.ctx().omega_ie_n.setZero();  // no rotation at all
 	tc.ctx().imu_position_b = kImuPos;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;
-	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);	// level, facing east
-	x.v_n = Eigen::Vector3d(0, 1, 0);			// 1 m/s east = straight ahead
+	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);  // level, facing east
+	x.v_n = Eigen::Vector3d(0, 1, 0);           // 1 m/s east = straight ahead
 	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	// Sensor x is yawed 22.5° to port: forward motion = (cos 22.5°, sin 22.5°, 0).
@@ -223,7 +229,7 @@ TEST(Dvl, YawRateAddsTheLeverArmVelocity)
 	tc.ctx().imu_position_b = kImuPos;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0, 0, 0.1);  // turning to starboard, 0.1 rad/s
 	DvlModel model(pt::defaultConfig(), "DVL");
-	NavState x;	 // level, heading north, IMU point at rest
+	NavState x;  // level, heading north, IMU point at rest
 	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	// ω × (r_dvl − r_imu) = 0.1 e_z × (0.36476, −0.141, 0.23463) = (0.0141, 0.036476, 0) in body,
@@ -244,7 +250,7 @@ TEST(Dvl, EarthRateAndGyroBiasAreRemovedFromTheGyroSample)
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;
 	x.R_nb = at::rotationYpr(40 * kDeg, 5 * kDeg, -3 * kDeg);
-	x.b_w = Eigen::Vector3d(0.01, -0.02, 0.03);	// exaggerated so a wrong sign would show
+	x.b_w = Eigen::Vector3d(0.01, -0.02, 0.03);  // exaggerated so a wrong sign would show
 	tc.ctx().omega_ib_b = x.R_nb.transpose() * tc.ctx().omega_ie_n + x.b_w;
 	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	EXPECT_LT(at::Predict(model, m, tc.ctx(), x).norm(), 1e-15);
@@ -261,19 +267,19 @@ TEST(Dvl, ObservationPoseOnlyWhenConfigured)
 	DvlModel cfg_pose(pt::defaultConfig(), "DVL");
 	DvlModel obs_pose(pt::configText("use_observation_pose: true"), "DVL");
 	auto o = dvlObs(Eigen::Vector3d::Zero());
-	o->sensorPose = mrpt::poses::CPose3D(1.0, 0, 0, 90 * kDeg, 0, 0);	// sensor x = body right
+	o->sensorPose = mrpt::poses::CPose3D(1.0, 0, 0, 90 * kDeg, 0, 0);  // sensor x = body right
 	NavState x;
 	x.v_n = Eigen::Vector3d(1, 0, 0);  // forward
 	const Eigen::VectorXd h_cfg = at::Predict(cfg_pose, prepareOne(cfg_pose, *o, tc.ctx()), tc.ctx(), x);
 	const Eigen::VectorXd h_obs = at::Predict(obs_pose, prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
 	EXPECT_NEAR(h_cfg[0], std::cos(22.5 * kDeg), 1e-12);  // config: the nominal 22.5° mount
-	EXPECT_NEAR(h_obs[0], 0.0, 1e-12);					  // observation: yawed 90°
+	EXPECT_NEAR(h_obs[0], 0.0, 1e-12);                    // observation: yawed 90°
 	EXPECT_NEAR(h_obs[1], -1.0, 1e-12);
 	// With a yaw rate the lever arm of the observation pose is used.
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0, 0, 0.5);
 	x.v_n.setZero();
 	const Eigen::VectorXd h_rot = at::Predict(obs_pose, prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
-	EXPECT_NEAR(h_rot[0], 0.5, 1e-12);	// ω × (1, 0, 0) = (0, 0.5, 0) body = sensor x
+	EXPECT_NEAR(h_rot[0], 0.5, 1e-12);  // ω × (1, 0, 0) = (0, 0.5, 0) body = sensor x
 }
 
 TEST(Dvl, NoiseFromObservationCovariancePlusExtra)
@@ -284,7 +290,7 @@ TEST(Dvl, NoiseFromObservationCovariancePlusExtra)
 	const Eigen::Matrix3d C = janusCovariance();
 	Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d(1, 0, 0), C), tc.ctx());
 	EXPECT_TRUE(m.R.isApprox(C + extra2 * Eigen::Matrix3d::Identity(), 1e-14));
-	EXPECT_NEAR(m.R(0, 0), 0.01 * 0.01 / (4 * 0.25 * 0.5) + extra2, 1e-15);	// 2e-4 + 2.5e-5
+	EXPECT_NEAR(m.R(0, 0), 0.01 * 0.01 / (4 * 0.25 * 0.5) + extra2, 1e-15);  // 2e-4 + 2.5e-5
 	// Zero, NaN, asymmetric or indefinite covariance: the configured σ instead.
 	Eigen::Matrix3d asym = C;
 	asym(0, 1) += 1e-4;
@@ -331,12 +337,13 @@ TEST(Dvl, NoBottomLockIsSkipped)
 	std::vector<Measurement> out;
 	std::string why;
 	EXPECT_EQ(model.prepare(*dvlObs(Eigen::Vector3d(1, 0, 0), janusCovariance(), false), tc.ctx(), out, why),
-			  PrepareStatus::Skip);
+	          PrepareStatus::Skip);
 	EXPECT_TRUE(out.empty());
 	EXPECT_NE(why.find("bottom lock"), std::string::npos) << why;
 	// Without lock even garbage velocities are a Skip, not an error.
-	EXPECT_EQ(model.prepare(*dvlObs(Eigen::Vector3d(NAN, 0, 0), janusCovariance(), false), tc.ctx(), out, why),
-			  PrepareStatus::Skip);
+	EXPECT_EQ(
+	    model.prepare(*dvlObs(Eigen::Vector3d(NAN, 0, 0), janusCovariance(), false), tc.ctx(), out, why),
+	    PrepareStatus::Skip);
 }
 
 TEST(Dvl, InvalidInputs)
@@ -359,7 +366,7 @@ TEST(Dvl, InvalidInputs)
 	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Ok);  // pose not used
 	EXPECT_EQ(obs_pose.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
 	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), out, why),
-			  PrepareStatus::Invalid);
+	          PrepareStatus::Invalid);
 	EXPECT_NE(why.find("CObservationDVL"), std::string::npos) << why;
 }
 
@@ -400,26 +407,30 @@ TEST(DvlFrames, HandComputedLevelEastboundCase)
 	NavState x;
 	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);
 	x.v_n = Eigen::Vector3d(0, 1, 0.2);
-	const auto h = [&](DvlFrame f, DvlSign sign = DvlSign::VehicleOverBottom) {
+	const auto h = [&](DvlFrame f, DvlSign sign = DvlSign::VehicleOverBottom)
+	{
 		auto o = modeObs(f, x, tc.ctx(), sign);
 		Eigen::VectorXd z, hx;
 		stackZH(model, prepareAll(model, *o, tc.ctx()), tc.ctx(), x, z, hx);
 		return hx;
 	};
 	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);
-	EXPECT_TRUE(h(DvlFrame::Instrument).isApprox(Eigen::Vector3d(c, s, 0.2), 1e-12)) << h(DvlFrame::Instrument);
+	EXPECT_TRUE(h(DvlFrame::Instrument).isApprox(Eigen::Vector3d(c, s, 0.2), 1e-12))
+	    << h(DvlFrame::Instrument);
 	EXPECT_TRUE(h(DvlFrame::Vehicle).isApprox(Eigen::Vector3d(1, 0, 0.2), 1e-12)) << h(DvlFrame::Vehicle);
 	EXPECT_TRUE(h(DvlFrame::EarthNed).isApprox(Eigen::Vector3d(0, 1, 0.2), 1e-12)) << h(DvlFrame::EarthNed);
 	// ENU: east first, then north, then UP (= −down).
 	EXPECT_TRUE(h(DvlFrame::EarthEnu).isApprox(Eigen::Vector3d(1, 0, -0.2), 1e-12)) << h(DvlFrame::EarthEnu);
-	EXPECT_TRUE(h(DvlFrame::EarthEnu, DvlSign::BottomOverInstrument).isApprox(Eigen::Vector3d(-1, 0, 0.2), 1e-12));
+	EXPECT_TRUE(
+	    h(DvlFrame::EarthEnu, DvlSign::BottomOverInstrument).isApprox(Eigen::Vector3d(-1, 0, 0.2), 1e-12));
 	// Beams at 45° + 90° i, 30° from the sensor z axis: sensor velocity (c, s, 0.2).
 	const Eigen::VectorXd hb = h(DvlFrame::Beam);
 	ASSERT_EQ(hb.size(), 4);
 	for (int i = 0; i < 4; ++i)
 	{
 		const double a = (45.0 + 90.0 * i) * kDeg;
-		EXPECT_NEAR(hb[i], 0.5 * std::cos(a - 22.5 * kDeg) + std::cos(30 * kDeg) * 0.2, 1e-12) << "beam " << i;
+		EXPECT_NEAR(hb[i], 0.5 * std::cos(a - 22.5 * kDeg) + std::cos(30 * kDeg) * 0.2, 1e-12)
+		    << "beam " << i;
 	}
 	EXPECT_NEAR(hb[0], 0.5 * std::cos(22.5 * kDeg) + 0.1 * std::sqrt(3.0), 1e-12);
 }
@@ -441,11 +452,12 @@ TEST(DvlFrames, PredictionEqualsTheIndependentlyComputedReadingInEveryFrame)
 				for (DvlSign sign : {DvlSign::VehicleOverBottom, DvlSign::BottomOverInstrument})
 				{
 					Eigen::VectorXd z, h;
-					stackZH(model, prepareAll(model, *modeObs(f, x, tc.ctx(), sign), tc.ctx()), tc.ctx(), x, z, h);
+					stackZH(model, prepareAll(model, *modeObs(f, x, tc.ctx(), sign), tc.ctx()), tc.ctx(), x,
+					        z, h);
 					ASSERT_EQ(z.size(), f == DvlFrame::Beam ? 4 : 3);
 					EXPECT_LT((z - h).cwiseAbs().maxCoeff(), 1e-12)
-						<< cfg << " seed " << seed << " frame " << obs::dvlFrameName(f) << " sign "
-						<< obs::dvlSignName(sign) << "\nz " << z.transpose() << "\nh " << h.transpose();
+					    << cfg << " seed " << seed << " frame " << obs::dvlFrameName(f) << " sign "
+					    << obs::dvlSignName(sign) << "\nz " << z.transpose() << "\nh " << h.transpose();
 				}
 		}
 	}
@@ -470,9 +482,10 @@ TEST(DvlFrames, WellFormedInEveryFrameSignAndBeamCount)
 				for (int beams : {3, 4})
 				{
 					if (f != DvlFrame::Beam && beams == 3) continue;
-					EXPECT_TRUE(at::IsWellFormed(model, *modeObs(f, other, tc.ctx(), sign, beams), tc.ctx(), x, opt))
-						<< obs::dvlFrameName(f) << " " << obs::dvlSignName(sign) << " beams " << beams << " seed "
-						<< seed;
+					EXPECT_TRUE(
+					    at::IsWellFormed(model, *modeObs(f, other, tc.ctx(), sign, beams), tc.ctx(), x, opt))
+					    << obs::dvlFrameName(f) << " " << obs::dvlSignName(sign) << " beams " << beams
+					    << " seed " << seed;
 				}
 	}
 }
@@ -510,13 +523,14 @@ TEST(DvlFrames, BottomOverInstrumentNegatesThePrediction)
 		a.initialize(x0, at::TypicalCovariance());
 		b.initialize(x0, at::TypicalCovariance());
 		const auto ra = at::ApplyObservation(a, model, *modeObs(f, truth, tc.ctx()), tc.ctx());
-		const auto rb =
-			at::ApplyObservation(b, model, *modeObs(f, truth, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
+		const auto rb = at::ApplyObservation(
+		    b, model, *modeObs(f, truth, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
 		ASSERT_EQ(ra.status, PrepareStatus::Ok) << ra.why;
 		ASSERT_EQ(rb.status, PrepareStatus::Ok) << rb.why;
 		for (const auto& u : ra.updates) EXPECT_EQ(u.status, UpdateStatus::Accepted) << obs::dvlFrameName(f);
 		EXPECT_TRUE(at::NavStateNear(a.state(), b.state(), 1e-12)) << obs::dvlFrameName(f);
-		EXPECT_LT((a.state().v_n - truth.v_n).norm(), 0.1 * (x0.v_n - truth.v_n).norm()) << obs::dvlFrameName(f);
+		EXPECT_LT((a.state().v_n - truth.v_n).norm(), 0.1 * (x0.v_n - truth.v_n).norm())
+		    << obs::dvlFrameName(f);
 	}
 }
 
@@ -526,10 +540,10 @@ TEST(DvlFrames, AuxLayoutAndLabels)
 	DvlModel model(pt::defaultConfig(), "DVL");
 	const NavState x;
 	const std::pair<DvlFrame, const char*> expected[] = {{DvlFrame::Instrument, "velocity"},
-														 {DvlFrame::Vehicle, "velocity_vehicle"},
-														 {DvlFrame::EarthNed, "velocity_earth_ned"},
-														 {DvlFrame::EarthEnu, "velocity_earth_enu"},
-														 {DvlFrame::Beam, "beam"}};
+	                                                     {DvlFrame::Vehicle, "velocity_vehicle"},
+	                                                     {DvlFrame::EarthNed, "velocity_earth_ned"},
+	                                                     {DvlFrame::EarthEnu, "velocity_earth_enu"},
+	                                                     {DvlFrame::Beam, "beam"}};
 	for (const auto& [f, label] : expected)
 	{
 		const auto ms = prepareAll(model, *modeObs(f, x, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
@@ -561,7 +575,7 @@ TEST(DvlBeams, OneScalarPerValidBeamWithTheBeamGeometry)
 	for (int valid : {3, 4})
 	{
 		auto o = modeObs(DvlFrame::Beam, x, tc.ctx(), DvlSign::VehicleOverBottom, 4);
-		if (valid == 3) o->beams[1].valid = false;	// beam 1 lost: its NaN velocity must not matter
+		if (valid == 3) o->beams[1].valid = false;  // beam 1 lost: its NaN velocity must not matter
 		if (valid == 3) o->beams[1].velocity_mps = std::nan("");
 		const auto ms = prepareAll(model, *o, tc.ctx());
 		ASSERT_EQ(ms.size(), std::size_t(valid));
@@ -576,7 +590,8 @@ TEST(DvlBeams, OneScalarPerValidBeamWithTheBeamGeometry)
 			EXPECT_EQ(m.z[0], o->beams[i].velocity_mps);
 			// The beam's unit vector in body axes, R_bs u_i.
 			const Eigen::Vector3d u_b(ping.axis[0], ping.axis[1], ping.axis[2]);
-			EXPECT_TRUE(u_b.isApprox(nominalRbs() * beamUnit(30 * kDeg, o->beams[i].azimuth_rad), 1e-14)) << i;
+			EXPECT_TRUE(u_b.isApprox(nominalRbs() * beamUnit(30 * kDeg, o->beams[i].azimuth_rad), 1e-14))
+			    << i;
 			EXPECT_NEAR(u_b.norm(), 1.0, 1e-14);
 			// The observation's beam sigma plus the extra sigma.
 			EXPECT_NEAR(m.R(0, 0), 0.01 * 0.01 + 0.005 * 0.005, 1e-18);
@@ -685,8 +700,10 @@ TEST(DvlBeams, InvalidBeamData)
 TEST(DvlEarth, CompassAndTiltErrorsEnterTheNoise)
 {
 	at::TestContext tc;
-	DvlModel model(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 3\nearth_tilt_sigma_deg: 1"), "DVL");
-	DvlModel no_att(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 0\nearth_tilt_sigma_deg: 0"), "DVL");
+	DvlModel model(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 3\nearth_tilt_sigma_deg: 1"),
+	               "DVL");
+	DvlModel no_att(pt::configText("extra_sigma_mps: 0\nearth_heading_sigma_deg: 0\nearth_tilt_sigma_deg: 0"),
+	                "DVL");
 	const Eigen::Matrix3d C = janusCovariance();
 	const double sh = 3 * kDeg, st = 1 * kDeg;
 	// 2 m/s north: the heading error is cross-track (east), the tilt error vertical.
@@ -710,7 +727,8 @@ TEST(DvlEarth, CompassAndTiltErrorsEnterTheNoise)
 	// (north-east 1, 1: cross-track direction (−1, 1)/√2, speed √2).
 	auto diag = dvlObs(Eigen::Vector3d(1, 1, 0), C);
 	diag->frame = DvlFrame::EarthNed;
-	DvlModel heading_only(pt::configText("extra_sigma_mps: 0\nearth_tilt_sigma_deg: 0"), "DVL");  // default 2°
+	DvlModel heading_only(pt::configText("extra_sigma_mps: 0\nearth_tilt_sigma_deg: 0"),
+	                      "DVL");  // default 2°
 	m = prepareOne(heading_only, *diag, tc.ctx());
 	const Eigen::Vector3d w(-1, 1, 0);
 	EXPECT_TRUE((m.R - C).isApprox(std::pow(2 * kDeg, 2) * w * w.transpose(), 1e-12)) << m.R - C;
@@ -725,7 +743,7 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 	// the same v_n a different heading changes h only by R_nb (ω × l), while
 	// an instrument-frame h turns with the heading.
 	at::TestContext tc;
-	tc.ctx().omega_ie_n.setZero();	// keep ω itself independent of R_nb
+	tc.ctx().omega_ie_n.setZero();  // keep ω itself independent of R_nb
 	tc.ctx().imu_position_b = kImuPos;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	const Eigen::Vector3d l = kDvlPos - kImuPos;
@@ -734,7 +752,7 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 		NavState a = at::RandomNavState(seed);
 		a.b_w.setZero();
 		NavState b = a;
-		b.R_nb = at::rotationYpr(30 * kDeg, 0, 0) * a.R_nb;	 // 30° more heading, same v_n
+		b.R_nb = at::rotationYpr(30 * kDeg, 0, 0) * a.R_nb;  // 30° more heading, same v_n
 		for (const Eigen::Vector3d& w : {Eigen::Vector3d::Zero().eval(), Eigen::Vector3d(0.05, -0.02, 0.3)})
 		{
 			tc.ctx().omega_ib_b = w;
@@ -742,11 +760,14 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 			for (DvlFrame f : {DvlFrame::EarthNed, DvlFrame::EarthEnu})
 			{
 				const Measurement m = prepareOne(model, *modeObs(f, a, tc.ctx()), tc.ctx());
-				const Eigen::VectorXd dh = at::Predict(model, m, tc.ctx(), b) - at::Predict(model, m, tc.ctx(), a);
-				EXPECT_NEAR(dh.norm(), lever_change.norm(), 1e-12) << obs::dvlFrameName(f) << " seed " << seed;
+				const Eigen::VectorXd dh =
+				    at::Predict(model, m, tc.ctx(), b) - at::Predict(model, m, tc.ctx(), a);
+				EXPECT_NEAR(dh.norm(), lever_change.norm(), 1e-12)
+				    << obs::dvlFrameName(f) << " seed " << seed;
 			}
 			const Measurement mi = prepareOne(model, *modeObs(DvlFrame::Instrument, a, tc.ctx()), tc.ctx());
-			const Eigen::VectorXd dhi = at::Predict(model, mi, tc.ctx(), b) - at::Predict(model, mi, tc.ctx(), a);
+			const Eigen::VectorXd dhi =
+			    at::Predict(model, mi, tc.ctx(), b) - at::Predict(model, mi, tc.ctx(), a);
 			// |Δh| = |Δ(R_nbᵀ v_n)| = 2 sin 15° |v_n| horizontally, give or take the lever arm.
 			EXPECT_GT(dhi.norm(), 0.3 * a.v_n.head<2>().norm() - lever_change.norm()) << "seed " << seed;
 		}
@@ -769,9 +790,10 @@ TEST(DvlStates, DeclaresScaleAndMisalignmentBlocksFromTheConfig)
 	DvlModel none(pt::defaultConfig(), "DVL");
 	EXPECT_TRUE(none.stateBlocks().empty());
 	EXPECT_EQ(none.uses() & kPluginStates, 0u);
-	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2, process: random_walk, "
-							  "process_sigma_deg: 0.001}}"),
-			   "DVL");
+	DvlModel m(pt::configText(
+	               "states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2, process: random_walk, "
+	               "process_sigma_deg: 0.001}}"),
+	           "DVL");
 	const auto blocks = m.stateBlocks();
 	ASSERT_EQ(blocks.size(), 2u);
 	EXPECT_EQ(blocks[0].name, "scale_factor");
@@ -787,9 +809,11 @@ TEST(DvlStates, DeclaresScaleAndMisalignmentBlocksFromTheConfig)
 	// Bad blocks name the key.
 	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0}}"), "DVL"), config::ConfigError);
 	EXPECT_THROW(DvlModel(pt::configText("states: {scale: {sigma: 0.01}}"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("states: {misalignment: {sigma_deg: 1, process: gauss_markov}}"), "DVL"),
-				 config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0.01, tau_s: 5}}"), "DVL"), config::ConfigError);
+	EXPECT_THROW(
+	    DvlModel(pt::configText("states: {misalignment: {sigma_deg: 1, process: gauss_markov}}"), "DVL"),
+	    config::ConfigError);
+	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0.01, tau_s: 5}}"), "DVL"),
+	             config::ConfigError);
 }
 
 TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
@@ -834,23 +858,26 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	ctx.imu_position_b = kImuPos;
 	ctx.omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
-							  "scale_reference_lag_s: 10"),
-			   "DVL");
+	                          "scale_reference_lag_s: 10"),
+	           "DVL");
 	m.bindStates(0);
 	const Eigen::Vector3d delta = Eigen::Vector3d(0.3, -0.2, 1.0) * kDeg;
-	auto stateWithVelocity = [&](unsigned seed) {
+	auto stateWithVelocity = [&](unsigned seed)
+	{
 		NavState x = at::RandomNavState(seed, 4);
 		x.extra.setZero();
 		x.extra.segment<3>(1) = delta;
 		return x;
 	};
-	const NavState old_mean = stateWithVelocity(11), mid_mean = stateWithVelocity(12), now_mean = stateWithVelocity(13);
+	const NavState old_mean = stateWithVelocity(11), mid_mean = stateWithVelocity(12),
+	               now_mean = stateWithVelocity(13);
 	NavState x = stateWithVelocity(14);
 	const double s = 0.005;
 	x.extra[0] = s;
 	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
 	const Eigen::Vector3d v_x = trueSensorVelocity(x, ctx, R_bs_true, kDvlPos);
-	auto pingAt = [&](double t, const NavState& mean) {
+	auto pingAt = [&](double t, const NavState& mean)
+	{
 		ctx.t_s = t;
 		ctx.t_measurement_s = t;
 		ctx.mean = &mean;
@@ -865,7 +892,8 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	const Measurement later = pingAt(1010.2, now_mean);
 	const Eigen::Vector3d r_old = trueSensorVelocity(old_mean, ctx, R_bs_true, kDvlPos);
 	const Eigen::VectorXd h = at::Predict(m, later, ctx, x);
-	EXPECT_LT((h - (v_x + s * r_old)).norm(), 1e-12) << h.transpose() << " vs " << (v_x + s * r_old).transpose();
+	EXPECT_LT((h - (v_x + s * r_old)).norm(), 1e-12)
+	    << h.transpose() << " vs " << (v_x + s * r_old).transpose();
 	EXPECT_GT((h - (1 + s) * v_x).norm(), 1e-4);
 	// A prediction with s = 0 does not depend on the reference.
 	NavState x0 = x;
@@ -885,8 +913,8 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 
 	// scale_reference_lag_s 0: always (1 + s) v_s_b, as before.
 	DvlModel plain(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
-								  "scale_reference_lag_s: 0"),
-				   "DVL");
+	                              "scale_reference_lag_s: 0"),
+	               "DVL");
 	plain.bindStates(0);
 	for (double t : {1000.0, 1010.2, 1020.4})
 	{

@@ -4,4 +4,4 @@
 #include "gps.h"
 
 AUVNAV_PLUGIN(auvnav::plugins::GpsModel, "gps", "1.0.0",
-			  "GNSS horizontal antenna position from NMEA GGA (lever arm, HDOP scaling, outlier gate)")
+              "GNSS horizontal antenna position from NMEA GGA (lever arm, HDOP scaling, outlier gate)")

@@ -12,22 +12,23 @@
 namespace auvnav::plugins
 {
 GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
-	: label_(label),
-	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(-0.3, 0, -0.6))),
-	  sigma_m_(cfg.positive("sigma_m", 3.0)),
-	  scale_by_hdop_(cfg.boolean("scale_by_hdop", false)),
-	  gate_probability_(gateProbabilityFrom(cfg)),
-	  min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0)),
-	  correlated_sigma_m_(cfg.inRange("correlated_sigma_m", 0.0, 1000.0, 0.0)),
-	  correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
+    : label_(label),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(-0.3, 0, -0.6))),
+      sigma_m_(cfg.positive("sigma_m", 3.0)),
+      scale_by_hdop_(cfg.boolean("scale_by_hdop", false)),
+      gate_probability_(gateProbabilityFrom(cfg)),
+      min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0)),
+      correlated_sigma_m_(cfg.inRange("correlated_sigma_m", 0.0, 1000.0, 0.0)),
+      correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 	if (horizontalFixBias(cfg, blocks_) && correlated_sigma_m_ > 0)
-		cfg.fail("correlated_sigma_m", "the correlated error is modelled by states.bias already (give one of them, not both)");
+		cfg.fail("correlated_sigma_m",
+		         "the correlated error is modelled by states.bias already (give one of them, not both)");
 }
 
-PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
-								  double& hdop, std::string& why) const
+PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+                                  Eigen::Vector3d& p_n, double& hdop, std::string& why) const
 {
 	using mrpt::obs::gnss::Message_NMEA_GGA;
 	const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs);
@@ -48,7 +49,7 @@ PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const Filt
 		return PrepareStatus::Skip;
 	}
 	if (!std::isfinite(f.latitude_degrees) || !std::isfinite(f.longitude_degrees) ||
-		std::abs(f.latitude_degrees) > 90 || std::abs(f.longitude_degrees) > 180)
+	    std::abs(f.latitude_degrees) > 90 || std::abs(f.longitude_degrees) > 180)
 	{
 		why = "invalid latitude/longitude";
 		return PrepareStatus::Invalid;
@@ -76,7 +77,8 @@ PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const Filt
 	return PrepareStatus::Ok;
 }
 
-bool GpsModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
+bool GpsModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+                          InitialFix& out) noexcept
 {
 	try
 	{
@@ -95,7 +97,7 @@ bool GpsModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContex
 }
 
 PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-								  std::vector<Measurement>& out, std::string& why)
+                                  std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	Eigen::Vector3d p_n;
@@ -161,7 +163,7 @@ double GpsModel::correlatedVariance(double since_last_s) const
 }
 
 bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
-						 Eigen::Ref<Eigen::VectorXd> z_pred) const
+                         Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 2) return false;
 	z_pred = (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();

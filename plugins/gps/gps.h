@@ -43,14 +43,20 @@ namespace auvnav::plugins
 {
 class GpsModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	GpsModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates); }
+	uint32_t uses() const noexcept override
+	{
+		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
+	}
 	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
 	uint32_t affineIn() const noexcept override { return kPosition | (blocks_.empty() ? 0u : kPluginStates); }
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override { bias_at_ = blocks_.empty() ? -1 : first_extra_index; }
+	void bindStates(int first_extra_index) noexcept override
+	{
+		bias_at_ = blocks_.empty() ? -1 : first_extra_index;
+	}
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 	//! The default residual, z − h: the filter may form it itself.
@@ -58,18 +64,19 @@ class GpsModel final : public SafeMeasurementModel
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	/** The antenna's position from a valid GGA fix (no rate limit, no state). */
-	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept override;
+	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                InitialFix& out) noexcept override;
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	/** The GGA fix of `obs` in the navigation frame (Ok), or why not. */
-	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
-							double& hdop, std::string& why) const;
+	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                        Eigen::Vector3d& p_n, double& hdop, std::string& why) const;
 	/** Variance [m²] of the correlated error for a fix `since_last_s` after
 	 *  the last one used (0 when correlated_sigma_m is 0). */
 	double correlatedVariance(double since_last_s) const;
@@ -82,11 +89,11 @@ class GpsModel final : public SafeMeasurementModel
 	double sigma_m_ = 3.0;
 	bool scale_by_hdop_ = false;
 	double gate_probability_ = 0.999;
-	double min_interval_s_ = 0;	  // fixes closer than this to the last one used are skipped
-	double correlated_sigma_m_ = 0;	  // Gauss-Markov part of the error, per axis [m]
+	double min_interval_s_ = 0;       // fixes closer than this to the last one used are skipped
+	double correlated_sigma_m_ = 0;   // Gauss-Markov part of the error, per axis [m]
 	double correlation_time_s_ = 60;  // its time constant [s]
 	double last_used_s_ = -1e300;
-	int bias_at_ = -1;	// NavState::extra index of b_n (b_e follows); -1: unbound
+	int bias_at_ = -1;  // NavState::extra index of b_n (b_e follows); -1: unbound
 	std::vector<StateBlockSpec> blocks_;
 };
 }  // namespace auvnav::plugins

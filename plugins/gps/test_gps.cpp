@@ -21,11 +21,11 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
-const Eigen::Vector3d kAntennaPos(-0.3, 0, -0.6);	  // gps.position_m
+const Eigen::Vector3d kAntennaPos(-0.3, 0, -0.6);     // gps.position_m
 
 /** A GGA fix at navigation-frame position `p_n`, as the simulator writes it. */
 CObservationGPS::Ptr ggaObs(const earth::TangentFrame& frame, const Eigen::Vector3d& p_n, int fix_quality = 1,
-							float hdop = 1.0f)
+                            float hdop = 1.0f)
 {
 	const earth::Geodetic g = frame.toGeodetic(p_n);
 	mrpt::obs::gnss::Message_NMEA_GGA gga;
@@ -77,9 +77,11 @@ TEST(Gps, RejectsBadConfigNamingTheKey)
 
 TEST(Gps, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", "states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}",
-										  kAttitude | kPosition | kPluginStates));
+	EXPECT_TRUE(
+	    pt::ModuleLoadsAndCreates("gps", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates(
+	    "gps", "states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}",
+	    kAttitude | kPosition | kPluginStates));
 }
 
 TEST(Gps, WellFormedOnRandomStates)
@@ -100,7 +102,7 @@ TEST(Gps, WellFormedOnRandomStates)
 			opt.seed = seed;
 			opt.accept_skip = false;
 			EXPECT_TRUE(at::IsWellFormed(model, *ggaObs(tc.frame(), p, 1, 1.4f), tc.ctx(), x, opt))
-				<< cfg << ", seed " << seed;
+			    << cfg << ", seed " << seed;
 		}
 	}
 }
@@ -110,7 +112,7 @@ TEST(Gps, FixConvertsBackToTheNavigationFrame)
 	at::TestContext tc;
 	GpsModel model(pt::defaultConfig(), "GPS");
 	for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1234.5, -987.6, -1.0),
-									 Eigen::Vector3d(-20000, 15000, -0.5)})
+	                                 Eigen::Vector3d(-20000, 15000, -0.5)})
 	{
 		const Measurement m = prepareOne(model, *ggaObs(tc.frame(), p), tc.ctx());
 		ASSERT_EQ(m.z.size(), 2);
@@ -126,7 +128,7 @@ TEST(Gps, LeverArmAtHeading180)
 	tc.ctx().imu_position_b = kImuPos;
 	GpsModel model(pt::defaultConfig(), "GPS");
 	NavState x;
-	x.R_nb = at::rotationYpr(180 * kDeg, 0, 0);	// facing south
+	x.R_nb = at::rotationYpr(180 * kDeg, 0, 0);  // facing south
 	x.p_n = Eigen::Vector3d(10, 20, 0);
 	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), Eigen::Vector3d(10, 20, -0.6)), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
@@ -153,7 +155,8 @@ TEST(Gps, HdopScalingOnlyWhenConfiguredAndReported)
 	const Eigen::Vector3d p(5, 5, -1);
 	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 0), 9.0, 1e-12);
 	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(1, 1), 25.0, 1e-12);
-	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 0.0f), tc.ctx()).R(0, 0), 4.0, 1e-12);	// not reported
+	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 0.0f), tc.ctx()).R(0, 0), 4.0,
+	            1e-12);  // not reported
 	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, NAN), tc.ctx()).R(0, 0), 4.0, 1e-12);
 	EXPECT_EQ(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 1), 0.0);
 }
@@ -171,7 +174,8 @@ TEST(Gps, UpdateReducesPositionError)
 	ManifoldUkf ukf(ProcessModel{}, UtParams{});
 	ukf.initialize(x0, at::TypicalCovariance());  // 5 m per axis
 	const double err_before = (x0.p_n - truth.p_n).head<2>().norm();
-	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos)), tc.ctx());
+	const auto res =
+	    at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos)), tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
@@ -193,7 +197,8 @@ TEST(Gps, GrossOutlierIsRejectedAndLeavesTheStateUnchanged)
 	ukf.initialize(truth, at::TypicalCovariance());
 	const NavState before = ukf.state();
 	const Covariance P_before = ukf.covariance();
-	const Eigen::Vector3d outlier = antennaPosition(truth, kImuPos) + Eigen::Vector3d(60, -80, 0);	// 100 m off
+	const Eigen::Vector3d outlier =
+	    antennaPosition(truth, kImuPos) + Eigen::Vector3d(60, -80, 0);  // 100 m off
 	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), outlier), tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
@@ -203,7 +208,8 @@ TEST(Gps, GrossOutlierIsRejectedAndLeavesTheStateUnchanged)
 	EXPECT_TRUE(ukf.covariance() == P_before);
 	// A 3 m error is accepted.
 	const auto ok = at::ApplyObservation(
-		ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos) + Eigen::Vector3d(3, 0, 0)), tc.ctx());
+	    ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos) + Eigen::Vector3d(3, 0, 0)),
+	    tc.ctx());
 	ASSERT_EQ(ok.updates.size(), 1u);
 	EXPECT_EQ(ok.updates[0].status, UpdateStatus::Accepted);
 }
@@ -215,7 +221,7 @@ TEST(Gps, NoFixOrNoGgaIsSkipped)
 	std::vector<Measurement> out;
 	std::string why;
 	EXPECT_EQ(model.prepare(*ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0), 0), tc.ctx(), out, why),
-			  PrepareStatus::Skip);
+	          PrepareStatus::Skip);
 	EXPECT_TRUE(out.empty());
 	EXPECT_NE(why.find("fix"), std::string::npos) << why;
 	auto rmc_only = CObservationGPS::Create();
@@ -230,7 +236,8 @@ TEST(Gps, InvalidInputs)
 	GpsModel model(pt::defaultConfig(), "GPS");
 	std::vector<Measurement> out;
 	std::string why;
-	auto withLatLon = [&](double lat, double lon) {
+	auto withLatLon = [&](double lat, double lon)
+	{
 		auto o = ggaObs(tc.frame(), Eigen::Vector3d::Zero());
 		auto& f = o->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields;
 		f.latitude_degrees = lat;
@@ -238,14 +245,16 @@ TEST(Gps, InvalidInputs)
 		return o;
 	};
 	for (const auto& [lat, lon] : std::vector<std::pair<double, double>>{
-			 {NAN, 8.8}, {53.1, NAN}, {HUGE_VAL, 8.8}, {95.0, 8.8}, {53.1, -190.0}})
+	         {NAN, 8.8}, {53.1, NAN}, {HUGE_VAL, 8.8}, {95.0, 8.8}, {53.1, -190.0}})
 	{
-		EXPECT_EQ(model.prepare(*withLatLon(lat, lon), tc.ctx(), out, why), PrepareStatus::Invalid) << lat << " " << lon;
+		EXPECT_EQ(model.prepare(*withLatLon(lat, lon), tc.ctx(), out, why), PrepareStatus::Invalid)
+		    << lat << " " << lon;
 		EXPECT_TRUE(out.empty());
 	}
 	// No navigation frame in the context.
 	FilterContext no_frame;
-	EXPECT_EQ(model.prepare(*ggaObs(tc.frame(), Eigen::Vector3d::Zero()), no_frame, out, why), PrepareStatus::Invalid);
+	EXPECT_EQ(model.prepare(*ggaObs(tc.frame(), Eigen::Vector3d::Zero()), no_frame, out, why),
+	          PrepareStatus::Invalid);
 	// A missing altitude still gives the horizontal position.
 	auto no_alt = ggaObs(tc.frame(), Eigen::Vector3d(100, 50, 0));
 	no_alt->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.altitude_meters = NAN;
@@ -253,7 +262,7 @@ TEST(Gps, InvalidInputs)
 	EXPECT_NEAR(m.z[0], 100, 1e-3);
 	EXPECT_NEAR(m.z[1], 50, 1e-3);
 	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), out, why),
-			  PrepareStatus::Invalid);
+	          PrepareStatus::Invalid);
 	EXPECT_NE(why.find("CObservationGPS"), std::string::npos) << why;
 }
 
@@ -288,7 +297,7 @@ TEST(Gps, MinIntervalUsesOneFixPerCorrelationTime)
 			EXPECT_NE(why.find("min_interval_s"), std::string::npos);
 		}
 	}
-	EXPECT_EQ(used, 4);	 // t = 0, 30, 60, 90
+	EXPECT_EQ(used, 4);  // t = 0, 30, 60, 90
 	EXPECT_EQ(skipped, 96);
 	EXPECT_THROW(GpsModel(pt::configText("min_interval_s: -1\n"), "GPS"), config::ConfigError);
 }
@@ -297,7 +306,8 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 {
 	at::TestContext tc;
 	GpsModel model(pt::configText("sigma_m: 1.0\ncorrelated_sigma_m: 1.5\ncorrelation_time_s: 60\n"), "GPS");
-	auto fixAt = [&](double t) {
+	auto fixAt = [&](double t)
+	{
 		auto o = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
 		o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + t);
 		return prepareOne(model, *o, tc.ctx()).R;
@@ -314,7 +324,8 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 	EXPECT_NEAR(fixAt(1230)(0, 0), 1 + 2.25, 1e-6);
 	// Off by default: sigma_m alone.
 	GpsModel plain(pt::configText("sigma_m: 2.0\n"), "GPS");
-	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0, 1e-12);
+	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0,
+	            1e-12);
 	EXPECT_THROW(GpsModel(pt::configText("correlated_sigma_m: -1\n"), "GPS"), config::ConfigError);
 	EXPECT_THROW(GpsModel(pt::configText("correlation_time_s: 0\n"), "GPS"), config::ConfigError);
 }
@@ -323,8 +334,9 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 {
 	at::TestContext tc;
 	tc.ctx().imu_position_b = kImuPos;
-	GpsModel model(pt::configText("states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}"),
-				   "GPS");
+	GpsModel model(
+	    pt::configText("states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}"),
+	    "GPS");
 	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPosition | kPluginStates));
 	EXPECT_EQ(model.affineIn(), uint32_t(kPosition | kPluginStates));
 	ASSERT_EQ(model.stateBlocks().size(), 1u);
@@ -338,7 +350,7 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	x.extra[3] = -1.3;
 	const Eigen::Vector3d a = antennaPosition(x, kImuPos);
 	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), a), tc.ctx());
-	EXPECT_NEAR(m.R(0, 0), 9.0, 1e-12);	 // sigma_m alone: no inflation for the correlated part
+	EXPECT_NEAR(m.R(0, 0), 9.0, 1e-12);  // sigma_m alone: no inflation for the correlated part
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	EXPECT_NEAR(h[0], a.x() + 0.8, 1e-12);
 	EXPECT_NEAR(h[1], a.y() - 1.3, 1e-12);
@@ -351,8 +363,10 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	// is tried twice, 1 s apart: one used if it is inside the gate (the
 	// second falls within min_interval_s), two if an outlier (the interval
 	// is not spent on it).
-	auto offeredWith = [&](double bias_n, double var_p, double var_b, double cov_pb) {
-		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"), "GPS");
+	auto offeredWith = [&](double bias_n, double var_p, double var_b, double cov_pb)
+	{
+		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"),
+		                 "GPS");
 		limited.bindStates(1);
 		NavState mean = at::RandomNavState(9, 3);
 		mean.extra << 0, bias_n, 0;
@@ -394,7 +408,7 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 TEST(Gps, BiasStateAndCorrelatedSigmaAreExclusive)
 {
 	EXPECT_THROW(GpsModel(pt::configText("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}"), "GPS"),
-				 config::ConfigError);
+	             config::ConfigError);
 	EXPECT_TRUE(pt::ModuleRefuses("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}", "states.bias"));
 	EXPECT_THROW(GpsModel(pt::configText("states: {bais: {sigma: 1}}"), "GPS"), config::ConfigError);
 	EXPECT_THROW(GpsModel(pt::configText("states: {bias: {sigma: 0}}"), "GPS"), config::ConfigError);

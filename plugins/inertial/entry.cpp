@@ -3,5 +3,6 @@
 
 #include "inertial.h"
 
-AUVNAV_PLUGIN(auvnav::plugins::InertialModel, "inertial", "1.0.0",
-			  "Accelerometer update of the acceleration state (specific force, attitude, gravity, accel bias)")
+AUVNAV_PLUGIN(
+    auvnav::plugins::InertialModel, "inertial", "1.0.0",
+    "Accelerometer update of the acceleration state (specific force, attitude, gravity, accel bias)")

@@ -11,18 +11,19 @@ namespace auvnav::plugins
 {
 namespace
 {
-constexpr double kMg = 1e-3 * 9.80665;	// 1 mg in m/s² (standard gravity, as datasheets)
+constexpr double kMg = 1e-3 * 9.80665;  // 1 mg in m/s² (standard gravity, as datasheets)
 }
 
 InertialModel::InertialModel(const config::Node& cfg, const std::string& label) : label_(label)
 {
 	const double rate_hz = cfg.inRange("rate_hz", 1.0, 10000.0, 100.0);
-	const double vrw = cfg.nonNegative("vrw_mg_per_sqrt_hz", 0.12) * kMg;	// m/s²/√Hz
+	const double vrw = cfg.nonNegative("vrw_mg_per_sqrt_hz", 0.12) * kMg;  // m/s²/√Hz
 	const double extra = cfg.nonNegative("extra_sigma_mps2", 0.02);
-	const double white = vrw * std::sqrt(rate_hz);	// per-sample σ of white noise
+	const double white = vrw * std::sqrt(rate_hz);  // per-sample σ of white noise
 	sigma_mps2_ = std::sqrt(white * white + extra * extra);
 	if (!(sigma_mps2_ > 0))
-		cfg.fail("extra_sigma_mps2", "vrw_mg_per_sqrt_hz and extra_sigma_mps2 are both 0: noise must be positive");
+		cfg.fail("extra_sigma_mps2",
+		         "vrw_mg_per_sqrt_hz and extra_sigma_mps2 are both 0: noise must be positive");
 	gate_probability_ = gateProbabilityFrom(cfg);
 	coriolis_ = cfg.boolean("coriolis", false);
 }
@@ -33,7 +34,7 @@ uint32_t InertialModel::uses() const noexcept
 }
 
 PrepareStatus InertialModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& /*ctx*/,
-									   std::vector<Measurement>& out, std::string& why)
+                                       std::vector<Measurement>& out, std::string& why)
 {
 	using namespace mrpt::obs;
 	out.clear();
@@ -68,7 +69,7 @@ PrepareStatus InertialModel::doPrepare(const mrpt::obs::CObservation& obs, const
 }
 
 bool InertialModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
-							  Eigen::Ref<Eigen::VectorXd> z_pred) const
+                              Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 3) return false;
 	// Specific force = acceleration relative to the Earth-fixed frame minus
@@ -79,11 +80,12 @@ bool InertialModel::doPredict(const NavState& x, const Measurement& /*m*/, const
 	return true;
 }
 
-bool InertialModel::doAffineSlopes(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx, int from,
-								   int to, Eigen::Ref<Eigen::MatrixXd> At) const
+bool InertialModel::doAffineSlopes(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
+                                   int from, int to, Eigen::Ref<Eigen::MatrixXd> At) const
 {
 	if (At.cols() != 3 || At.rows() != to - from) return false;
-	auto put = [&](int i, const Eigen::Vector3d& slope) {
+	auto put = [&](int i, const Eigen::Vector3d& slope)
+	{
 		if (i >= from && i < to) At.row(i - from) = slope.transpose();
 	};
 	// ∂h/∂a_n,i = R_nbᵀ e_i, and the same for the accelerometer bias: its
@@ -93,7 +95,8 @@ bool InertialModel::doAffineSlopes(const NavState& x, const Measurement& /*m*/, 
 		const Eigen::Vector3d col = x.R_nb.row(i).transpose();
 		put(idx::acc + i, col);
 		put(idx::acc_bias + i, col);
-		if (coriolis_) put(idx::vel + i, x.R_nb.transpose() * (2 * ctx.omega_ie_n.cross(Eigen::Vector3d::Unit(i))));
+		if (coriolis_)
+			put(idx::vel + i, x.R_nb.transpose() * (2 * ctx.omega_ie_n.cross(Eigen::Vector3d::Unit(i))));
 	}
 	put(idx::gravity, -x.R_nb.row(2).transpose());
 	return true;

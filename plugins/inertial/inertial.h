@@ -26,7 +26,7 @@ namespace auvnav::plugins
 {
 class InertialModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	InertialModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override;
@@ -39,16 +39,16 @@ class InertialModel final : public SafeMeasurementModel
 	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */
 	double sigma_mps2() const { return sigma_mps2_; }
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 	/** h's slopes in closed form (MeasurementModel::affineSlopes). */
 	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-						Eigen::Ref<Eigen::MatrixXd> At) const override;
+	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
-   private:
+ private:
 	std::string label_;
 	double sigma_mps2_ = 0;
 	double gate_probability_ = 0.999;

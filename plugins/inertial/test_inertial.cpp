@@ -19,7 +19,8 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 
-mrpt::obs::CObservationIMU::Ptr imuObs(const Eigen::Vector3d& f, const Eigen::Vector3d& w = Eigen::Vector3d::Zero())
+mrpt::obs::CObservationIMU::Ptr imuObs(const Eigen::Vector3d& f,
+                                       const Eigen::Vector3d& w = Eigen::Vector3d::Zero())
 {
 	using namespace mrpt::obs;
 	auto o = CObservationIMU::Create();
@@ -75,7 +76,7 @@ TEST(Inertial, RejectsBadConfigNamingTheKey)
 	EXPECT_THROW(InertialModel(pt::configText("rate_hz: 0"), "IMU"), config::ConfigError);
 	EXPECT_THROW(InertialModel(pt::configText("vrw_mg_per_sqrt_hz: -1"), "IMU"), config::ConfigError);
 	EXPECT_THROW(InertialModel(pt::configText("vrw_mg_per_sqrt_hz: 0\nextra_sigma_mps2: 0"), "IMU"),
-				 config::ConfigError);
+	             config::ConfigError);
 	EXPECT_THROW(InertialModel(pt::configText("gate_probability: 0"), "IMU"), config::ConfigError);
 	EXPECT_THROW(InertialModel(pt::configText("gate_probability: 1.5"), "IMU"), config::ConfigError);
 	EXPECT_THROW(InertialModel(pt::configText("coriolis: maybe"), "IMU"), config::ConfigError);
@@ -85,9 +86,9 @@ TEST(Inertial, RejectsBadConfigNamingTheKey)
 TEST(Inertial, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("inertial", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
-										  kAttitude | kAcceleration | kGravity | kAccelBias));
+	                                      kAttitude | kAcceleration | kGravity | kAccelBias));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("inertial", "coriolis: true",
-										  kAttitude | kAcceleration | kGravity | kAccelBias | kVelocity));
+	                                      kAttitude | kAcceleration | kGravity | kAccelBias | kVelocity));
 }
 
 TEST(Inertial, WellFormedOnRandomStates)
@@ -101,7 +102,8 @@ TEST(Inertial, WellFormedOnRandomStates)
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
 			const NavState x = at::RandomNavState(seed);
-			const Eigen::Vector3d f = specificForce(at::RandomNavState(seed + 100)) + Eigen::Vector3d(0.01, -0.02, 0.03);
+			const Eigen::Vector3d f =
+			    specificForce(at::RandomNavState(seed + 100)) + Eigen::Vector3d(0.01, -0.02, 0.03);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
 			opt.accept_skip = false;
@@ -125,12 +127,12 @@ TEST(Inertial, TenDegreesRollTiltsGravityIntoBodyY)
 	at::TestContext tc;
 	InertialModel model(pt::defaultConfig(), "IMU");
 	NavState x = levelAtRest();
-	x.R_nb = at::rotationYpr(0, 0, 10 * kDeg);	// starboard down
+	x.R_nb = at::rotationYpr(0, 0, 10 * kDeg);  // starboard down
 	const Eigen::Vector3d h = measure(model, x, tc.ctx());
 	// Body y (right) dips down: the upward specific force has −g sin φ on it.
 	EXPECT_NEAR(h.x(), 0, 1e-12);
-	EXPECT_NEAR(h.y(), -9.81 * std::sin(10 * kDeg), 1e-12);	 // −1.70348
-	EXPECT_NEAR(h.z(), -9.81 * std::cos(10 * kDeg), 1e-12);	 // −9.66096
+	EXPECT_NEAR(h.y(), -9.81 * std::sin(10 * kDeg), 1e-12);  // −1.70348
+	EXPECT_NEAR(h.z(), -9.81 * std::cos(10 * kDeg), 1e-12);  // −9.66096
 	EXPECT_NEAR(h.y(), -1.7034886, 1e-7);
 	// And 10° nose up: body x points up, f_x = +g sin θ.
 	x.R_nb = at::rotationYpr(0, 10 * kDeg, 0);
@@ -144,8 +146,8 @@ TEST(Inertial, AccelerationAndBiasAtHeading90)
 	at::TestContext tc;
 	InertialModel model(pt::defaultConfig(), "IMU");
 	NavState x = levelAtRest();
-	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);	// facing east
-	x.a_n = Eigen::Vector3d(1.0, 0, 0);			// accelerating north = to port
+	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);  // facing east
+	x.a_n = Eigen::Vector3d(1.0, 0, 0);         // accelerating north = to port
 	x.b_a = Eigen::Vector3d(0.01, 0.02, 0.03);
 	const Eigen::Vector3d h = measure(model, x, tc.ctx());
 	EXPECT_NEAR(h.x(), 0.01, 1e-12);
@@ -155,7 +157,7 @@ TEST(Inertial, AccelerationAndBiasAtHeading90)
 
 TEST(Inertial, OptionalCoriolisTerm)
 {
-	at::TestContext tc;	 // 53.1° N
+	at::TestContext tc;  // 53.1° N
 	InertialModel model(pt::configText("coriolis: true"), "IMU");
 	NavState x = levelAtRest();
 	x.v_n = Eigen::Vector3d(1.0, 0, 0);
@@ -174,7 +176,7 @@ TEST(Inertial, UpdateReducesTiltError)
 	InertialModel model(pt::defaultConfig(), "IMU");
 	const NavState truth = levelAtRest();
 	NavState x0 = truth;
-	x0.R_nb = at::rotationYpr(0, -2 * kDeg, 3 * kDeg);	// 3.6° tilt error
+	x0.R_nb = at::rotationYpr(0, -2 * kDeg, 3 * kDeg);  // 3.6° tilt error
 	Covariance P0 = at::TypicalCovariance();
 	P0.block<3, 3>(idx::att, idx::att) = Eigen::Matrix3d::Identity() * std::pow(5 * kDeg, 2);
 	ManifoldUkf ukf(ProcessModel{}, UtParams{});
@@ -187,12 +189,13 @@ TEST(Inertial, UpdateReducesTiltError)
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
 	const double tilt_after = ukf.state().boxminus(truth).segment<2>(idx::att).norm();
-	EXPECT_LT(tilt_after, 0.2 * tilt_before) << "before " << tilt_before / kDeg << "°, after " << tilt_after / kDeg << "°";
+	EXPECT_LT(tilt_after, 0.2 * tilt_before)
+	    << "before " << tilt_before / kDeg << "°, after " << tilt_after / kDeg << "°";
 	// The attitude variance of the tilt axes shrank; heading is unobservable here.
 	EXPECT_LT(ukf.covariance()(idx::att, idx::att), P0(idx::att, idx::att));
 	EXPECT_LT(ukf.covariance()(idx::att + 1, idx::att + 1), P0(idx::att + 1, idx::att + 1));
 	EXPECT_NEAR(ukf.covariance()(idx::att + 2, idx::att + 2), P0(idx::att + 2, idx::att + 2),
-				1e-6 * P0(idx::att + 2, idx::att + 2));
+	            1e-6 * P0(idx::att + 2, idx::att + 2));
 }
 
 TEST(Inertial, InvalidInputs)
@@ -233,7 +236,8 @@ TEST(Inertial, NanMeasurementNeverChangesTheState)
 	const NavState before = ukf.state();
 	const Covariance P_before = ukf.covariance();
 	// Through the plugin: prepare refuses, nothing reaches the filter.
-	const auto res = at::ApplyObservation(ukf, model, *imuObs(Eigen::Vector3d(0, std::nan(""), -9.8)), tc.ctx());
+	const auto res =
+	    at::ApplyObservation(ukf, model, *imuObs(Eigen::Vector3d(0, std::nan(""), -9.8)), tc.ctx());
 	EXPECT_EQ(res.status, PrepareStatus::Invalid);
 	EXPECT_TRUE(res.updates.empty());
 	// Directly: a measurement with a NaN is refused by the filter.

@@ -98,7 +98,8 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 		if (st.has("heading_bias"))
 		{
 			if (mode_ != Mode::Heading) st.fail("heading_bias", "a heading bias state needs mode: heading");
-			blocks_.push_back(stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
+			blocks_.push_back(
+			    stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
 		}
 	}
 	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);

@@ -135,6 +135,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 	std::size_t disturbed_ = 0;
 	std::size_t rate_limited_ = 0;
 	std::vector<StateBlockSpec> blocks_;
-	int bias_at_ = -1;	// heading bias in NavState::extra, after bindStates
+	int bias_at_ = -1;  // heading bias in NavState::extra, after bindStates
 };
 }  // namespace auvnav::plugins

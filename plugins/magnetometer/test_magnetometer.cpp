@@ -687,8 +687,9 @@ TEST(MagnetometerStates, HeadingBiasAddsToTheHeadingAndIsDeclared)
 		tc.ctx().mean = &x;
 		const Measurement m = prepareOne(model, *magObs(reading(x.R_nb)), tc.ctx());
 		const Measurement mp = prepareOne(plain, *magObs(reading(x.R_nb)), tc.ctx());
-		EXPECT_NEAR(plugins::wrapPi(at::Predict(model, m, tc.ctx(), x)[0] - at::Predict(plain, mp, tc.ctx(), x)[0]),
-		            3 * kDeg, 1e-12);
+		EXPECT_NEAR(
+		    plugins::wrapPi(at::Predict(model, m, tc.ctx(), x)[0] - at::Predict(plain, mp, tc.ctx(), x)[0]),
+		    3 * kDeg, 1e-12);
 		at::WellFormedOptions opt;
 		opt.seed = seed;
 		opt.accept_skip = false;
@@ -698,7 +699,9 @@ TEST(MagnetometerStates, HeadingBiasAddsToTheHeadingAndIsDeclared)
 		EXPECT_TRUE(std::isnan(at::Predict(model, m, tc.ctx(), short_state)[0]));
 	}
 	tc.ctx().mean = nullptr;
-	EXPECT_THROW(MagnetometerModel(pt::configText("mode: vector\nstates: {heading_bias: {sigma_deg: 4}}"), "MAG"),
+	EXPECT_THROW(
+	    MagnetometerModel(pt::configText("mode: vector\nstates: {heading_bias: {sigma_deg: 4}}"), "MAG"),
+	    config::ConfigError);
+	EXPECT_THROW(MagnetometerModel(pt::configText("states: {hard_iron: {sigma: 4}}"), "MAG"),
 	             config::ConfigError);
-	EXPECT_THROW(MagnetometerModel(pt::configText("states: {hard_iron: {sigma: 4}}"), "MAG"), config::ConfigError);
 }

@@ -4,4 +4,4 @@
 #include "model_aiding.h"
 
 AUVNAV_PLUGIN(auvnav::plugins::ModelAidingModel, "model_aiding", "1.0.0",
-			  "Model aiding: thruster wrench vs Fossen's simplified model with estimated inertia and damping")
+              "Model aiding: thruster wrench vs Fossen's simplified model with estimated inertia and damping")

@@ -45,13 +45,14 @@ struct PhysicalSubs
 		Eigen::Array<double, 6, 1> e;
 		e << M(0, 0), M(1, 1), D_l(0, 0), D_l(1, 1), D_q(0, 0), D_q(1, 1);
 		e = e.exp();
-		M(0, 0) = e[0], M(1, 1) = e[1], D_l(0, 0) = e[2], D_l(1, 1) = e[3], D_q(0, 0) = e[4], D_q(1, 1) = e[5];
+		M(0, 0) = e[0], M(1, 1) = e[1], D_l(0, 0) = e[2], D_l(1, 1) = e[3], D_q(0, 0) = e[4],
+		     D_q(1, 1) = e[5];
 	}
 };
 
 /** ν (velocity relative to the water, turn rate) and ν̇ at the body origin. */
 void bodyMotion(const NavState& x, const Eigen::Vector3d& omega_b, const Eigen::Vector3d& alpha_b,
-				const Eigen::Vector3d& r_imu_b, Vector6d& nu, Vector6d& nu_dot)
+                const Eigen::Vector3d& r_imu_b, Vector6d& nu, Vector6d& nu_dot)
 {
 	const Eigen::Matrix3d Rt = x.R_nb.transpose();
 	const Eigen::Vector3d c_n(x.current_vehicle_ne.x(), x.current_vehicle_ne.y(), 0.0);
@@ -65,7 +66,7 @@ Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb)
 	const Eigen::Vector3d k_b = R_nb.transpose() * Eigen::Vector3d::UnitZ();  // down, body axes
 	Vector6d g;
 	g << -(vm.weight_n - vm.buoyancy_n) * k_b,
-		-(vm.r_g_b.cross(vm.weight_n * k_b) - vm.r_b_b.cross(vm.buoyancy_n * k_b));
+	    -(vm.r_g_b.cross(vm.weight_n * k_b) - vm.r_b_b.cross(vm.buoyancy_n * k_b));
 	return g;
 }
 
@@ -80,7 +81,7 @@ Vector6d coriolisWrench(const Matrix6d& M, const Vector6d& nu)
 }
 
 Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
-						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
+                         const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
 {
 	Vector6d nu, nu_dot;
 	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
@@ -113,7 +114,7 @@ Vector6d applyPlaced(const Matrix6d& base, const Eigen::Matrix<double, 2, 3>& su
 }  // namespace
 
 Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
-								 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
+                                 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b)
 {
 	Vector6d nu, nu_dot;
 	bodyMotion(x, omega_b, alpha_b, r_imu_b, nu, nu_dot);
@@ -126,7 +127,8 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 		// C(ν)ν with Ms = ½ (M + Mᵀ): the diagonal, and the sub-block's
 		// off-diagonal pairs (x, y), (x, ψ), (y, ψ) averaged with zeros or
 		// with each other.
-		const double m_xy = 0.5 * (M_sub(0, 1) + M_sub(1, 0)), m_xpsi = 0.5 * M_sub(0, 2), m_ypsi = 0.5 * M_sub(1, 2);
+		const double m_xy = 0.5 * (M_sub(0, 1) + M_sub(1, 0)), m_xpsi = 0.5 * M_sub(0, 2),
+		             m_ypsi = 0.5 * M_sub(1, 2);
 		Vector6d p;
 		p[0] = M_sub(0, 0) * nu[0] + m_xy * nu[1] + m_xpsi * nu[5];
 		p[1] = m_xy * nu[0] + M_sub(1, 1) * nu[1] + m_ypsi * nu[5];
@@ -140,7 +142,7 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 	else
 		inertial = applyPlaced(vm.M, M_sub, nu_dot);
 	return inertial + applyPlaced(vm.D_l, subs.D_l, nu) +
-		   applyPlaced(vm.D_q, subs.D_q, nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
+	       applyPlaced(vm.D_q, subs.D_q, nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
 }
 
 ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
@@ -211,19 +213,20 @@ Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
 }
 
 PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-										  std::vector<Measurement>& out, std::string& why)
+                                          std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	const auto* thr = dynamic_cast<const auvnav::obs::CObservationThrusters*>(&obs);
 	if (!thr)
 	{
-		why = std::string("expected auvnav::obs::CObservationThrusters, got ") + obs.GetRuntimeClass()->className;
+		why = std::string("expected auvnav::obs::CObservationThrusters, got ") +
+		      obs.GetRuntimeClass()->className;
 		return PrepareStatus::Invalid;
 	}
 	if (static_cast<Eigen::Index>(thr->effort.size()) != T_.cols())
 	{
 		why = "observation has " + std::to_string(thr->effort.size()) + " thrusters, the configuration " +
-			  std::to_string(T_.cols());
+		      std::to_string(T_.cols());
 		return PrepareStatus::Invalid;
 	}
 	const bool rpm_obs = thr->unit == auvnav::obs::EffortUnit::Speed_rpm;
@@ -257,12 +260,13 @@ PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, co
 }
 
 bool ModelAidingModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-								 Eigen::Ref<Eigen::VectorXd> z_pred) const
+                                 Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != static_cast<Eigen::Index>(dofs_.size())) return false;
 	const Eigen::Vector3d omega_b = ctx.omega_ib_b - x.b_w - x.R_nb.transpose() * ctx.omega_ie_n;
-	const Vector6d w = diagonal_base_ ? predictedWrenchDiagonal(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b)
-									  : predictedWrench(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b);
+	const Vector6d w = diagonal_base_
+	                       ? predictedWrenchDiagonal(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b)
+	                       : predictedWrench(vm_, x, omega_b, ctx.alpha_b, ctx.imu_position_b);
 	for (std::size_t i = 0; i < dofs_.size(); ++i) z_pred[static_cast<Eigen::Index>(i)] = w[dofs_[i]];
 	(void)m;
 	return true;

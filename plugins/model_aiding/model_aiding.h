@@ -54,27 +54,27 @@ Vector6d coriolisWrench(const Matrix6d& M, const Vector6d& nu);
 
 /** Fossen's simplified model: the wrench needed for state x (see file doc). */
 Vector6d predictedWrench(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
-						 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b);
+                         const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b);
 
 /** predictedWrench for a model whose M, D_l and D_q are diagonal (as the
  *  configuration's *_diag keys give them) before the estimated 2×3
  *  sub-blocks are placed: the same wrench without the products by zeros
  *  (each evaluation runs once per sigma point, 87 per update). */
 Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, const Eigen::Vector3d& omega_b,
-								 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b);
+                                 const Eigen::Vector3d& alpha_b, const Eigen::Vector3d& r_imu_b);
 
 /** Restoring forces and moments g(R) (subtracted from thrust in the equation). */
 Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb);
 
 class ModelAidingModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	ModelAidingModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override
 	{
-		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia | kDampingLinear |
-			   kDampingQuadratic;
+		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia |
+		       kDampingLinear | kDampingQuadratic;
 	}
 	double gateProbability() const noexcept override { return gate_probability_; }
 	//! The default residual, z − h: the filter may form it itself.
@@ -85,13 +85,13 @@ class ModelAidingModel final : public SafeMeasurementModel
 	const VehicleModel& vehicle() const { return vm_; }
 	const Eigen::Matrix<double, 6, Eigen::Dynamic>& configurationMatrix() const { return T_; }
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	std::string label_;
 	VehicleModel vm_;
 	Eigen::Matrix<double, 6, Eigen::Dynamic> T_;
@@ -100,7 +100,7 @@ class ModelAidingModel final : public SafeMeasurementModel
 	double rpm_coefficient_ = 0;
 	Vector6d sigma_ = Vector6d::Ones();
 	double surface_depth_m_ = 1.0, surface_factor_ = 10.0, gate_probability_ = 0.999;
-	std::vector<int> dofs_;	 // rows of the wrench used (default all six)
+	std::vector<int> dofs_;       // rows of the wrench used (default all six)
 	bool diagonal_base_ = false;  // vm_'s matrices diagonal: predictedWrenchDiagonal
 };
 }  // namespace auvnav::plugins

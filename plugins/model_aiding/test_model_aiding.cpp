@@ -32,7 +32,8 @@ NavState unitState()
 {
 	NavState x;
 	// Estimated sub-blocks equal to the unit model (stored: ln 1 = 0 on the diagonal).
-	x.M_sub = storedSub(Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished()));
+	x.M_sub = storedSub(
+	    Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished()));
 	x.Dl_sub = x.M_sub;
 	x.Dq_sub = x.M_sub;
 	return x;
@@ -54,7 +55,7 @@ TEST(ModelAiding, UnitModelAtOneMetrePerSecondNeedsTwoNewtons)
 	NavState x = unitState();
 	x.v_n = {1, 0, 0};
 	const Vector6d w = predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-									   Eigen::Vector3d::Zero());
+	                                   Eigen::Vector3d::Zero());
 	EXPECT_NEAR(w[0], 2.0, 1e-12);
 	EXPECT_NEAR(w.tail<5>().norm(), 0.0, 1e-12);
 	// Heading 90° and the water moving with the vehicle at 0.4 m/s: 0.6 m/s
@@ -63,12 +64,13 @@ TEST(ModelAiding, UnitModelAtOneMetrePerSecondNeedsTwoNewtons)
 	x.v_n = {0, 1, 0};
 	x.current_vehicle_ne = {0, 0.4};
 	const Vector6d w2 = predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-										Eigen::Vector3d::Zero());
+	                                    Eigen::Vector3d::Zero());
 	EXPECT_NEAR(w2[0], 0.96, 1e-12);
 	// Accelerating at 0.5 m/s² adds M·a.
 	x.a_n = {0, 0.5, 0};
-	EXPECT_NEAR(predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero())[0],
-				1.46, 1e-12);
+	EXPECT_NEAR(predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+	                            Eigen::Vector3d::Zero())[0],
+	            1.46, 1e-12);
 }
 
 TEST(ModelAiding, AngularAccelerationAndLeverArmEnter)
@@ -76,7 +78,7 @@ TEST(ModelAiding, AngularAccelerationAndLeverArmEnter)
 	NavState x = unitState();
 	const Eigen::Vector3d alpha(0, 0, 0.2), r_imu(0.5, 0, 0);
 	const Vector6d w = predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), alpha, r_imu);
-	EXPECT_NEAR(w[5], 0.2, 1e-12);	// M_ψψ α
+	EXPECT_NEAR(w[5], 0.2, 1e-12);  // M_ψψ α
 	// a_CG = a_IMU − α × r = −(0,0,0.2)×(0.5,0,0) = (0, −0.1, 0): sway force −0.1 N.
 	EXPECT_NEAR(w[1], -0.1, 1e-12);
 }
@@ -89,7 +91,8 @@ TEST(ModelAiding, RestoringForcesAtRollAndPitch)
 	vm.r_b_b = {0, 0, -0.05};
 	const double roll = 20 * M_PI / 180, pitch = -10 * M_PI / 180;
 	const Eigen::Matrix3d R = (Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-							   Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX())).toRotationMatrix();
+	                           Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+	                              .toRotationMatrix();
 	const Vector6d g = restoringWrench(vm, R);
 	// Net buoyancy 12 N up in NED, expressed in the body: −(W − B) Rᵀk = 12 Rᵀk.
 	const Eigen::Vector3d k_b = R.transpose() * Eigen::Vector3d::UnitZ();
@@ -118,10 +121,10 @@ TEST(ModelAiding, ThrustWrenchThroughTheConfigurationMatrix)
 TEST(ModelAiding, ParametersStayPositiveUnderLargeUpdates)
 {
 	NavState x = unitState();
-	x.Dl_sub(0, 0) = -50.0;	 // a huge negative excursion of the stored (log) value
+	x.Dl_sub(0, 0) = -50.0;  // a huge negative excursion of the stored (log) value
 	x.v_n = {1, 0, 0};
 	const Vector6d w = predictedWrench(unitModel(), x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-									   Eigen::Vector3d::Zero());
+	                                   Eigen::Vector3d::Zero());
 	EXPECT_GT(physicalSub(x.Dl_sub)(0, 0), 0.0);
 	EXPECT_NEAR(w[0], 1.0 + std::exp(-50.0), 1e-12);  // damping ≥ the quadratic term alone
 }
@@ -158,7 +161,7 @@ TEST(ModelAiding, SurfaceInflatesTheNoise)
 	const double r_deep = out[0].R(0, 0);
 	c.mean = &shallow;
 	ASSERT_EQ(m.prepare(*thrusters({10, 10, 0, 0, 0, 0}), c, out, why), PrepareStatus::Ok);
-	EXPECT_NEAR(out[0].R(0, 0), 100.0 * r_deep, 1e-9);	// factor 10 on sigma
+	EXPECT_NEAR(out[0].R(0, 0), 100.0 * r_deep, 1e-9);  // factor 10 on sigma
 }
 
 TEST(ModelAiding, UpdatePullsTheCurrentAndDampingTheRightWay)
@@ -182,12 +185,13 @@ TEST(ModelAiding, UpdatePullsTheCurrentAndDampingTheRightWay)
 	truth.p_n.z() = 10;
 	truth.g = 9.78;
 	const Vector6d tau = predictedWrench(m.vehicle(), truth, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-										 tc.ctx().imu_position_b);
+	                                     tc.ctx().imu_position_b);
 	// Efforts that produce exactly that surge/sway/yaw wrench (least squares).
 	const auto& T = m.configurationMatrix();
 	Eigen::MatrixXd T3(3, T.cols());
 	T3 << T.row(0), T.row(1), T.row(5);
-	const Eigen::VectorXd u = T3.completeOrthogonalDecomposition().solve(Eigen::Vector3d(tau[0], tau[1], tau[5]));
+	const Eigen::VectorXd u =
+	    T3.completeOrthogonalDecomposition().solve(Eigen::Vector3d(tau[0], tau[1], tau[5]));
 	const Vector6d achieved = m.thrustWrench(std::vector<double>(u.data(), u.data() + u.size()));
 	ASSERT_NEAR(achieved[0], tau[0], 1e-9);
 	ASSERT_NEAR(achieved[5], tau[5], 1e-9);
@@ -206,7 +210,8 @@ TEST(ModelAiding, UpdatePullsTheCurrentAndDampingTheRightWay)
 	FilterContext c = tc.ctx();
 	c.mean = &ukf.state();
 	c.omega_ib_b = truth.R_nb.transpose() * c.omega_ie_n;  // at rest relative to the Earth in rotation
-	const auto res = at::ApplyObservation(ukf, m, *thrusters(std::vector<double>(u.data(), u.data() + u.size())), c);
+	const auto res =
+	    at::ApplyObservation(ukf, m, *thrusters(std::vector<double>(u.data(), u.data() + u.size())), c);
 	ASSERT_EQ(res.updates.size(), 1u);
 	ASSERT_EQ(res.updates[0].status, UpdateStatus::Accepted);
 	EXPECT_LT(std::abs(ukf.state().current_vehicle_ne.x()), 0.3 * 0.5);
@@ -227,7 +232,8 @@ NavState stateWithModel(const VehicleModel& vm)
 	NavState x;
 	Eigen::Matrix<double, 2, 3> M_sub = vm.M.topLeftCorner<2, 3>();
 	x.M_sub = storedSub(M_sub);
-	x.Dl_sub = storedSub(Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished()));
+	x.Dl_sub = storedSub(
+	    Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished()));
 	x.Dq_sub = x.Dl_sub;
 	return x;
 }
@@ -239,9 +245,10 @@ TEST(ModelAiding, CoriolisTermCarriesTheMunkMoment)
 	vm.D_l.setZero();
 	vm.D_q.setZero();
 	NavState x = stateWithModel(vm);
-	x.Dl_sub = storedSub(Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1e-12, 0, 0, 0, 1e-12, 0).finished()));
+	x.Dl_sub = storedSub(
+	    Eigen::Matrix<double, 2, 3>((Eigen::Matrix<double, 2, 3>() << 1e-12, 0, 0, 0, 1e-12, 0).finished()));
 	x.Dq_sub = x.Dl_sub;
-	x.v_n = {0.4, 0.1, 0};	// surge 0.4, sway 0.1 m/s, level, heading north, still water
+	x.v_n = {0.4, 0.1, 0};  // surge 0.4, sway 0.1 m/s, level, heading north, still water
 	const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
 	// Hand computation: moment = v × (M v), z = u·M_yy·v − v·M_xx·u = (1042.95 − 851)·0.04.
 	const Vector6d w = predictedWrench(vm, x, zero, zero, zero);
@@ -303,12 +310,13 @@ TEST(ModelAiding, DiagonalWrenchEqualsTheGeneralOne)
 		{
 			vm.coriolis = coriolis;
 			const NavState x = at::RandomNavState(seed);
-			const Eigen::Vector3d omega(0.01 * seed, -0.02, 0.15), alpha(0.001, 0.002 * seed, -0.002), r_imu(0.3, 0.1, -0.03);
+			const Eigen::Vector3d omega(0.01 * seed, -0.02, 0.15), alpha(0.001, 0.002 * seed, -0.002),
+			    r_imu(0.3, 0.1, -0.03);
 			const Vector6d general = predictedWrench(vm, x, omega, alpha, r_imu);
 			const Vector6d diagonal = predictedWrenchDiagonal(vm, x, omega, alpha, r_imu);
 			ASSERT_TRUE(general.allFinite());
 			EXPECT_LE((general - diagonal).cwiseAbs().maxCoeff(), 1e-12 * (1 + general.cwiseAbs().maxCoeff()))
-				<< "seed " << seed << ": " << general.transpose() << " vs " << diagonal.transpose();
+			    << "seed " << seed << ": " << general.transpose() << " vs " << diagonal.transpose();
 			// The random sub-blocks are full (every placed entry matters).
 			EXPECT_NE(x.M_sub(0, 2), 0.0);
 			++compared;

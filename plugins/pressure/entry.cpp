@@ -4,4 +4,4 @@
 #include "pressure.h"
 
 AUVNAV_PLUGIN(auvnav::plugins::PressureModel, "pressure", "1.0.0",
-			  "Absolute pressure to depth (hydrostatic, constant density, lever arm)")
+              "Absolute pressure to depth (hydrostatic, constant density, lever arm)")

@@ -10,13 +10,13 @@
 namespace auvnav::plugins
 {
 PressureModel::PressureModel(const config::Node& cfg, const std::string& label)
-	: label_(label),
-	  density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
-	  atmospheric_pa_(cfg.inRange("atmospheric_pressure_pa", 50e3, 120e3, 101325.0)),
-	  sigma_pa_(cfg.positive("sigma_pa", 100.0)),
-	  bias_sigma_pa_(cfg.inRange("bias_sigma_pa", 0.0, 1e5, 0.0)),
-	  position_b_(cfg.vector3("position_m", Eigen::Vector3d(0, 0, 0.3))),
-	  gate_probability_(gateProbabilityFrom(cfg))
+    : label_(label),
+      density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
+      atmospheric_pa_(cfg.inRange("atmospheric_pressure_pa", 50e3, 120e3, 101325.0)),
+      sigma_pa_(cfg.positive("sigma_pa", 100.0)),
+      bias_sigma_pa_(cfg.inRange("bias_sigma_pa", 0.0, 1e5, 0.0)),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0, 0, 0.3))),
+      gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }
@@ -33,18 +33,20 @@ double PressureModel::noiseVariance(const FilterContext& ctx) const
 	if (!std::isfinite(prior)) return white;
 	// A scalar update with noise R leaves P R / (P + R); this R leaves the
 	// floor. At or below it, an update that changes nothing (10⁶ P).
-	const double at_floor = prior > floor * (1 + 1e-6) ? prior * floor / (prior - floor) : 1e6 * std::max(prior, floor);
+	const double at_floor =
+	    prior > floor * (1 + 1e-6) ? prior * floor / (prior - floor) : 1e6 * std::max(prior, floor);
 	return std::max(white, at_floor);
 }
 
 PrepareStatus PressureModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-									   std::vector<Measurement>& out, std::string& why)
+                                       std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(&obs);
 	if (!p)
 	{
-		why = std::string("expected auvnav::obs::CObservationPressure, got ") + obs.GetRuntimeClass()->className;
+		why = std::string("expected auvnav::obs::CObservationPressure, got ") +
+		      obs.GetRuntimeClass()->className;
 		return PrepareStatus::Invalid;
 	}
 	if (!std::isfinite(p->pressure_pa))
@@ -66,7 +68,7 @@ PrepareStatus PressureModel::doPrepare(const mrpt::obs::CObservation& obs, const
 }
 
 bool PressureModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
-							  Eigen::Ref<Eigen::VectorXd> z_pred) const
+                              Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 1) return false;
 	const double depth_s = x.p_n.z() + x.R_nb.row(2).dot(position_b_ - ctx.imu_position_b);

@@ -29,7 +29,7 @@ namespace auvnav::plugins
 {
 class PressureModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	/** Pressures outside this range are rejected as absurd [Pa]. */
 	static constexpr double kMinPressurePa = 5e4, kMaxPressurePa = 1e8;
 
@@ -49,20 +49,20 @@ class PressureModel final : public SafeMeasurementModel
 	 *  update then leaves the floor; at or below it, 10⁶ × the variance). */
 	double noiseVariance(const FilterContext& ctx) const;
 
-	static constexpr double kNominalGravity = 9.80665;	//!< [m/s²], only for the floor
+	static constexpr double kNominalGravity = 9.80665;  //!< [m/s²], only for the floor
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	std::string label_;
 	double density_kg_m3_ = 1025;
 	double atmospheric_pa_ = 101325;
 	double sigma_pa_ = 100;
-	double bias_sigma_pa_ = 0;	//!< 0: no floor
+	double bias_sigma_pa_ = 0;  //!< 0: no floor
 	Eigen::Vector3d position_b_;
 	double gate_probability_ = 0.999;
 };

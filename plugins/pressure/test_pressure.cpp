@@ -20,7 +20,7 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
-const Eigen::Vector3d kSensorPos(0, 0, 0.3);		  // pressure.position_m
+const Eigen::Vector3d kSensorPos(0, 0, 0.3);          // pressure.position_m
 
 CObservationPressure::Ptr pressureObs(double pa)
 {
@@ -74,7 +74,7 @@ TEST(Pressure, RejectsBadConfigNamingTheKey)
 TEST(Pressure, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("pressure", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
-										  kAttitude | kGravity | kPosition));
+	                                      kAttitude | kGravity | kPosition));
 }
 
 TEST(Pressure, WellFormedOnRandomStates)
@@ -88,9 +88,9 @@ TEST(Pressure, WellFormedOnRandomStates)
 		at::WellFormedOptions opt;
 		opt.seed = seed;
 		opt.accept_skip = false;
-		EXPECT_TRUE(at::IsWellFormed(model, *pressureObs(truePressure(at::RandomNavState(seed + 9), kImuPos) + 30),
-									 tc.ctx(), x, opt))
-			<< "seed " << seed;
+		EXPECT_TRUE(at::IsWellFormed(
+		    model, *pressureObs(truePressure(at::RandomNavState(seed + 9), kImuPos) + 30), tc.ctx(), x, opt))
+		    << "seed " << seed;
 	}
 }
 
@@ -101,7 +101,7 @@ TEST(Pressure, TenMetresLevelAndPitched)
 	PressureModel model(pt::defaultConfig(), "PRESSURE");
 	NavState x;
 	x.g = 9.81;
-	x.p_n = Eigen::Vector3d(5, -3, 10);	 // IMU at 10 m
+	x.p_n = Eigen::Vector3d(5, -3, 10);  // IMU at 10 m
 	// Level: the sensor is 0.3 + 0.02863 m below the IMU.
 	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 101325 + 1025 * 9.81 * 10.32863, 1e-8);
 	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 205181.9568075, 1e-6);
@@ -158,7 +158,8 @@ TEST(Pressure, InvalidInputs)
 	// The plausible extremes pass: a reading above water, and 9000 m deep.
 	EXPECT_EQ(model.prepare(*pressureObs(5.0e4), tc.ctx(), out, why), PrepareStatus::Ok);
 	EXPECT_EQ(model.prepare(*pressureObs(9.3e7), tc.ctx(), out, why), PrepareStatus::Ok);
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why), PrepareStatus::Invalid);
+	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why),
+	          PrepareStatus::Invalid);
 	EXPECT_NE(why.find("CObservationPressure"), std::string::npos) << why;
 }
 
@@ -189,7 +190,8 @@ TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
 	tc.ctx().imu_position_b = kImuPos;
 	const double pa_per_m = 1025 * PressureModel::kNominalGravity;
 	const double floor_m = 60 / pa_per_m;  // ~6 mm
-	auto run = [&](const char* cfg, double& sigma_d, double& first_err) {
+	auto run = [&](const char* cfg, double& sigma_d, double& first_err)
+	{
 		PressureModel model(pt::configText(cfg), "PRESSURE");
 		NavState truth;
 		truth.g = 9.81;
@@ -210,7 +212,8 @@ TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
 		tc.ctx().covariance = &ukf.covariance();
 		for (int k = 0; k < 200; ++k)
 		{
-			const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
+			const auto res =
+			    at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
 			ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 			ASSERT_EQ(res.updates.at(0).status, UpdateStatus::Accepted) << res.updates[0].why;
 			if (k == 0) first_err = std::abs(ukf.state().p_n.z() - truth.p_n.z());

@@ -4,4 +4,4 @@
 #include "sonar_heading.h"
 
 AUVNAV_PLUGIN(auvnav::plugins::SonarHeadingModel, "sonar_heading", "1.0.0",
-			  "Surveyed-pole bearings from imaging-sonar frames (OpenCV): heading validation or update")
+              "Surveyed-pole bearings from imaging-sonar frames (OpenCV): heading validation or update")

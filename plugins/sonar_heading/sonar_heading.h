@@ -29,7 +29,7 @@ namespace auvnav::plugins
 /** Bearing [rad] of the pole at `pole_ne` seen from state x by a sonar at
  *  lever arm `r_s_b` whose x axis is the body x axis turned by `mount_yaw`. */
 double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double mount_yaw_rad,
-						const Eigen::Vector2d& pole_ne);
+                        const Eigen::Vector2d& pole_ne);
 
 /** What a bearing measurement carries to h (Measurement::payload): the
  *  associated pole's position in the navigation frame [m]. */
@@ -40,23 +40,23 @@ struct PolePosition
 
 class SonarHeadingModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	SonarHeadingModel(const config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
 	double gateProbability() const noexcept override { return gate_probability_; }
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
 	bool validateOnly() const { return validate_only_; }
 	const sonar::SonarConfig& sonarConfig() const { return sonar_; }
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	std::string label_;
 	sonar::SonarConfig sonar_;
 	bool validate_only_ = true;

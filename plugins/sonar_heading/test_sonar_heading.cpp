@@ -4,9 +4,9 @@
 #include <auvnav/so3.h>
 #include <auvnav/sonar/frame.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <auvnav/testing/sonar_frames.h>
 #include <auvnav/ukf.h>
-#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,11 +32,13 @@ std::string pluginYaml(const std::string& mode, const fs::path& dir)
 {
 	fs::create_directories(dir);
 	std::ofstream(dir / "poles.yaml") << "poles:\n"
-										 "  - {id: A, north_m: 20, east_m: -6, radius_m: 0.15}\n"
-										 "  - {id: B, north_m: 25, east_m: 7, radius_m: 0.15}\n"
-										 "  - {id: C, north_m: 14, east_m: 3, radius_m: 0.15}\n";
-	std::ofstream(dir / "sonar.yaml") << "pole_map: poles.yaml\nmount: {position_m: [0.9, 0, 0.1], yaw_deg: 0}\n";
-	return "sonar_config: sonar.yaml\nmode: " + mode + "\nvalidation_csv: validation.csv\nconfig_dir: " + dir.string() + "\n";
+	                                     "  - {id: A, north_m: 20, east_m: -6, radius_m: 0.15}\n"
+	                                     "  - {id: B, north_m: 25, east_m: 7, radius_m: 0.15}\n"
+	                                     "  - {id: C, north_m: 14, east_m: 3, radius_m: 0.15}\n";
+	std::ofstream(dir / "sonar.yaml")
+	    << "pole_map: poles.yaml\nmount: {position_m: [0.9, 0, 0.1], yaw_deg: 0}\n";
+	return "sonar_config: sonar.yaml\nmode: " + mode +
+	       "\nvalidation_csv: validation.csv\nconfig_dir: " + dir.string() + "\n";
 }
 
 /** A frame as the sonar at x would see the map's poles (flat seabed from 6 m). */
@@ -85,7 +87,8 @@ TEST(SonarHeading, PredictedBearingHandComputed)
 	EXPECT_NEAR(predictedBearing(x, Eigen::Vector3d::Zero(), 30 * kDeg, {0, 10}), -30 * kDeg, 1e-12);
 	// Across ±180°: facing west, a pole just south-west-ish wraps correctly.
 	x = levelAt(179);
-	EXPECT_NEAR(predictedBearing(x, Eigen::Vector3d::Zero(), 0, {-10, -10 * std::tan(2 * kDeg)}), 3 * kDeg, 1e-9);
+	EXPECT_NEAR(predictedBearing(x, Eigen::Vector3d::Zero(), 0, {-10, -10 * std::tan(2 * kDeg)}), 3 * kDeg,
+	            1e-9);
 }
 
 TEST(SonarHeading, UpdateModeIsWellFormedOnASyntheticFrame)
@@ -124,7 +127,7 @@ TEST(SonarHeading, ValidationModeLogsAndNeverApplies)
 		at::TestContext tc;
 		const NavState truth = levelAt(12);
 		NavState believed = truth;
-		believed.R_nb = so3::Exp(Eigen::Vector3d(0, 0, 2 * kDeg)) * truth.R_nb;	// 2° off
+		believed.R_nb = so3::Exp(Eigen::Vector3d(0, 0, 2 * kDeg)) * truth.R_nb;  // 2° off
 		const Covariance P = navCovariance();
 		tc.ctx().mean = &believed;
 		tc.ctx().covariance = &P;
@@ -194,12 +197,14 @@ TEST(SonarHeading, RejectsBadConfigNamingTheKey)
 	{
 		EXPECT_NE(std::string(e.what()).find("mode"), std::string::npos) << e.what();
 	}
-	EXPECT_THROW(SonarHeadingModel(pt::configText("sonar_config: /nonexistent/sonar.yaml\n"), "SONAR"), std::exception);
+	EXPECT_THROW(SonarHeadingModel(pt::configText("sonar_config: /nonexistent/sonar.yaml\n"), "SONAR"),
+	             std::exception);
 }
 
 TEST(SonarHeading, ModuleExportsEntryAndCreates)
 {
 	const auvnav::testing::ScratchDir scratch("sonar_heading_mod");
 	const fs::path& dir = scratch.path();
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("sonar_heading", pluginYaml("validate", dir), kAttitude | kPosition));
+	EXPECT_TRUE(
+	    pt::ModuleLoadsAndCreates("sonar_heading", pluginYaml("validate", dir), kAttitude | kPosition));
 }

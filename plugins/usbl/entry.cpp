@@ -3,6 +3,7 @@
 
 #include "usbl.h"
 
-AUVNAV_PLUGIN(auvnav::plugins::UsblModel, "usbl", "1.0.0",
-			  "USBL acoustic position fix of the transponder (measurement time, lever arm, range-dependent noise, "
-			  "optional bias state)")
+AUVNAV_PLUGIN(
+    auvnav::plugins::UsblModel, "usbl", "1.0.0",
+    "USBL acoustic position fix of the transponder (measurement time, lever arm, range-dependent noise, "
+    "optional bias state)")

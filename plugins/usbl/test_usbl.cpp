@@ -29,7 +29,7 @@ const char* kMounted = "position_m: [-0.5, 0.1, -0.3]";
 
 /** A fix of the transponder at p_n, in the navigation frame or as lat/lon/depth. */
 CObservationUSBL::Ptr fixAt(const earth::TangentFrame& frame, const Eigen::Vector3d& p_n,
-							UsblFrame f = UsblFrame::Geodetic)
+                            UsblFrame f = UsblFrame::Geodetic)
 {
 	auto o = CObservationUSBL::Create();
 	o->sensorLabel = "USBL";
@@ -46,7 +46,10 @@ CObservationUSBL::Ptr fixAt(const earth::TangentFrame& frame, const Eigen::Vecto
 	return o;
 }
 
-Eigen::Vector3d transponderOf(const NavState& x) { return x.p_n + x.R_nb * (kTransponder - kImuPos); }
+Eigen::Vector3d transponderOf(const NavState& x)
+{
+	return x.p_n + x.R_nb * (kTransponder - kImuPos);
+}
 
 Measurement prepareOne(UsblModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
 {
@@ -63,8 +66,10 @@ TEST(Usbl, DefaultConfigAndModule)
 	EXPECT_TRUE(m.position_b().isZero());
 	EXPECT_EQ(m.uses(), uint32_t(kAttitude | kPosition));
 	EXPECT_TRUE(m.stateBlocks().empty());
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", "states: {bias: {sigma: 1}}", kAttitude | kPosition | kPluginStates));
+	EXPECT_TRUE(
+	    pt::ModuleLoadsAndCreates("usbl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", "states: {bias: {sigma: 1}}",
+	                                      kAttitude | kPosition | kPluginStates));
 }
 
 TEST(Usbl, RejectsBadConfigNamingTheKey)
@@ -74,14 +79,15 @@ TEST(Usbl, RejectsBadConfigNamingTheKey)
 	EXPECT_THROW(UsblModel(pt::configText("position_m: [0, 0, 1e6]"), "USBL"), config::ConfigError);
 	EXPECT_THROW(UsblModel(pt::configText("states: {bais: {sigma: 1}}"), "USBL"), config::ConfigError);
 	EXPECT_THROW(UsblModel(pt::configText("states: {bias: {sigma: -1}}"), "USBL"), config::ConfigError);
-	EXPECT_TRUE(pt::ModuleRefuses("sigma_mm: 3", "sigma_m"));	// unknown key, with the suggestion
+	EXPECT_TRUE(pt::ModuleRefuses("sigma_mm: 3", "sigma_m"));  // unknown key, with the suggestion
 }
 
 TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
 {
 	at::TestContext tc;
 	tc.ctx().imu_position_b = kImuPos;
-	for (const char* cfg : {kMounted, "{position_m: [0, 0, 0.4], use_depth: true}", "states: {bias: {sigma: 2}}"})
+	for (const char* cfg :
+	     {kMounted, "{position_m: [0, 0, 0.4], use_depth: true}", "states: {bias: {sigma: 2}}"})
 	{
 		UsblModel model(pt::configText(cfg), "USBL");
 		const int extra = static_cast<int>(model.stateBlocks().size()) * 2;
@@ -92,9 +98,10 @@ TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
 			at::WellFormedOptions opt;
 			opt.seed = seed;
 			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(model, *fixAt(tc.frame(), transponderOf(at::RandomNavState(seed + 3, extra))),
-										 tc.ctx(), x, opt))
-				<< cfg << ", seed " << seed;
+			EXPECT_TRUE(at::IsWellFormed(
+			    model, *fixAt(tc.frame(), transponderOf(at::RandomNavState(seed + 3, extra))), tc.ctx(), x,
+			    opt))
+			    << cfg << ", seed " << seed;
 		}
 	}
 }
@@ -103,8 +110,8 @@ TEST(Usbl, GeodeticAndLocalFixesGiveTheSamePosition)
 {
 	at::TestContext tc;
 	UsblModel model(pt::configText("use_depth: true"), "USBL");
-	for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 5), Eigen::Vector3d(1234.5, -987.6, 40),
-									 Eigen::Vector3d(-15000, 20000, 250)})
+	for (const Eigen::Vector3d& p :
+	     {Eigen::Vector3d(0, 0, 5), Eigen::Vector3d(1234.5, -987.6, 40), Eigen::Vector3d(-15000, 20000, 250)})
 	{
 		const Measurement g = prepareOne(model, *fixAt(tc.frame(), p), tc.ctx());
 		const Measurement l = prepareOne(model, *fixAt(tc.frame(), p, UsblFrame::LocalNed), tc.ctx());
@@ -122,7 +129,7 @@ TEST(Usbl, NoiseFromTheFixOrGrowingWithSlantRange)
 	at::TestContext tc;
 	UsblModel model(pt::configText("{sigma_m: 0.3, sigma_range_fraction: 0.01}"), "USBL");
 	auto o = fixAt(tc.frame(), Eigen::Vector3d(10, 20, 30));
-	o->slant_range_m = 400;	 // 1 % of 400 m = 4 m, with 0.3 m: 4.011 m
+	o->slant_range_m = 400;  // 1 % of 400 m = 4 m, with 0.3 m: 4.011 m
 	EXPECT_NEAR(prepareOne(model, *o, tc.ctx()).R(0, 0), 0.09 + 16.0, 1e-9);
 	o->slant_range_m = std::nan("");  // unknown range: the constant part only
 	EXPECT_NEAR(prepareOne(model, *o, tc.ctx()).R(1, 1), 0.09, 1e-12);
@@ -213,8 +220,8 @@ TEST(Usbl, UpdateReducesErrorAndAGrossOutlierIsRejected)
 	// Prior 5 m, fix 3 m (geodetic round trip at 20 m: sub-mm): the error keeps 9/34 of itself.
 	EXPECT_NEAR((ukf.state().p_n - truth.p_n).head<2>().norm(), before * 9.0 / 34.0, 0.05 * before);
 	const NavState settled = ukf.state();
-	r = at::ApplyObservation(ukf, model, *fixAt(tc.frame(), transponderOf(truth) + Eigen::Vector3d(80, 60, 0)),
-							 tc.ctx());
+	r = at::ApplyObservation(ukf, model,
+	                         *fixAt(tc.frame(), transponderOf(truth) + Eigen::Vector3d(80, 60, 0)), tc.ctx());
 	ASSERT_EQ(r.updates.size(), 1u);
 	EXPECT_EQ(r.updates[0].status, UpdateStatus::Rejected);
 	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), settled));
@@ -235,7 +242,8 @@ TEST(UsblObservation, RoundTripKeepsEveryFieldAndACorruptFrameIsRefused)
 	mrpt::io::CMemoryStream buf;
 	mrpt::serialization::archiveFrom(buf) << o;
 	buf.Seek(0);
-	auto back = std::dynamic_pointer_cast<CObservationUSBL>(mrpt::serialization::archiveFrom(buf).ReadObject());
+	auto back =
+	    std::dynamic_pointer_cast<CObservationUSBL>(mrpt::serialization::archiveFrom(buf).ReadObject());
 	ASSERT_TRUE(back);
 	EXPECT_EQ(back->timestamp, o.timestamp);
 	EXPECT_EQ(back->measurement_time, o.measurement_time);

@@ -10,14 +10,14 @@
 namespace auvnav::plugins
 {
 UsblModel::UsblModel(const config::Node& cfg, const std::string& label)
-	: label_(label),
-	  position_b_(cfg.vector3("position_m", Eigen::Vector3d::Zero())),
-	  sigma_m_(cfg.positive("sigma_m", 2.0)),
-	  sigma_range_fraction_(cfg.inRange("sigma_range_fraction", 0.0, 1.0, 0.01)),
-	  depth_sigma_m_(cfg.positive("depth_sigma_m", 1.0)),
-	  use_reported_covariance_(cfg.boolean("use_reported_covariance", true)),
-	  use_depth_(cfg.boolean("use_depth", false)),
-	  gate_probability_(gateProbabilityFrom(cfg))
+    : label_(label),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d::Zero())),
+      sigma_m_(cfg.positive("sigma_m", 2.0)),
+      sigma_range_fraction_(cfg.inRange("sigma_range_fraction", 0.0, 1.0, 0.01)),
+      depth_sigma_m_(cfg.positive("depth_sigma_m", 1.0)),
+      use_reported_covariance_(cfg.boolean("use_reported_covariance", true)),
+      use_depth_(cfg.boolean("use_depth", false)),
+      gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 	horizontalFixBias(cfg, blocks_);
@@ -30,8 +30,8 @@ double UsblModel::measurementTime(const mrpt::obs::CObservation& obs, double sta
 	return mrpt::Clock::toDouble(u->measurement_time);
 }
 
-PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const FilterContext& ctx, Eigen::Vector3d& p_n,
-								   Eigen::Matrix3d& C_n, std::string& why) const
+PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const FilterContext& ctx,
+                                   Eigen::Vector3d& p_n, Eigen::Matrix3d& C_n, std::string& why) const
 {
 	const auto* u = dynamic_cast<const obs::CObservationUSBL*>(&o);
 	if (!u)
@@ -65,7 +65,7 @@ PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const Filte
 		// origin's height does (it moves north/east by ~1e-7 per metre).
 		g.h_m = ctx.frame->origin().h_m - (std::isfinite(pos.z()) ? pos.z() : 0.0);
 		p_n = ctx.frame->toNed(g);
-		p_n.z() = pos.z();	// depth, as the pressure sensor's (not the tangent plane's curvature)
+		p_n.z() = pos.z();  // depth, as the pressure sensor's (not the tangent plane's curvature)
 	}
 	else
 		p_n = pos;
@@ -88,7 +88,8 @@ PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const Filte
 	return PrepareStatus::Ok;
 }
 
-bool UsblModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
+bool UsblModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+                           InitialFix& out) noexcept
 {
 	try
 	{
@@ -107,7 +108,7 @@ bool UsblModel::initialFix(const mrpt::obs::CObservation& obs, const FilterConte
 }
 
 PrepareStatus UsblModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-								   std::vector<Measurement>& out, std::string& why)
+                                   std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
 	Eigen::Vector3d p_n;
@@ -124,7 +125,7 @@ PrepareStatus UsblModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 }
 
 bool UsblModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,
-						  Eigen::Ref<Eigen::VectorXd> z_pred) const
+                          Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	const int dim = use_depth_ ? 3 : 2;
 	if (z_pred.size() != dim) return false;

@@ -33,31 +33,38 @@ namespace auvnav::plugins
 {
 class UsblModel final : public SafeMeasurementModel
 {
-   public:
+ public:
 	UsblModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates); }
+	uint32_t uses() const noexcept override
+	{
+		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
+	}
 	double gateProbability() const noexcept override { return gate_probability_; }
 	//! The default residual, z − h: the filter may form it itself.
 	bool residualIsDifference() const noexcept override { return true; }
 	bool reportsPositionFix() const noexcept override { return true; }
-	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept override;
+	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                InitialFix& out) noexcept override;
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override { bias_at_ = blocks_.empty() ? -1 : first_extra_index; }
+	void bindStates(int first_extra_index) noexcept override
+	{
+		bias_at_ = blocks_.empty() ? -1 : first_extra_index;
+	}
 	double measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept override;
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 
-   protected:
+ protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-							std::vector<Measurement>& out, std::string& why) override;
+	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	/** The fix in the navigation frame and its covariance (Ok), or why not. */
-	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, Eigen::Vector3d& p_n,
-							Eigen::Matrix3d& C_n, std::string& why) const;
+	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                        Eigen::Vector3d& p_n, Eigen::Matrix3d& C_n, std::string& why) const;
 
 	std::string label_;
 	Eigen::Vector3d position_b_;

@@ -50,9 +50,9 @@ CObservationDVL referenceDvl()
 	d.altitude_m = 12.75;
 	d.beam_inclination_rad = 0.5235987755982988;
 	d.beams = {{14.5, true, 0.625, 0.7853981633974483},
-			   {14.25, true, -0.5, 2.356194490192345},
-			   {15.125, true, 0.125, -2.356194490192345},
-			   {0.0, false, 0.0, -0.7853981633974483}};
+	           {14.25, true, -0.5, 2.356194490192345},
+	           {15.125, true, 0.125, -2.356194490192345},
+	           {0.0, false, 0.0, -0.7853981633974483}};
 	// Version 1: coordinates and sign as reported (a Teledyne RDI in earth mode).
 	d.frame = DvlFrame::EarthEnu;
 	d.sign = DvlSign::BottomOverInstrument;

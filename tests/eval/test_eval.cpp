@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
 #include "eval.h"
 #include "plot.h"
-#include <unistd.h>
 
 using namespace auvnav::eval;
 namespace fs = std::filesystem;
@@ -39,14 +39,18 @@ TEST(Eval, ErrorsAndNeesOnAHandMadeRun)
 	{
 		std::ofstream s(dir / "states.csv");
 		s.precision(17);
-		s << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d,sigma_att_n,sigma_att_e,"
-			 "sigma_att_d,cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed,current_n,current_e,"
-			 "sigma_current_n,sigma_current_e,Dl_ln_xx,Dl_ln_yy,Dq_ln_xx,Dq_ln_yy,sigma_Dl_ln_xx,sigma_Dl_ln_yy,"
-			 "sigma_Dq_ln_xx,sigma_Dq_ln_yy\n";
+		s << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d,sigma_att_n,"
+		     "sigma_att_e,"
+		     "sigma_att_d,cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed,current_n,"
+		     "current_e,"
+		     "sigma_current_n,sigma_current_e,Dl_ln_xx,Dl_ln_yy,Dq_ln_xx,Dq_ln_yy,sigma_Dl_ln_xx,sigma_Dl_ln_"
+		     "yy,"
+		     "sigma_Dq_ln_xx,sigma_Dq_ln_yy\n";
 		const double c = std::cos(0.005), z = std::sin(0.005);
 		for (int k = 0; k <= 10; ++k)
-			s << 1000 + k << "," << c << ",0,0," << z << ",11,22,5,1,2,1,0.01,0.01,0.01,0,0,0,0,0,0,0.12,0,0.01,0.01,"
-			  << std::log(40.0) << "," << std::log(1.5) << "," << std::log(8.6) << "," << std::log(5.0) << ",0.1,0.1,0.1,0.1\n";
+			s << 1000 + k << "," << c << ",0,0," << z
+			  << ",11,22,5,1,2,1,0.01,0.01,0.01,0,0,0,0,0,0,0.12,0,0.01,0.01," << std::log(40.0) << ","
+			  << std::log(1.5) << "," << std::log(8.6) << "," << std::log(5.0) << ",0.1,0.1,0.1,0.1\n";
 	}
 	const Evaluation ev = evaluate(dir.string(), (dir / "truth.csv").string(), 1.0);
 	ASSERT_EQ(ev.samples.size(), 11u);
@@ -91,17 +95,20 @@ TEST(Eval, TruthIsInterpolatedToTheStateTimes)
 		for (int k = 0; k <= 50; ++k)
 		{
 			const double tt = 1000 + 0.1 * k, h = 0.5 * yawAt(tt);
-			t << tt << "," << tt - 1000 << ",0,5," << std::cos(h) << ",0,0," << std::sin(h) << ",0,0," << tt - 1000
-			  << "\n";
+			t << tt << "," << tt - 1000 << ",0,5," << std::cos(h) << ",0,0," << std::sin(h) << ",0,0,"
+			  << tt - 1000 << "\n";
 		}
 	}
 	{
 		std::ofstream s(dir / "states.csv");
 		s.precision(17);
-		s << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d,sigma_att_n,sigma_att_e,"
-			 "sigma_att_d,cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed,current_n,current_e,"
-			 "sigma_current_n,sigma_current_e,Dl_ln_xx,Dl_ln_yy,Dq_ln_xx,Dq_ln_yy,sigma_Dl_ln_xx,sigma_Dl_ln_yy,"
-			 "sigma_Dq_ln_xx,sigma_Dq_ln_yy\n";
+		s << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d,sigma_att_n,"
+		     "sigma_att_e,"
+		     "sigma_att_d,cov_pos_ne,cov_pos_nd,cov_pos_ed,cov_att_ne,cov_att_nd,cov_att_ed,current_n,"
+		     "current_e,"
+		     "sigma_current_n,sigma_current_e,Dl_ln_xx,Dl_ln_yy,Dq_ln_xx,Dq_ln_yy,sigma_Dl_ln_xx,sigma_Dl_ln_"
+		     "yy,"
+		     "sigma_Dq_ln_xx,sigma_Dq_ln_yy\n";
 		for (double t : {1000.02, 1001.37, 1003.05, 1004.99})
 		{
 			const double h = 0.5 * yawAt(t);
@@ -152,9 +159,10 @@ TEST(Eval, BandBeyondAFixedRangeStaysInsideTheFrame)
 	p.save(png.string());
 	const cv::Mat img = cv::imread(png.string());
 	ASSERT_FALSE(img.empty());
-	auto tinted = [&](int x, int y) {
+	auto tinted = [&](int x, int y)
+	{
 		const auto& px = img.at<cv::Vec3b>(y, x);
-		return px[0] > px[2] + 40;	// blue over white at 35 %: (255, 166, 166)
+		return px[0] > px[2] + 40;  // blue over white at 35 %: (255, 166, 166)
 	};
 	EXPECT_TRUE(tinted(200, 150)) << "inside the frame";
 	EXPECT_FALSE(tinted(40, 150)) << "left margin (tick labels)";

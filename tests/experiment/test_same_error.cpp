@@ -54,11 +54,11 @@ TEST(ExperimentAndEval, MeasureTheSameErrorOnTheSameRun)
 		   << "seeds: [3]\ninitialization_s: " << init_s << "\ndenial_s: " << std::to_string(denial_s) << "\n"
 		   << "configurations:\n  - {name: \"Inertial + pressure + ADCP + model\", deny: [GPS, DVL]}\n";
 	}
-	ASSERT_EQ(run(std::string(AUVNAV_EXPERIMENT_EXE) + " " + (w / "experiment.yaml").string() + " --keep-rawlogs --out " +
-					  (w / "exp").string(),
-				  w / "experiment.log"),
-			  0)
-		<< slurp(w / "experiment.log");
+	ASSERT_EQ(run(std::string(AUVNAV_EXPERIMENT_EXE) + " " + (w / "experiment.yaml").string() +
+	                  " --keep-rawlogs --out " + (w / "exp").string(),
+	              w / "experiment.log"),
+	          0)
+	    << slurp(w / "experiment.log");
 	// runs.csv: seed,"configuration",error_m,two_sigma_m,inside_2sigma
 	std::smatch m;
 	const std::string runs = slurp(w / "exp" / "runs.csv");
@@ -66,25 +66,28 @@ TEST(ExperimentAndEval, MeasureTheSameErrorOnTheSameRun)
 	const double experiment_error = std::stod(m[1]);
 
 	const fs::path seed = w / "exp" / "seed_3";
-	const std::string deny = " --deny GPS:" + std::to_string(init_s) + ":" + std::to_string(init_s + denial_s) +
-							 " --deny DVL:" + std::to_string(init_s) + ":" + std::to_string(init_s + denial_s);
-	ASSERT_EQ(run(std::string(AUVNAV_RUN_EXE) + " --quiet --config " + kRepo + "/config/flatfish.yaml" + deny +
-					  " --set outputs.rate_hz=1000 --out " + (w / "run").string() + " " +
-					  (seed / "short_test.rawlog").string(),
-				  w / "run.log"),
-			  0)
-		<< slurp(w / "run.log");
+	const std::string deny = " --deny GPS:" + std::to_string(init_s) + ":" +
+	                         std::to_string(init_s + denial_s) + " --deny DVL:" + std::to_string(init_s) +
+	                         ":" + std::to_string(init_s + denial_s);
+	ASSERT_EQ(run(std::string(AUVNAV_RUN_EXE) + " --quiet --config " + kRepo + "/config/flatfish.yaml" +
+	                  deny + " --set outputs.rate_hz=1000 --out " + (w / "run").string() + " " +
+	                  (seed / "short_test.rawlog").string(),
+	              w / "run.log"),
+	          0)
+	    << slurp(w / "run.log");
 	ASSERT_EQ(run(std::string(AUVNAV_EVAL_EXE) + " --run " + (w / "run").string() + " --truth " +
-					  (seed / "ground_truth.csv").string() + " --at " + std::to_string(init_s + denial_s) + " --out " +
-					  (w / "eval").string(),
-				  w / "eval.log"),
-			  0)
-		<< slurp(w / "eval.log");
+	                  (seed / "ground_truth.csv").string() + " --at " + std::to_string(init_s + denial_s) +
+	                  " --out " + (w / "eval").string(),
+	              w / "eval.log"),
+	          0)
+	    << slurp(w / "eval.log");
 	const std::string md = slurp(w / "eval" / "eval.md");
-	ASSERT_TRUE(std::regex_search(md, m, std::regex("Horizontal error at [.0-9]+ s after the truth's start: ([.0-9]+) m")))
-		<< md;
+	ASSERT_TRUE(std::regex_search(
+	    md, m, std::regex("Horizontal error at [.0-9]+ s after the truth's start: ([.0-9]+) m")))
+	    << md;
 	const double eval_error = std::stod(m[1]);
-	std::printf("error after the denial: auvnav-experiment %.6g m, auvnav-eval %.6g m\n", experiment_error, eval_error);
+	std::printf("error after the denial: auvnav-experiment %.6g m, auvnav-eval %.6g m\n", experiment_error,
+	            eval_error);
 	EXPECT_GT(experiment_error, 0.0);
 	EXPECT_NEAR(eval_error, experiment_error, 1e-5 * std::max(1.0, experiment_error));
 }

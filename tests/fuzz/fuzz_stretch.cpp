@@ -23,7 +23,8 @@ namespace
 /** The bytes StretchWriter writes before the first record, n = core_dim. */
 const Bytes& validHeader()
 {
-	static const Bytes header = [] {
+	static const Bytes header = []
+	{
 		const int fd = memfd_create("auvnav-fuzz-header", 0);
 		FUZZ_CHECK(fd >= 0, "memfd_create");
 		const std::string path = "/proc/self/fd/" + std::to_string(fd);
@@ -58,7 +59,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size)
 		if (size < 3) return 0;
 		file = validHeader();
 		const std::size_t records_bytes =
-			static_cast<std::size_t>(auvnav::stretchRecordBytes(auvnav::idx::core_dim)) * (1 + data[1] % 3);
+		    static_cast<std::size_t>(auvnav::stretchRecordBytes(auvnav::idx::core_dim)) * (1 + data[1] % 3);
 		for (std::size_t i = 0; i < records_bytes; ++i) file.push_back(data[2 + i % (size - 2)]);
 	}
 	else
@@ -66,11 +67,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size)
 	const MemFile mem(file.data(), file.size());
 	try
 	{
-		auvnav::smoothStretchFile(mem.path(), [](double, const auvnav::NavState& x, const auvnav::Covariance& P,
-												 auvnav::SmoothedKind) {
-			FUZZ_CHECK(x.dim() == auvnav::idx::core_dim && P.rows() == x.dim() && P.cols() == x.dim(),
-					   "an estimate of the file's dimension");
-		});
+		auvnav::smoothStretchFile(
+		    mem.path(),
+		    [](double, const auvnav::NavState& x, const auvnav::Covariance& P, auvnav::SmoothedKind)
+		    {
+			    FUZZ_CHECK(x.dim() == auvnav::idx::core_dim && P.rows() == x.dim() && P.cols() == x.dim(),
+			               "an estimate of the file's dimension");
+		    });
 	}
 	catch (const std::runtime_error&)
 	{

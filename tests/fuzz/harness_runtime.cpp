@@ -22,5 +22,5 @@ extern "C" int backtrace(void** buffer, int size)
 extern "C" const char* __lsan_default_suppressions()
 {
 	return "leak:libfyaml.so\n"
-		   "leak:gnss_message::Factory\n";
+	       "leak:gnss_message::Factory\n";
 }

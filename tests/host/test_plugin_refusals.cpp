@@ -44,8 +44,9 @@ std::string pluginError(F&& f)
 	return "";
 }
 
-#define EXPECT_CONTAINS(haystack, needle) \
-	EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << "'" << (haystack) << "' lacks '" << (needle) << "'"
+#define EXPECT_CONTAINS(haystack, needle)                            \
+	EXPECT_NE(std::string(haystack).find(needle), std::string::npos) \
+	    << "'" << (haystack) << "' lacks '" << (needle) << "'"
 
 std::string readFile(const std::string& path)
 {
@@ -68,7 +69,8 @@ config::Node navigatorConfig(const std::string& sensors_block)
 	{
 		if (in_sensors)
 		{
-			if (line.empty() || line[0] == ' ' || line[0] == '\t' || line[0] == '#' || line[0] == '-') continue;
+			if (line.empty() || line[0] == ' ' || line[0] == '\t' || line[0] == '#' || line[0] == '-')
+				continue;
 			in_sensors = false;
 		}
 		if (line.rfind("sensors:", 0) == 0)
@@ -139,7 +141,7 @@ struct NavFixture
 	NavFixture(const std::string& label, const std::string& plugin, const std::string& config_flow)
 	{
 		const auto cfg = navigatorConfig("sensors:\n  - label: " + label + "\n    plugin: " + plugin +
-										 "\n    config: " + config_flow + "\n");
+		                                 "\n    config: " + config_flow + "\n");
 		imu_label = cfg.child("imu").string("label");
 		nav = std::make_unique<Navigator>(cfg, host);
 		t = feedImu(*nav, imu_label, 150);
@@ -211,7 +213,8 @@ TEST(PluginRefusal, WrongAbiVersion)
 TEST(PluginRefusal, MismatchingBuildFingerprint)
 {
 	PluginHost host;
-	const std::string msg = pluginError([&] { host.create(AUVNAV_TEST_PLUGIN_WRONG_FINGERPRINT, "{}", "X"); });
+	const std::string msg =
+	    pluginError([&] { host.create(AUVNAV_TEST_PLUGIN_WRONG_FINGERPRINT, "{}", "X"); });
 	EXPECT_CONTAINS(msg, "plugin 'wrong_fingerprint'");
 	EXPECT_CONTAINS(msg, AUVNAV_TEST_PLUGIN_WRONG_FINGERPRINT);
 	EXPECT_CONTAINS(msg, "built with 'gcc-0.0 eigen-3.0.0 align-8 mrpt-0x100 state-42'");
@@ -222,14 +225,15 @@ TEST(PluginRefusal, MismatchingBuildFingerprint)
 TEST(PluginRefusal, FailingFactorySurfacesThePluginsMessage)
 {
 	PluginHost host;
-	const std::string msg =
-		pluginError([&] { host.create(AUVNAV_TEST_PLUGIN_FAILING_FACTORY, "calibration: /etc/cal.bin\n", "BROKEN"); });
+	const std::string msg = pluginError(
+	    [&] { host.create(AUVNAV_TEST_PLUGIN_FAILING_FACTORY, "calibration: /etc/cal.bin\n", "BROKEN"); });
 	EXPECT_CONTAINS(msg, "plugin 'failing_factory'");
 	EXPECT_CONTAINS(msg, AUVNAV_TEST_PLUGIN_FAILING_FACTORY);
 	EXPECT_CONTAINS(msg, "refused its configuration for sensor 'BROKEN'");
 	EXPECT_CONTAINS(msg, "calibration file '/etc/cal.bin' cannot be read (failing_factory test plugin)");
 	// A config the plugin's config reader rejects: the ConfigError text surfaces too.
-	const std::string msg2 = pluginError([&] { host.create(AUVNAV_TEST_PLUGIN_PROBE, "mode: sideways\n", "P"); });
+	const std::string msg2 =
+	    pluginError([&] { host.create(AUVNAV_TEST_PLUGIN_PROBE, "mode: sideways\n", "P"); });
 	EXPECT_CONTAINS(msg2, "refused its configuration for sensor 'P'");
 	EXPECT_CONTAINS(msg2, "mode");
 	EXPECT_CONTAINS(msg2, "expected passthrough or nan_h");
@@ -491,14 +495,14 @@ TEST_P(ShippedPlugin, RefusesAMisspelledKeyWithTheNearestValidOne)
 }
 
 INSTANTIATE_TEST_SUITE_P(Host, ShippedPlugin,
-						 ::testing::Values("adcp", "ahrs", "dvl", "gps", "inertial", "magnetometer", "model_aiding",
-										   "pressure", "sonar_heading"));
+                         ::testing::Values("adcp", "ahrs", "dvl", "gps", "inertial", "magnetometer",
+                                           "model_aiding", "pressure", "sonar_heading"));
 
 TEST(PluginConfig, MisspelledKeyThroughTheNavigatorNamesTheFileAndTheEntry)
 {
 	PluginHost host;
-	const auto cfg = navigatorConfig(
-		"sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN ", config: {sigma_pa: 100, sigmapa: 3}}\n");
+	const auto cfg = navigatorConfig("sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN
+	                                 ", config: {sigma_pa: 100, sigmapa: 3}}\n");
 	const std::string msg = pluginError([&] { Navigator nav(cfg, host); });
 	EXPECT_CONTAINS(msg, "config/flatfish.yaml: sensors[0].config: ");
 	EXPECT_CONTAINS(msg, "sigmapa: unknown key (did you mean 'sigma_pa'?)");
@@ -507,18 +511,19 @@ TEST(PluginConfig, MisspelledKeyThroughTheNavigatorNamesTheFileAndTheEntry)
 TEST(NavigatorConfig, MisspelledKeysAreRefusedWithTheNearestValidOne)
 {
 	PluginHost host;
-	const std::string sensors = "sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN ", config: {}}\n";
+	const std::string sensors =
+	    "sensors:\n  - {label: DEPTH, plugin: " AUVNAV_PRESSURE_PLUGIN ", config: {}}\n";
 	{
 		const auto cfg = navigatorConfig(sensors);
 		EXPECT_NO_THROW({ const Navigator nav(cfg, host); });
 	}
 	const std::vector<std::pair<std::string, std::string>> cases = {
-		{"filter.initial.heading_dg", "filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)"},
-		{"imu.max_gap", "imu.max_gap: unknown key (did you mean 'max_gap_s'?)"},
-		{"filter.process_noise.gyro_arw_deg_per_sqrt_hh",
-		 "filter.process_noise.gyro_arw_deg_per_sqrt_hh: unknown key (did you mean"},
-		{"gatse.recovery_after_s", "gatse: unknown key (did you mean 'gates'?)"},
-		{"sensors.DEPTH.plugn", "sensors[0].plugn: unknown key (did you mean 'plugin'?)"},
+	    {"filter.initial.heading_dg", "filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)"},
+	    {"imu.max_gap", "imu.max_gap: unknown key (did you mean 'max_gap_s'?)"},
+	    {"filter.process_noise.gyro_arw_deg_per_sqrt_hh",
+	     "filter.process_noise.gyro_arw_deg_per_sqrt_hh: unknown key (did you mean"},
+	    {"gatse.recovery_after_s", "gatse: unknown key (did you mean 'gates'?)"},
+	    {"sensors.DEPTH.plugn", "sensors[0].plugn: unknown key (did you mean 'plugin'?)"},
 	};
 	for (const auto& [key, expected] : cases)
 	{

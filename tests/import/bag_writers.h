@@ -134,7 +134,7 @@ ros::Time toRosTime(TimeNs ns);
 /** Writes a ROS 1 bag: chunks of about `chunk_bytes`, compressed or not. */
 class Ros1BagWriter
 {
-   public:
+ public:
 	explicit Ros1BagWriter(
 	    const std::string& path, uint32_t chunk_bytes = 768 * 1024,
 	    rosbag::compression::CompressionType compression = rosbag::compression::Uncompressed);
@@ -151,7 +151,7 @@ class Ros1BagWriter
 	/** Writes the index; the bag is unreadable without it. Idempotent. */
 	void close();
 
-   private:
+ private:
 	rosbag::Bag bag_;
 	bool open_ = false;
 };
@@ -160,7 +160,7 @@ class Ros1BagWriter
  *  endian), then the fields in definition order. */
 class CdrWriter
 {
-   public:
+ public:
 	explicit CdrWriter(bool little_endian = true);
 
 	/** Pads with zeros up to a multiple of `n` (counted after the header). */
@@ -190,7 +190,7 @@ class CdrWriter
 
 	const std::vector<uint8_t>& bytes() const { return bytes_; }
 
-   private:
+ private:
 	void putRaw(const void* p, std::size_t n);
 	std::vector<uint8_t> bytes_;
 	bool swap_;
@@ -211,7 +211,7 @@ std::vector<uint8_t> toRos2Cdr(const auvnav_test::DvlData& m, bool little_endian
  *  has neither. Messages are committed by close() (or the destructor). */
 class Ros2BagWriter
 {
-   public:
+ public:
 	enum class Layout
 	{
 		Jazzy,
@@ -232,7 +232,7 @@ class Ros2BagWriter
 	void write(const std::string& topic, TimeNs record_time_ns, const std::vector<uint8_t>& cdr);
 	void close();
 
-   private:
+ private:
 	void exec(const std::string& sql);
 	int64_t topicId(const std::string& name) const;
 

@@ -4,6 +4,7 @@
 // pressure and GPS travel as sensor_msgs types; the DVL, ADCP and thrusters as
 // message types that exist only in this test (their definitions are stored in
 // the bags, so the importer must decode them from there).
+#include <auvnav/import/importer.h>
 #include <auvnav/import/time_format.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/CObservationADCP.h>
@@ -11,7 +12,6 @@
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
 #include <auvnav/testing/scratch_dir.h>
-#include <auvnav/import/importer.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
@@ -23,8 +23,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "bag_writers.h"
 #include <unistd.h>
+#include "bag_writers.h"
 
 namespace fs = std::filesystem;
 using auvnav::import::testing::CdrWriter;
@@ -67,50 +67,54 @@ struct Efforts
 };
 
 const char* const kSep = "================================================================================\n";
-const std::string kRos1Header = std::string(kSep) + "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n";
+const std::string kRos1Header =
+    std::string(kSep) + "MSG: std_msgs/Header\nuint32 seq\ntime stamp\nstring frame_id\n";
 const std::string kRos2Header = std::string(kSep) +
-								"MSG: std_msgs/msg/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" + kSep +
-								"MSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n";
+                                "MSG: std_msgs/msg/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n" +
+                                kSep + "MSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n";
 const std::string kDvlBody =
-	"float64[3] velocity        # sensor over the seabed, sensor frame [m/s]\n"
-	"float64[9] velocity_covariance\nbool bottom_lock\nfloat64 altitude\nBeam[] beams\n";
-const std::string kDvlRos1 = "Header header\n" + kDvlBody + kRos1Header + kSep + "MSG: auvnav_rt/Beam\nfloat64 range\nbool valid\n";
+    "float64[3] velocity        # sensor over the seabed, sensor frame [m/s]\n"
+    "float64[9] velocity_covariance\nbool bottom_lock\nfloat64 altitude\nBeam[] beams\n";
+const std::string kDvlRos1 =
+    "Header header\n" + kDvlBody + kRos1Header + kSep + "MSG: auvnav_rt/Beam\nfloat64 range\nbool valid\n";
 const std::string kDvlRos2 = "std_msgs/Header header\n" + kDvlBody + kRos2Header + kSep +
-							 "MSG: auvnav_rt/msg/Beam\nfloat64 range\nbool valid\n";
-const std::string kAdcpBody = "float64 blank_distance\nfloat64 cell_size\nfloat64 velocity_sigma\nCell[] cells\n";
+                             "MSG: auvnav_rt/msg/Beam\nfloat64 range\nbool valid\n";
+const std::string kAdcpBody =
+    "float64 blank_distance\nfloat64 cell_size\nfloat64 velocity_sigma\nCell[] cells\n";
 const std::string kAdcpRos1 = "Header header\n" + kAdcpBody + kRos1Header + kSep +
-							  "MSG: auvnav_rt/Cell\nfloat64[3] velocity\nfloat64 correlation\nbool valid\n";
-const std::string kAdcpRos2 = "std_msgs/Header header\n" + kAdcpBody + kRos2Header + kSep +
-							  "MSG: auvnav_rt/msg/Cell\nfloat64[3] velocity\nfloat64 correlation\nbool valid\n";
+                              "MSG: auvnav_rt/Cell\nfloat64[3] velocity\nfloat64 correlation\nbool valid\n";
+const std::string kAdcpRos2 =
+    "std_msgs/Header header\n" + kAdcpBody + kRos2Header + kSep +
+    "MSG: auvnav_rt/msg/Cell\nfloat64[3] velocity\nfloat64 correlation\nbool valid\n";
 const std::string kEffortsRos1 = "Header header\nfloat64[] effort\n" + kRos1Header;
 const std::string kEffortsRos2 = "std_msgs/Header header\nfloat64[] effort\n" + kRos2Header;
 }  // namespace auvnav_rt
 
-#define AUVNAV_RT_TRAITS(Type, Name, Def)                                                  \
-	namespace ros::message_traits                                                          \
-	{                                                                                      \
-	template <>                                                                            \
-	struct DataType<auvnav_rt::Type>                                                       \
-	{                                                                                      \
-		static const char* value() { return Name; }                                        \
-		static const char* value(const auvnav_rt::Type&) { return value(); }               \
-	};                                                                                     \
-	template <>                                                                            \
-	struct MD5Sum<auvnav_rt::Type>                                                         \
-	{                                                                                      \
-		static const char* value() { return "00000000000000000000000000000000"; }          \
-		static const char* value(const auvnav_rt::Type&) { return value(); }               \
-	};                                                                                     \
-	template <>                                                                            \
-	struct Definition<auvnav_rt::Type>                                                     \
-	{                                                                                      \
-		static const char* value() { return Def.c_str(); }                                 \
-		static const char* value(const auvnav_rt::Type&) { return value(); }               \
-	};                                                                                     \
-	template <>                                                                            \
-	struct HasHeader<auvnav_rt::Type> : TrueType                                           \
-	{                                                                                      \
-	};                                                                                     \
+#define AUVNAV_RT_TRAITS(Type, Name, Def)                                         \
+	namespace ros::message_traits                                                 \
+	{                                                                             \
+	template <>                                                                   \
+	struct DataType<auvnav_rt::Type>                                              \
+	{                                                                             \
+		static const char* value() { return Name; }                               \
+		static const char* value(const auvnav_rt::Type&) { return value(); }      \
+	};                                                                            \
+	template <>                                                                   \
+	struct MD5Sum<auvnav_rt::Type>                                                \
+	{                                                                             \
+		static const char* value() { return "00000000000000000000000000000000"; } \
+		static const char* value(const auvnav_rt::Type&) { return value(); }      \
+	};                                                                            \
+	template <>                                                                   \
+	struct Definition<auvnav_rt::Type>                                            \
+	{                                                                             \
+		static const char* value() { return Def.c_str(); }                        \
+		static const char* value(const auvnav_rt::Type&) { return value(); }      \
+	};                                                                            \
+	template <>                                                                   \
+	struct HasHeader<auvnav_rt::Type> : TrueType                                  \
+	{                                                                             \
+	};                                                                            \
 	}
 AUVNAV_RT_TRAITS(DvlReport, "auvnav_rt/DvlReport", auvnav_rt::kDvlRos1)
 AUVNAV_RT_TRAITS(AdcpProfile, "auvnav_rt/AdcpProfile", auvnav_rt::kAdcpRos1)
@@ -265,12 +269,18 @@ struct Ros2Sink final : BagSink
 		bag.addTopic("/thrusters", "auvnav_rt/msg/Efforts", auvnav_rt::kEffortsRos2);
 	}
 	Ros2BagWriter bag;
-	void imu(int64_t t, const sensor_msgs::Imu& m) override { bag.write("/imu", t, auvnav::import::testing::toRos2Cdr(m)); }
+	void imu(int64_t t, const sensor_msgs::Imu& m) override
+	{
+		bag.write("/imu", t, auvnav::import::testing::toRos2Cdr(m));
+	}
 	void pressure(int64_t t, const sensor_msgs::FluidPressure& m) override
 	{
 		bag.write("/pressure", t, auvnav::import::testing::toRos2Cdr(m));
 	}
-	void gps(int64_t t, const sensor_msgs::NavSatFix& m) override { bag.write("/fix", t, auvnav::import::testing::toRos2Cdr(m)); }
+	void gps(int64_t t, const sensor_msgs::NavSatFix& m) override
+	{
+		bag.write("/fix", t, auvnav::import::testing::toRos2Cdr(m));
+	}
 	void dvl(int64_t t, const auvnav_rt::DvlReport& m) override { bag.write("/dvl", t, cdr(m)); }
 	void adcp(int64_t t, const auvnav_rt::AdcpProfile& m) override { bag.write("/adcp", t, cdr(m)); }
 	void thrusters(int64_t t, const auvnav_rt::Efforts& m) override { bag.write("/thrusters", t, cdr(m)); }
@@ -361,24 +371,41 @@ std::string bagSpec(const std::string& kind, const std::string& bag)
 {
 	const std::string src = "source: {" + kind + ": '" + bag + "', topic: ";
 	return "reorder_window_s: 1.0\nsensors:\n"
-		   "  - {label: THRUSTERS, class: thrusters, " + src + "/thrusters}, time: {field: header.stamp},\n"
-		   "     effort: {count: {field: 'effort[]'}, field: 'effort[{i}]', unit: N}}\n"
-		   "  - {label: IMU, class: imu, " + src + "/imu}, time: {field: header.stamp}}\n"
-		   "  - label: DVL\n    class: dvl\n    " + src + "/dvl}\n    time: {field: header.stamp}\n"
-		   "    frame: instrument\n    sign: vehicle_over_bottom\n"
-		   "    velocity: {fields: ['velocity[0]', 'velocity[1]', 'velocity[2]'], unit: m/s}\n"
-		   "    velocity_covariance: {fields: ['velocity_covariance[0]', 'velocity_covariance[1]', 'velocity_covariance[2]',"
-		   " 'velocity_covariance[3]', 'velocity_covariance[4]', 'velocity_covariance[5]', 'velocity_covariance[6]',"
-		   " 'velocity_covariance[7]', 'velocity_covariance[8]'], unit: 'm^2/s^2'}\n"
-		   "    bottom_lock: {field: bottom_lock}\n    altitude: {field: altitude, unit: m}\n"
-		   "    beams: {count: {field: 'beams[]'}, range: {field: 'beams[{i}].range', unit: m}, valid: {field: 'beams[{i}].valid'}}\n"
-		   "  - label: ADCP\n    class: adcp\n    " + src + "/adcp}\n    time: {field: header.stamp}\n"
-		   "    blank_distance: {field: blank_distance, unit: m}\n    cell_size: {field: cell_size, unit: m}\n"
-		   "    velocity_sigma: {field: velocity_sigma, unit: m/s}\n"
-		   "    cells: {count: {field: 'cells[]'}, velocity: {fields: ['cells[{i}].velocity[0]', 'cells[{i}].velocity[1]',"
-		   " 'cells[{i}].velocity[2]'], unit: m/s}, correlation: {field: 'cells[{i}].correlation'}, valid: {field: 'cells[{i}].valid'}}\n"
-		   "  - {label: PRESSURE, class: pressure, " + src + "/pressure}, time: {field: header.stamp}, pressure_reference: absolute}\n"
-		   "  - {label: GPS, class: gps, " + src + "/fix}, time: {field: header.stamp}, altitude_reference: ellipsoid}\n";
+	       "  - {label: THRUSTERS, class: thrusters, " +
+	       src +
+	       "/thrusters}, time: {field: header.stamp},\n"
+	       "     effort: {count: {field: 'effort[]'}, field: 'effort[{i}]', unit: N}}\n"
+	       "  - {label: IMU, class: imu, " +
+	       src +
+	       "/imu}, time: {field: header.stamp}}\n"
+	       "  - label: DVL\n    class: dvl\n    " +
+	       src +
+	       "/dvl}\n    time: {field: header.stamp}\n"
+	       "    frame: instrument\n    sign: vehicle_over_bottom\n"
+	       "    velocity: {fields: ['velocity[0]', 'velocity[1]', 'velocity[2]'], unit: m/s}\n"
+	       "    velocity_covariance: {fields: ['velocity_covariance[0]', 'velocity_covariance[1]', "
+	       "'velocity_covariance[2]',"
+	       " 'velocity_covariance[3]', 'velocity_covariance[4]', 'velocity_covariance[5]', "
+	       "'velocity_covariance[6]',"
+	       " 'velocity_covariance[7]', 'velocity_covariance[8]'], unit: 'm^2/s^2'}\n"
+	       "    bottom_lock: {field: bottom_lock}\n    altitude: {field: altitude, unit: m}\n"
+	       "    beams: {count: {field: 'beams[]'}, range: {field: 'beams[{i}].range', unit: m}, valid: "
+	       "{field: 'beams[{i}].valid'}}\n"
+	       "  - label: ADCP\n    class: adcp\n    " +
+	       src +
+	       "/adcp}\n    time: {field: header.stamp}\n"
+	       "    blank_distance: {field: blank_distance, unit: m}\n    cell_size: {field: cell_size, unit: "
+	       "m}\n"
+	       "    velocity_sigma: {field: velocity_sigma, unit: m/s}\n"
+	       "    cells: {count: {field: 'cells[]'}, velocity: {fields: ['cells[{i}].velocity[0]', "
+	       "'cells[{i}].velocity[1]',"
+	       " 'cells[{i}].velocity[2]'], unit: m/s}, correlation: {field: 'cells[{i}].correlation'}, valid: "
+	       "{field: 'cells[{i}].valid'}}\n"
+	       "  - {label: PRESSURE, class: pressure, " +
+	       src +
+	       "/pressure}, time: {field: header.stamp}, pressure_reference: absolute}\n"
+	       "  - {label: GPS, class: gps, " +
+	       src + "/fix}, time: {field: header.stamp}, altitude_reference: ellipsoid}\n";
 }
 
 int run(const std::string& cmd, const fs::path& log)
@@ -400,13 +427,14 @@ std::string slurp(const fs::path& p)
 auvnav::testing::ScratchDir simulated(const std::string& kind)
 {
 	auvnav::testing::ScratchDir d("bag_round_trip_" + kind);
-	EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " + (d / "sim").string(),
-				  d / "sim.log"),
-			  0);
+	EXPECT_EQ(run(kBin + "/auvnav-sim " + kSource + "/tests/data/short_mission.yaml --seed 5 --out " +
+	                  (d / "sim").string(),
+	              d / "sim.log"),
+	          0);
 	EXPECT_EQ(run(kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
-					  (d / "run_original").string() + " " + (d / "sim" / "short_test.rawlog").string(),
-				  d / "run_original.log"),
-			  0);
+	                  (d / "run_original").string() + " " + (d / "sim" / "short_test.rawlog").string(),
+	              d / "run_original.log"),
+	          0);
 	return d;
 }
 
@@ -425,15 +453,15 @@ void checkBagRoundTrip(const std::string& kind)
 	std::ofstream(d / (kind + ".yaml")) << bagSpec(kind, bag_name);
 	const std::string out = (d / (kind + ".rawlog")).string();
 	ASSERT_EQ(run(kBin + "/auvnav-import --spec " + (d / (kind + ".yaml")).string() + " --out " + out + " " +
-					  (d / bag_name).string(),
-				  d / (kind + "_import.log")),
-			  0)
-		<< slurp(d / (kind + "_import.log"));
+	                  (d / bag_name).string(),
+	              d / (kind + "_import.log")),
+	          0)
+	    << slurp(d / (kind + "_import.log"));
 	ASSERT_EQ(run(kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
-					  (d / ("run_" + kind)).string() + " " + out,
-				  d / ("run_" + kind + ".log")),
-			  0)
-		<< slurp(d / ("run_" + kind + ".log"));
+	                  (d / ("run_" + kind)).string() + " " + out,
+	              d / ("run_" + kind + ".log")),
+	          0)
+	    << slurp(d / ("run_" + kind + ".log"));
 	const std::string a = slurp(d / "run_original" / "trajectory.tum");
 	const std::string b = slurp(d / ("run_" + kind) / "trajectory.tum");
 	EXPECT_GT(a.size(), 10000u);
@@ -442,8 +470,14 @@ void checkBagRoundTrip(const std::string& kind)
 }
 }  // namespace
 
-TEST(ImportBagRoundTrip, Ros1BagGivesTheSameTrajectory) { checkBagRoundTrip("ros1"); }
-TEST(ImportBagRoundTrip, Ros2BagGivesTheSameTrajectory) { checkBagRoundTrip("ros2"); }
+TEST(ImportBagRoundTrip, Ros1BagGivesTheSameTrajectory)
+{
+	checkBagRoundTrip("ros1");
+}
+TEST(ImportBagRoundTrip, Ros2BagGivesTheSameTrajectory)
+{
+	checkBagRoundTrip("ros2");
+}
 
 // ---------------------------------------------------------------- bad bag input
 
@@ -494,18 +528,20 @@ TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 	for (const std::string kind : {"ros1", "ros2"})
 	{
 		const std::string bag = kind == "ros1" ? "small.bag" : "small.db3";
-		const std::string err = importError(
-			d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag + ", topic: /imu/data}, time: {field: header.stamp}}\n",
-			(d / bag).string());
+		const std::string err = importError(d.path(),
+		                                    "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " +
+		                                        bag + ", topic: /imu/data}, time: {field: header.stamp}}\n",
+		                                    (d / bag).string());
 		EXPECT_THAT(err, ::testing::HasSubstr(bag)) << kind;
 		EXPECT_THAT(err, ::testing::HasSubstr("/imu/data")) << kind;
 		EXPECT_THAT(err, ::testing::HasSubstr("/imu (sensor_msgs")) << kind << ": " << err;
 		// The right topic imports.
-		EXPECT_EQ(importError(d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag +
-									 ", topic: /imu}, time: {field: header.stamp}}\n",
-							  (d / bag).string()),
-				  "")
-			<< kind;
+		EXPECT_EQ(importError(d.path(),
+		                      "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + bag +
+		                          ", topic: /imu}, time: {field: header.stamp}}\n",
+		                      (d / bag).string()),
+		          "")
+		    << kind;
 	}
 }
 
@@ -518,9 +554,10 @@ TEST(ImportBagBadInput, TruncatedBagIsAClearError)
 		fs::copy_file(d / bag, d / cut, fs::copy_options::overwrite_existing);
 		fs::resize_file(d / cut, fs::file_size(d / bag) / 2);
 		const std::string kind = bag == "small.bag" ? "ros1" : "ros2";
-		const std::string err = importError(
-			d.path(), "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " + cut + ", topic: /imu}, time: {field: header.stamp}}\n",
-			(d / cut).string());
+		const std::string err = importError(d.path(),
+		                                    "sensors:\n  - {label: IMU, class: imu, source: {" + kind + ": " +
+		                                        cut + ", topic: /imu}, time: {field: header.stamp}}\n",
+		                                    (d / cut).string());
 		EXPECT_THAT(err, ::testing::HasSubstr(cut)) << err;
 		EXPECT_THAT(err, ::testing::HasSubstr("truncated"));
 		std::printf("%s: %s\n", cut.c_str(), err.c_str());

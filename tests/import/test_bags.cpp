@@ -836,14 +836,16 @@ TEST(Ros1Bag, NumericTimeFieldNeedsAFormat)
 	// + 1000 i) as seconds without time.format would be a silent 1e3..1e9 error.
 	const fs::path dir = fs::path(scratch("numeric_time_dir"));
 	fs::create_directories(dir);
-	auto import = [&](const std::string& time) {
-		std::ofstream(dir / "spec.yaml") << "sensors:\n  - {label: P, class: pressure, source: {ros1: '" + ros1Bag() +
-												"', topic: /depth}, time: " + time + ", pressure_reference: absolute}\n";
+	auto import = [&](const std::string& time)
+	{
+		std::ofstream(dir / "spec.yaml") << "sensors:\n  - {label: P, class: pressure, source: {ros1: '" +
+		                                        ros1Bag() + "', topic: /depth}, time: " + time +
+		                                        ", pressure_reference: absolute}\n";
 		ImportOptions opt;
 		opt.spec_path = (dir / "spec.yaml").string();
 		opt.inputs = {ros1Bag()};
 		opt.out_rawlog = (dir / "out.rawlog").string();
-		opt.lenient = true;	 // a spec error stops the import even so
+		opt.lenient = true;  // a spec error stops the import even so
 		ImportReport rep;
 		try
 		{
@@ -862,7 +864,7 @@ TEST(Ros1Bag, NumericTimeFieldNeedsAFormat)
 	auvnav::io::RawlogReader r((dir / "out.rawlog").string());
 	const auto o = r.next();
 	ASSERT_TRUE(o);
-	EXPECT_EQ(fromMrptTime(o->timestamp), 101325000000LL);	// 101325 ms
+	EXPECT_EQ(fromMrptTime(o->timestamp), 101325000000LL);  // 101325 ms
 }
 
 TEST(Ros1Bag, CompressedChunks)
@@ -1391,7 +1393,7 @@ namespace
 /** Removes the scratch folder after the last test. */
 class ScratchCleanup : public ::testing::Environment
 {
-   public:
+ public:
 	void TearDown() override
 	{
 		std::error_code ec;

@@ -11,8 +11,8 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
-#include <gmock/gmock.h>
 #include <auvnav/testing/scratch_dir.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -20,13 +20,13 @@
 
 #include <opencv2/core.hpp>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
-#include <unistd.h>
 
 using namespace auvnav::import;
 using ::testing::HasSubstr;
@@ -34,7 +34,10 @@ namespace fs = std::filesystem;
 
 namespace
 {
-fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("import_test", name); }
+fs::path scratch(const std::string& name)
+{
+	return auvnav::testing::scratchFolder("import_test", name);
+}
 
 void write(const fs::path& p, const std::string& text)
 {
@@ -51,7 +54,8 @@ std::vector<mrpt::obs::CObservation::Ptr> readAll(const std::string& rawlog)
 }
 
 /** Runs an import of `spec_text` over folder `dir`; returns the error text ("" if none). */
-std::string importError(const fs::path& dir, const std::string& spec_text, ImportReport& report, bool lenient = false)
+std::string importError(const fs::path& dir, const std::string& spec_text, ImportReport& report,
+                        bool lenient = false)
 {
 	write(dir / "spec.yaml", spec_text);
 	ImportOptions opt;
@@ -135,7 +139,8 @@ TEST(ImportTime, ParsesExactly)
 	EXPECT_EQ(*parseTime("1.453606148457768e9", TimeFormat::Seconds, why), 1453606148457768000LL);
 	EXPECT_EQ(*parseTime("-0.5", TimeFormat::Seconds, why), -500000000LL);
 	EXPECT_EQ(*parseTime("2016-01-24T03:29:08.457768Z", TimeFormat::Iso8601, why), 1453606148457768000LL);
-	EXPECT_EQ(*parseTime("2016-01-23T22:29:08.457768-05:00", TimeFormat::Iso8601, why), 1453606148457768000LL);
+	EXPECT_EQ(*parseTime("2016-01-23T22:29:08.457768-05:00", TimeFormat::Iso8601, why),
+	          1453606148457768000LL);
 	EXPECT_EQ(*parseTime("1970-01-01 00:00:01", TimeFormat::Iso8601, why), 1000000000LL);
 	EXPECT_FALSE(parseTime("12:00", TimeFormat::Seconds, why));
 	EXPECT_FALSE(parseTime("", TimeFormat::Seconds, why));
@@ -223,8 +228,8 @@ sensors:
   - {label: MAG, class: imu, source: {csv: mag.csv}, time: {field: t, format: s},
      magnetic_field: {fields: [mx, my, mz], unit: uT}, axes: [x, -y, -z]}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	const auto* imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(obs.at(0).get());
 	ASSERT_NE(imu, nullptr);
@@ -238,10 +243,10 @@ TEST(Import, DvlPd0EarthWithRangesAndFrameMap)
 {
 	const auto dir = scratch("dvl");
 	write(dir / "dvl.csv",
-		  "t,r1,r2,r3,r4,v1,v2,v3,coord\n"
-		  "1,3.3,3.5,3.4,3.4,0.022,-0.029,-0.003,3\n"
-		  "2,3.3,,3.4,3.4,nan,nan,nan,3\n"
-		  "3,3.3,3.5,3.4,3.4,-32768,-32768,-32768,1\n");
+	      "t,r1,r2,r3,r4,v1,v2,v3,coord\n"
+	      "1,3.3,3.5,3.4,3.4,0.022,-0.029,-0.003,3\n"
+	      "2,3.3,,3.4,3.4,nan,nan,nan,3\n"
+	      "3,3.3,3.5,3.4,3.4,-32768,-32768,-32768,1\n");
 	ImportReport rep;
 	ASSERT_EQ(importError(dir, R"(
 sensors:
@@ -256,8 +261,8 @@ sensors:
     beam_inclination: {value: 30, unit: deg}
     mounting: {position_m: [0, 0, 0.15], orientation_ypr_deg: [45, 0, 0]}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 3u);
 	using auvnav::obs::CObservationDVL;
@@ -266,17 +271,17 @@ sensors:
 	EXPECT_EQ(d0->frame, auvnav::obs::DvlFrame::EarthEnu);
 	EXPECT_EQ(d0->sign, auvnav::obs::DvlSign::BottomOverInstrument);
 	EXPECT_TRUE(d0->bottom_lock);
-	EXPECT_DOUBLE_EQ(d0->velocity_s_mps[0], 0.022);	// earth frames are not axis-mapped
+	EXPECT_DOUBLE_EQ(d0->velocity_s_mps[0], 0.022);  // earth frames are not axis-mapped
 	EXPECT_NEAR(d0->altitude_m, (3.3 + 3.5 + 3.4 + 3.4) / 4, 1e-12);
 	ASSERT_EQ(d0->beams.size(), 4u);
 	EXPECT_NEAR(d0->sensorPose.z(), 0.15, 1e-12);
 	const auto* d1 = dynamic_cast<const CObservationDVL*>(obs[1].get());
-	EXPECT_FALSE(d1->bottom_lock);	// NaN velocity: no lock, not an error
+	EXPECT_FALSE(d1->bottom_lock);  // NaN velocity: no lock, not an error
 	EXPECT_FALSE(d1->beams[1].valid);
 	EXPECT_NEAR(d1->altitude_m, (3.3 + 3.4 + 3.4) / 3, 1e-12);
 	const auto* d2 = dynamic_cast<const CObservationDVL*>(obs[2].get());
 	EXPECT_EQ(d2->frame, auvnav::obs::DvlFrame::Instrument);
-	EXPECT_FALSE(d2->bottom_lock);	// PD0 -32768: invalid
+	EXPECT_FALSE(d2->bottom_lock);  // PD0 -32768: invalid
 }
 
 TEST(Import, PressureUnitsGaugeAndDepth)
@@ -292,8 +297,8 @@ sensors:
   - {label: P2, class: pressure, source: {csv: p.csv}, time: {field: t, format: s},
      depth: {field: depth, unit: m}, atmospheric_pressure_pa: 101325, density_kg_m3: 1000, gravity_mps2: 9.81}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 2u);
 	for (const auto& o : obs)
@@ -315,15 +320,15 @@ sensors:
   - {label: P, class: pressure, source: {csv: p.csv}, time: {field: t, format: s},
      depth: {field: depth, unit: m}, atmospheric_pressure_pa: 101325}
 )",
-							rep2),
-				HasSubstr("sensors[0].density_kg_m3"));
+	                        rep2),
+	            HasSubstr("sensors[0].density_kg_m3"));
 	EXPECT_THAT(importError(dir, R"(
 sensors:
   - {label: P, class: pressure, source: {csv: p.csv}, time: {field: t, format: s},
      pressure: {field: p_kpa, unit: kPa}}
 )",
-							rep2),
-				HasSubstr("pressure_reference: required"));
+	                        rep2),
+	            HasSubstr("pressure_reference: required"));
 }
 
 TEST(Import, GpsFromDegrees)
@@ -337,8 +342,8 @@ sensors:
      latitude: {field: lat, unit: deg}, longitude: {field: lon, unit: deg},
      altitude: {field: alt, unit: m}, altitude_reference: msl, fix_quality: {field: q}}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 2u);
 	auto* g = dynamic_cast<mrpt::obs::CObservationGPS*>(obs[0].get());
@@ -353,8 +358,8 @@ sensors:
 	EXPECT_EQ(lon_deg, -38.43);
 	EXPECT_EQ(quality, 1);
 	const int quality_1 = dynamic_cast<mrpt::obs::CObservationGPS*>(obs[1].get())
-							  ->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>()
-							  .fields.fix_quality;
+	                          ->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>()
+	                          .fields.fix_quality;
 	EXPECT_EQ(quality_1, 0);
 }
 
@@ -379,8 +384,8 @@ sensors:
     time: {field: t, format: s}
     effort: {count: 3, field: 'e{i}', unit: N}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 2u);
 	const auto* a = dynamic_cast<const auvnav::obs::CObservationADCP*>(obs[0].get());
@@ -406,9 +411,9 @@ TEST(Import, InterleavedJitteredSourcesComeOutInTimeOrder)
 	for (int i = 0; i < 100; ++i)
 	{
 		double t = 100 + 0.01 * i;
-		if (i == 10) t = 100 + 0.01 * 9;	  // repeated stamp
-		if (i == 20) t = 100 + 0.01 * 17;	  // 30 ms back
-		if (i >= 50) t += 0.3;				  // gap
+		if (i == 10) t = 100 + 0.01 * 9;   // repeated stamp
+		if (i == 20) t = 100 + 0.01 * 17;  // 30 ms back
+		if (i >= 50) t += 0.3;             // gap
 		imu += std::to_string(t) + ",0,0,0,0,0,1\n";
 	}
 	std::string mag = "t,mx,my,mz\n";
@@ -421,8 +426,8 @@ TEST(Import, InterleavedJitteredSourcesComeOutInTimeOrder)
      magnetic_field: {fields: [mx, my, mz], unit: uT}}
 reorder_window_s: 0.1
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 150u);
 	for (std::size_t i = 1; i < obs.size(); ++i) ASSERT_LE(obs[i - 1]->timestamp, obs[i]->timestamp) << i;
@@ -447,8 +452,8 @@ TEST(Import, ClockJumpsAreReportedNotFollowedBlindly)
 	for (int i = 0; i < 30; ++i)
 	{
 		double t = 1000 + 0.01 * i;
-		if (i >= 10) t += 3600;	  // +1 h
-		if (i >= 20) t -= 7200;	  // then 1 h before the start
+		if (i >= 10) t += 3600;  // +1 h
+		if (i >= 20) t -= 7200;  // then 1 h before the start
 		imu += std::to_string(t) + ",0,0,0,0,0,1\n";
 	}
 	write(dir / "imu.csv", imu);
@@ -458,7 +463,8 @@ TEST(Import, ClockJumpsAreReportedNotFollowedBlindly)
 	EXPECT_EQ(s.clock_jumps, 2u);
 	EXPECT_EQ(s.written, 20u);
 	EXPECT_EQ(s.rejected, 10u);
-	EXPECT_EQ(s.rejected_by_reason.begin()->first, "behind the reorder window (older than data already written)");
+	EXPECT_EQ(s.rejected_by_reason.begin()->first,
+	          "behind the reorder window (older than data already written)");
 	ASSERT_EQ(s.clock_jump_notes.size(), 2u);
 	EXPECT_THAT(s.clock_jump_notes[0], HasSubstr("+3600.010 s"));
 	EXPECT_THAT(s.clock_jump_notes[1], HasSubstr("-7199.990 s"));
@@ -478,13 +484,15 @@ TEST(ImportBadInput, MalformedRowNamesFileAndLine)
 	ASSERT_EQ(importError(dir, kImuSpec, lenient, true), "");
 	EXPECT_EQ(lenient.sensors[0].written, 2u);
 	EXPECT_EQ(lenient.sensors[0].rejected, 1u);
-	EXPECT_EQ(lenient.sensors[0].first_rejected_where.at("4 cells, the header has 7"), (dir / "imu.csv").string() + ":3");
+	EXPECT_EQ(lenient.sensors[0].first_rejected_where.at("4 cells, the header has 7"),
+	          (dir / "imu.csv").string() + ":3");
 }
 
 TEST(ImportBadInput, NonNumericAndNonFiniteFields)
 {
 	const auto dir = scratch("bad_number");
-	write(dir / "imu.csv", "t,gx,gy,gz,ax,ay,az\n1,0,0,0,0,0,1\n1.01,0,abc,0,0,0,1\n1.02,0,0,inf,0,0,1\n1.03,0,0,0,0,0,1\n");
+	write(dir / "imu.csv",
+	      "t,gx,gy,gz,ax,ay,az\n1,0,0,0,0,0,1\n1.01,0,abc,0,0,0,1\n1.02,0,0,inf,0,0,1\n1.03,0,0,0,0,0,1\n");
 	ImportReport rep;
 	EXPECT_THAT(importError(dir, kImuSpec, rep), HasSubstr("imu.csv:3: field 'gy': 'abc' is not a number"));
 	ImportReport lenient;
@@ -514,54 +522,54 @@ sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s},
      angular_velocity: {fields: [gx, gy, gz], unit: deg}}
 )"),
-				HasSubstr("sensors[0].angular_velocity.unit: unit 'deg' is an angle"));
+	            HasSubstr("sensors[0].angular_velocity.unit: unit 'deg' is an angle"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s},
      angular_velocity: {fields: [gx, gy, gz], unit: rpm/s}}
 )"),
-				HasSubstr("unknown unit 'rpm/s'"));
+	            HasSubstr("unknown unit 'rpm/s'"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s},
      angular_velocty: {fields: [gx, gy, gz], unit: rad/s}}
 )"),
-				HasSubstr("sensors[0].angular_velocty: unknown key"));
+	            HasSubstr("sensors[0].angular_velocty: unknown key"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t},
      angular_velocity: {fields: [gx, gy, gz], unit: rad/s}}
 )"),
-				HasSubstr("sensors[0].time.format: required for a CSV time column"));
+	            HasSubstr("sensors[0].time.format: required for a CSV time column"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: hours},
      angular_velocity: {fields: [gx, gy, gz], unit: rad/s}}
 )"),
-				HasSubstr("unknown time format 'hours'"));
+	            HasSubstr("unknown time format 'hours'"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: sonar, source: {csv: imu.csv}, time: {field: t, format: s}}
 )"),
-				HasSubstr("unknown observation class 'sonar'"));
+	            HasSubstr("unknown observation class 'sonar'"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: nothere.csv}, time: {field: t, format: s},
      angular_velocity: {fields: [gx, gy, gz], unit: rad/s}}
 )"),
-				HasSubstr("no input matches 'nothere.csv'"));
+	            HasSubstr("no input matches 'nothere.csv'"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s},
      angular_velocity: {fields: [gx, gy, gz], unit: rad/s}, axes: [x, y, w]}
 )"),
-				HasSubstr("sensors[0].axes: 'w' is not one of"));
+	            HasSubstr("sensors[0].axes: 'w' is not one of"));
 	EXPECT_THAT(spec(R"(
 sensors:
   - {label: DVL, class: dvl, source: {csv: imu.csv}, time: {field: t, format: s},
      velocity: {fields: [gx, gy, gz], unit: m/s}}
 )"),
-				HasSubstr("sensors[0].frame: required"));
+	            HasSubstr("sensors[0].frame: required"));
 	EXPECT_FALSE(fs::exists(dir / "out.rawlog") && fs::file_size(dir / "out.rawlog") > 100);
 }
 
@@ -573,15 +581,20 @@ TEST(ImportExport, ShippedSpecIsTheExportLayout)
 	std::stringstream s;
 	s << f.rdbuf();
 	EXPECT_EQ(s.str(), exportSpecText(simulatorLabels(), {{"THRUSTERS", "N"}}, true))
-		<< "regenerate config/import/auvnav_export.yaml from exportSpecText(simulatorLabels(), ..., true)";
+	    << "regenerate config/import/auvnav_export.yaml from exportSpecText(simulatorLabels(), ..., true)";
 }
 
 TEST(ImportExport, SpecTextReadsTheLayoutBack)
 {
 	const auto dir = scratch("export_spec");
-	write(dir / "spec.yaml", exportSpecText({{"IMU", "imu"}, {"DVL", "dvl"}, {"PRESSURE", "pressure"}, {"GPS", "gps"},
-											 {"ADCP", "adcp"}, {"THRUSTERS", "thrusters"}, {"SONAR", "image"}},
-											{{"THRUSTERS", "N"}}));
+	write(dir / "spec.yaml", exportSpecText({{"IMU", "imu"},
+	                                         {"DVL", "dvl"},
+	                                         {"PRESSURE", "pressure"},
+	                                         {"GPS", "gps"},
+	                                         {"ADCP", "adcp"},
+	                                         {"THRUSTERS", "thrusters"},
+	                                         {"SONAR", "image"}},
+	                                        {{"THRUSTERS", "N"}}));
 	EXPECT_NO_THROW(validateSpec((dir / "spec.yaml").string()));
 }
 
@@ -595,8 +608,8 @@ sensors:
   - {label: P, class: pressure, source: {csv: p.csv}, time: {field: when, format: iso8601, offset_s: -0.25},
      pressure: {field: p, unit: Pa}, pressure_reference: absolute}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 2u);
 	EXPECT_EQ(fromMrptTime(obs[0]->timestamp), 1453606148250000000LL);
@@ -615,7 +628,8 @@ TEST(ImportExport, ImagesRoundTripAsPng)
 			o->timestamp = toMrptTime(1000000000000LL + k * 500000000LL);
 			cv::Mat img(40, 32, CV_8UC1);
 			for (int r = 0; r < img.rows; ++r)
-				for (int c = 0; c < img.cols; ++c) img.at<uchar>(r, c) = static_cast<uchar>((r * 7 + c * 3 + k) % 251);
+				for (int c = 0; c < img.cols; ++c)
+					img.at<uchar>(r, c) = static_cast<uchar>((r * 7 + c * 3 + k) % 251);
 			o->image = mrpt::img::CImage(img, mrpt::img::DEEP_COPY);
 			o->cameraParams.ncols = 32;
 			o->cameraParams.nrows = 40;

@@ -15,8 +15,8 @@
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/obs/CObservationThrusters.h>
-#include <gmock/gmock.h>
 #include <auvnav/testing/scratch_dir.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -25,6 +25,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <unistd.h>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -33,7 +34,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-#include <unistd.h>
 
 using namespace auvnav::import;
 using ::testing::ContainsRegex;
@@ -42,7 +42,10 @@ namespace fs = std::filesystem;
 
 namespace
 {
-fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("import_adversarial", name); }
+fs::path scratch(const std::string& name)
+{
+	return auvnav::testing::scratchFolder("import_adversarial", name);
+}
 
 void write(const fs::path& p, const std::string& text)
 {
@@ -67,7 +70,8 @@ std::vector<mrpt::obs::CObservation::Ptr> readAll(const std::string& rawlog)
 }
 
 /** Runs an import of `spec_text` over folder `dir`; returns the error text ("" if none). */
-std::string importError(const fs::path& dir, const std::string& spec_text, ImportReport& report, bool lenient = false)
+std::string importError(const fs::path& dir, const std::string& spec_text, ImportReport& report,
+                        bool lenient = false)
 {
 	write(dir / "spec.yaml", spec_text);
 	ImportOptions opt;
@@ -107,7 +111,8 @@ void writeRawlog(const fs::path& p, const std::vector<mrpt::obs::CObservation::P
 }
 
 /** Exports `in` to `dir/csv` and imports it back with the export's own spec. */
-std::vector<mrpt::obs::CObservation::Ptr> exportImport(const fs::path& dir, const fs::path& in, ExportReport& ex)
+std::vector<mrpt::obs::CObservation::Ptr> exportImport(const fs::path& dir, const fs::path& in,
+                                                       ExportReport& ex)
 {
 	exportRawlog(in.string(), (dir / "csv").string(), ex);
 	ImportOptions opt;
@@ -138,8 +143,8 @@ sensors:
 std::string pressureSensor(const std::string& label, const std::string& file, const std::string& format = "s")
 {
 	return "  - label: " + label + "\n    class: pressure\n    source: {csv: " + file +
-		   "}\n    time: {field: t, format: " + format +
-		   "}\n    pressure: {field: p, unit: Pa}\n    pressure_reference: absolute\n";
+	       "}\n    time: {field: t, format: " + format +
+	       "}\n    pressure: {field: p, unit: Pa}\n    pressure_reference: absolute\n";
 }
 }  // namespace
 
@@ -219,7 +224,8 @@ TEST(ImportAdversarialTime, HugeStepBetweenValidStampsIsAClockJumpNotAnOverflow)
 	ImportReport rep;
 	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("P", "p.csv", "ns"), rep, true), "");
 	const SensorReport& s = rep.sensors[0];
-	EXPECT_TRUE(s.clock_jumps == 1 || s.rejected == 1) << "clock_jumps " << s.clock_jumps << ", rejected " << s.rejected;
+	EXPECT_TRUE(s.clock_jumps == 1 || s.rejected == 1)
+	    << "clock_jumps " << s.clock_jumps << ", rejected " << s.rejected;
 }
 
 // ================================================================ CSV
@@ -248,7 +254,10 @@ TEST(ImportAdversarialCsv, QuotedEmptyCellIsAnEmptyValue)
 	const auto dir = scratch("quoted_empty");
 	write(dir / "imu.csv", "\"t\",\"gx\",\"gy\",\"gz\",\"tc\"\n\"1\",\"0.5\",\"0\",\"0\",\"\"\n");
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, std::string(kImuSpec) + "    temperature: {field: tc, unit: degC, optional: true}\n", rep), "");
+	ASSERT_EQ(
+	    importError(dir, std::string(kImuSpec) + "    temperature: {field: tc, unit: degC, optional: true}\n",
+	                rep),
+	    "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 1u);
 	const auto* m = dynamic_cast<const mrpt::obs::CObservationIMU*>(obs[0].get());
@@ -280,7 +289,8 @@ TEST(ImportAdversarialCsv, OverlongLineIsRefusedWithItsLineNumber)
 	if (lerr.empty())
 	{
 		ASSERT_EQ(lenient.sensors[0].rejected_by_reason.size(), 1u);
-		EXPECT_THAT(lenient.sensors[0].rejected_by_reason.begin()->first, ContainsRegex("too long|line length|exceeds|longer than"));
+		EXPECT_THAT(lenient.sensors[0].rejected_by_reason.begin()->first,
+		            ContainsRegex("too long|line length|exceeds|longer than"));
 		EXPECT_EQ(lenient.sensors[0].written, 1u);
 	}
 	else
@@ -316,13 +326,13 @@ sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s},
      angular_velocity: {fields: [gx, gy, gz], unit: furlong}}
 )"),
-				HasSubstr("unknown unit 'furlong'"));
+	            HasSubstr("unknown unit 'furlong'"));
 	EXPECT_THAT(validateError(dir, R"(
 sensors:
   - {label: DVL, class: dvl, source: {csv: dvl.csv}, time: {field: t, format: s},
      velocity: {fields: [a, b, c], unit: m/s}}
 )"),
-				HasSubstr("frame"));
+	            HasSubstr("frame"));
 }
 
 TEST(ImportAdversarialSpec, OptionalSensorWithoutInputStillHasItsSpecChecked)
@@ -337,8 +347,8 @@ TEST(ImportAdversarialSpec, OptionalSensorWithoutInputStillHasItsSpecChecked)
   - {label: DVL, class: dvl, optional: true, source: {csv: dvl.csv}, time: {field: t, format: s},
      frame: instrument, sign: vehicle_over_bottom, velocity: {fields: [a, b, c], unit: furlong}}
 )",
-							rep),
-				HasSubstr("furlong"));
+	                        rep),
+	            HasSubstr("furlong"));
 }
 
 TEST(ImportAdversarialSpec, AxesThatCannotBeAppliedAreAnError)
@@ -352,14 +362,14 @@ sensors:
   - {label: IMU, class: imu, source: {csv: imu.csv}, time: {field: t, format: s}, axes: [x, -y, -z],
      angular_velocity: {fields: [gx, gy, gz], unit: rad/s}, orientation: {fields: [qw, qx, qy, qz]}}
 )"),
-				HasSubstr("sensors[0].axes"));
+	            HasSubstr("sensors[0].axes"));
 	EXPECT_THAT(validateError(dir, R"(
 sensors:
   - {label: DVL, class: dvl, source: {csv: dvl.csv}, time: {field: t, format: s}, axes: [x, -y, -z],
      frame: beam, sign: vehicle_over_bottom, beam_inclination: {value: 30, unit: deg},
      beams: {count: 4, range: {field: 'r{i}', unit: m}, velocity: {field: 'v{i}', unit: m/s}, azimuth: {field: 'a{i}', unit: rad}}}
 )"),
-				HasSubstr("beam azimuths"));
+	            HasSubstr("beam azimuths"));
 	// A per-record frame: the beam rows are rejected (counted with lenient), the others converted.
 	write(dir / "dvl.csv", "t,f,vx,vy,vz\n1,instrument,0.5,0.25,0\n2,beam,0.5,0.25,0\n");
 	ImportReport rep;
@@ -377,7 +387,7 @@ sensors:
 	ASSERT_EQ(obs.size(), 1u);
 	const auto* d = dynamic_cast<const auvnav::obs::CObservationDVL*>(obs[0].get());
 	ASSERT_NE(d, nullptr);
-	EXPECT_EQ(d->velocity_s_mps[1], -0.25);	 // axes applied to the instrument-frame row
+	EXPECT_EQ(d->velocity_s_mps[1], -0.25);  // axes applied to the instrument-frame row
 }
 
 TEST(ImportAdversarialSpec, HugeClockJumpThresholdDoesNotFlagEveryStep)
@@ -414,8 +424,8 @@ sensors:
     velocity: {fields: [vx, vy, vz], unit: m/s}
     beams: {count: 4, range: {field: 'r{i}', unit: m}}
 )",
-							rep),
-				HasSubstr("beam_inclination"));
+	                        rep),
+	            HasSubstr("beam_inclination"));
 }
 
 TEST(ImportAdversarialSpec, DataDrivenCountBeyondTheColumnsIsACountedRejection)
@@ -452,7 +462,8 @@ TEST(ImportAdversarialConvert, MagnetometerInGaussIsKeptBitExact)
 	char buf[200];
 	for (int i = 0; i + 2 < 5; ++i)
 	{
-		std::snprintf(buf, sizeof buf, "%d,%.17g,%.17g,%.17g\n", i + 1, values[i], values[i + 1], values[i + 2]);
+		std::snprintf(buf, sizeof buf, "%d,%.17g,%.17g,%.17g\n", i + 1, values[i], values[i + 1],
+		              values[i + 2]);
 		csv += buf;
 	}
 	write(dir / "mag.csv", csv);
@@ -462,13 +473,14 @@ sensors:
   - {label: MAG, class: imu, source: {csv: mag.csv}, time: {field: t, format: s},
      magnetic_field: {fields: [mx, my, mz], unit: G}}
 )",
-						  rep),
-			  "");
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 3u);
 	for (int i = 0; i < 3; ++i)
 	{
-		const auto* m = dynamic_cast<const mrpt::obs::CObservationIMU*>(obs[static_cast<std::size_t>(i)].get());
+		const auto* m =
+		    dynamic_cast<const mrpt::obs::CObservationIMU*>(obs[static_cast<std::size_t>(i)].get());
 		ASSERT_NE(m, nullptr);
 		EXPECT_TRUE(same(m->get(mrpt::obs::IMU_MAG_X), values[i])) << i;
 		EXPECT_TRUE(same(m->get(mrpt::obs::IMU_MAG_Y), values[i + 1])) << i;
@@ -492,7 +504,8 @@ void writeColourPng(const fs::path& p)
 {
 	cv::Mat img(6, 8, CV_8UC3);
 	for (int r = 0; r < img.rows; ++r)
-		for (int c = 0; c < img.cols; ++c) img.at<cv::Vec3b>(r, c) = cv::Vec3b(uchar(10 * c), uchar(40 * r), 200);
+		for (int c = 0; c < img.cols; ++c)
+			img.at<cv::Vec3b>(r, c) = cv::Vec3b(uchar(10 * c), uchar(40 * r), 200);
 	mrpt::img::CImage(img, mrpt::img::DEEP_COPY).saveToFile(p.string());
 }
 }  // namespace
@@ -564,7 +577,9 @@ TEST(ImportAdversarialOrder, OneFarFutureStampDoesNotDiscardTheRestOfItsSensor)
 	write(dir / "a.csv", a);
 	write(dir / "b.csv", b);
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep), "");
+	ASSERT_EQ(
+	    importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep),
+	    "");
 	EXPECT_GE(rep.sensors[0].written, 99u);
 	EXPECT_LE(rep.sensors[0].rejected, 1u);
 	EXPECT_EQ(rep.sensors[1].written, 100u);
@@ -591,10 +606,11 @@ TEST(ImportAdversarialOrder, EqualStampsAreWrittenInSpecOrderWithAZeroWindow)
 	write(dir / "a.csv", "t,p\n1,1\n2,2\n2,3\n");
 	write(dir / "b.csv", "t,p\n2,10\n");
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, "reorder_window_s: 0\nsensors:\n" + pressureSensor("A", "a.csv") +
-								   pressureSensor("B", "b.csv"),
-						  rep),
-			  "");
+	ASSERT_EQ(importError(dir,
+	                      "reorder_window_s: 0\nsensors:\n" + pressureSensor("A", "a.csv") +
+	                          pressureSensor("B", "b.csv"),
+	                      rep),
+	          "");
 	const auto obs = readAll((dir / "out.rawlog").string());
 	ASSERT_EQ(obs.size(), 4u);
 	std::string order;
@@ -670,7 +686,7 @@ TEST(ImportAdversarialExport, LabelsMappingToTheSameFileAreNotMerged)
 	}
 	catch (const ImportError&)
 	{
-		return;	 // refusing is fine; merging is not
+		return;  // refusing is fine; merging is not
 	}
 	ASSERT_EQ(ex.sensors.size(), 2u);
 	EXPECT_NE(ex.sensors[0].file, ex.sensors[1].file);
@@ -725,14 +741,14 @@ TEST(ImportAdversarialExport, MixedThrusterUnitsAreNotRelabelled)
 	}
 	catch (const ImportError&)
 	{
-		return;	 // refusing is fine
+		return;  // refusing is fine
 	}
 	for (const auto& b : back)
 	{
 		const auto* t = dynamic_cast<const auvnav::obs::CObservationThrusters*>(b.get());
 		ASSERT_NE(t, nullptr);
 		const auto& orig = *dynamic_cast<const auvnav::obs::CObservationThrusters*>(
-			obs[b->timestamp == obs[0]->timestamp ? 0 : 1].get());
+		    obs[b->timestamp == obs[0]->timestamp ? 0 : 1].get());
 		EXPECT_EQ(t->unit, orig.unit) << "row at " << formatSeconds7(fromMrptTime(b->timestamp));
 	}
 	if (back.size() < 2)
@@ -834,9 +850,9 @@ TEST(ImportAdversarialExport, BeamModeDvlRoundTripIsBitExact)
 	d->beam_inclination_rad = 0.5235987755982988;
 	d->beam_velocity_sigma_mps = 0.0075;
 	d->beams = {{14.5, true, 0.625, 0.7853981633974483},
-				{14.25, true, -0.5, 2.356194490192345},
-				{15.125, true, 0.125, -2.356194490192345},
-				{0.0, false, std::nan(""), -0.7853981633974483}};
+	            {14.25, true, -0.5, 2.356194490192345},
+	            {15.125, true, 0.125, -2.356194490192345},
+	            {0.0, false, std::nan(""), -0.7853981633974483}};
 	d->bottom_lock = true;
 	d->altitude_m = 12.75;
 	d->sensorPose = mrpt::poses::CPose3D(0, 0, 0.15, M_PI / 4, 0, 0);
@@ -849,7 +865,8 @@ TEST(ImportAdversarialExport, BeamModeDvlRoundTripIsBitExact)
 	EXPECT_EQ(b->frame, d->frame);
 	EXPECT_EQ(b->bottom_lock, d->bottom_lock);
 	for (std::size_t k = 0; k < 3; ++k) EXPECT_TRUE(same(b->velocity_s_mps[k], d->velocity_s_mps[k])) << k;
-	for (std::size_t k = 0; k < 9; ++k) EXPECT_TRUE(same(b->velocity_cov[k], d->velocity_cov[k])) << "cov " << k;
+	for (std::size_t k = 0; k < 9; ++k)
+		EXPECT_TRUE(same(b->velocity_cov[k], d->velocity_cov[k])) << "cov " << k;
 	EXPECT_TRUE(same(b->altitude_m, d->altitude_m));
 	ASSERT_EQ(b->beams.size(), d->beams.size());
 	for (std::size_t i = 0; i < d->beams.size(); ++i)
@@ -899,7 +916,9 @@ TEST(ImportAdversarialOrder, FarFutureFirstStampDoesNotDiscardTheRestOfItsSensor
 	write(dir / "a.csv", a);
 	write(dir / "b.csv", b);
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep), "");
+	ASSERT_EQ(
+	    importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep),
+	    "");
 	EXPECT_GE(rep.sensors[0].written, 99u);
 	EXPECT_LE(rep.sensors[0].rejected, 1u);
 	EXPECT_EQ(rep.sensors[1].written, 100u);
@@ -918,7 +937,9 @@ TEST(ImportAdversarialOrder, IsolatedFarFutureStampIsRejectedNotWrittenAYearLate
 	write(dir / "a.csv", a);
 	write(dir / "b.csv", "t,p\n1000.5,1\n1099.5,2\n");
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep), "");
+	ASSERT_EQ(
+	    importError(dir, "sensors:\n" + pressureSensor("A", "a.csv") + pressureSensor("B", "b.csv"), rep),
+	    "");
 	EXPECT_EQ(rep.sensors[0].written, 99u);
 	EXPECT_EQ(rep.sensors[0].rejected, 1u);
 	const auto obs = readAll((dir / "out.rawlog").string());
@@ -935,12 +956,14 @@ TEST(ImportAdversarialOrder, SlowSensorAndRealClockJumpsAreNotTakenForIsolatedSt
 	const auto dir = scratch("not_isolated");
 	std::string gps = "t,p\n", jump = "t,p\n";
 	for (int i = 0; i < 10; ++i) gps += std::to_string(1000 + 60 * i) + "," + std::to_string(i) + "\n";
-	for (int i = 0; i < 10; ++i) jump += std::to_string(i < 5 ? 1000 + i : 5000 + i) + "," + std::to_string(i) + "\n";
+	for (int i = 0; i < 10; ++i)
+		jump += std::to_string(i < 5 ? 1000 + i : 5000 + i) + "," + std::to_string(i) + "\n";
 	write(dir / "slow.csv", gps);
 	write(dir / "jump.csv", jump);
 	ImportReport rep;
-	ASSERT_EQ(importError(dir, "sensors:\n" + pressureSensor("S", "slow.csv") + pressureSensor("J", "jump.csv"), rep),
-			  "");
+	ASSERT_EQ(importError(
+	              dir, "sensors:\n" + pressureSensor("S", "slow.csv") + pressureSensor("J", "jump.csv"), rep),
+	          "");
 	EXPECT_EQ(rep.sensors[0].written, 10u);
 	EXPECT_EQ(rep.sensors[0].rejected, 0u);
 	EXPECT_EQ(rep.sensors[1].written, 10u);

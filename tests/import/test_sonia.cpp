@@ -10,6 +10,7 @@
 #include <mrpt/obs/CObservationIMU.h>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -19,7 +20,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace auvnav::import;
@@ -30,13 +30,16 @@ const std::string kSource = AUVNAV_SOURCE_DIR;
 const std::string kBin = AUVNAV_BIN_DIR;
 const fs::path kData = AUVNAV_SONIA_DIR;
 
-#define SKIP_WITHOUT_DATA()                            \
-	if (!fs::is_directory(kData))                      \
-	{                                                  \
-		GTEST_SKIP() << kData << " not present";       \
+#define SKIP_WITHOUT_DATA()                      \
+	if (!fs::is_directory(kData))                \
+	{                                            \
+		GTEST_SKIP() << kData << " not present"; \
 	}
 
-fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("sonia", name); }
+fs::path scratch(const std::string& name)
+{
+	return auvnav::testing::scratchFolder("sonia", name);
+}
 
 ImportReport importRun(const std::string& spec, const std::vector<std::string>& inputs, const fs::path& out)
 {
@@ -77,10 +80,12 @@ TEST(ImportSonia, EachRunImportsWithTheShippedSpec)
 {
 	SKIP_WITHOUT_DATA();
 	const fs::path d = scratch("csv");
-	const std::map<std::string, std::size_t> imu_rows = {{"2016-01-23_run1", 7807}, {"2016-01-23_run2_heading", 8932}};
+	const std::map<std::string, std::size_t> imu_rows = {{"2016-01-23_run1", 7807},
+	                                                     {"2016-01-23_run2_heading", 8932}};
 	for (const auto& [run, rows] : imu_rows)
 	{
-		const ImportReport rep = importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
+		const ImportReport rep =
+		    importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
 		ASSERT_TRUE(rep.completed) << run;
 		EXPECT_EQ(sensor(rep, "IMU").written, rows) << run;
 		EXPECT_EQ(sensor(rep, "MAG").written, rows) << run;
@@ -103,7 +108,8 @@ TEST(ImportSonia, EachRunImportsWithTheShippedSpec)
 		// At rest the raw accelerometer z reads +9.8: in FRD the specific force is −g on z.
 		const mrpt::obs::CObservationIMU* imu = nullptr;
 		for (const auto& o : obs)
-			if (o->sensorLabel == "IMU" && (imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get()))) break;
+			if (o->sensorLabel == "IMU" && (imu = dynamic_cast<const mrpt::obs::CObservationIMU*>(o.get())))
+				break;
 		ASSERT_NE(imu, nullptr);
 		EXPECT_NEAR(imu->get(mrpt::obs::IMU_Z_ACC), -9.8, 0.3);
 	}
@@ -116,7 +122,8 @@ TEST(ImportSonia, BagDvlWithTheTeamsMessageTypeAgreesWithTheCsv)
 	const std::string run = (kData / "2016-01-23_run1").string();
 	importRun("sonia_pool_2016.yaml", {run}, d / "csv.rawlog");
 	const ImportReport rep =
-		importRun("sonia_dvl_bag.yaml", {run, (kData / "bags" / "2016-01-23-22-29-09_dvl.bag").string()}, d / "bag.rawlog");
+	    importRun("sonia_dvl_bag.yaml", {run, (kData / "bags" / "2016-01-23-22-29-09_dvl.bag").string()},
+	              d / "bag.rawlog");
 	EXPECT_EQ(sensor(rep, "DVL").written, 278u);
 	const auto obs_csv = readAll(d / "csv.rawlog");
 	const auto obs_bag = readAll(d / "bag.rawlog");
@@ -139,10 +146,11 @@ namespace
 // far from a KVH 1750; the navigator profile for such vehicles is issue 13's),
 // the start position from the config (there is no GPS in a pool).
 const char* kMemsOverrides =
-	" --set filter.initial.position=config --set filter.process_noise.gyro_arw_deg_per_sqrt_h=2"
-	" --set filter.initial.gyro_bias_sigma_deg_per_h=200 --set filter.process_noise.gyro_bias_deg_per_h.sigma=20"
-	" --set filter.initial.accel_bias_sigma_mg=10 --set filter.process_noise.accel_bias_mg.sigma=5"
-	" --set filter.initial.heading_sigma_deg=60 --set sensors.IMU.config.vrw_mg_per_sqrt_hz=0.5";
+    " --set filter.initial.position=config --set filter.process_noise.gyro_arw_deg_per_sqrt_h=2"
+    " --set filter.initial.gyro_bias_sigma_deg_per_h=200 --set "
+    "filter.process_noise.gyro_bias_deg_per_h.sigma=20"
+    " --set filter.initial.accel_bias_sigma_mg=10 --set filter.process_noise.accel_bias_mg.sigma=5"
+    " --set filter.initial.heading_sigma_deg=60 --set sensors.IMU.config.vrw_mg_per_sqrt_hz=0.5";
 
 struct TrackExtent
 {
@@ -153,8 +161,9 @@ struct TrackExtent
 
 TrackExtent runNavigator(const fs::path& rawlog, const fs::path& out)
 {
-	const std::string cmd = kBin + "/auvnav-run --config " + kSource + "/config/flatfish.yaml --quiet --out " +
-							out.string() + kMemsOverrides + " " + rawlog.string() + " > " + out.string() + ".log 2>&1";
+	const std::string cmd = kBin + "/auvnav-run --config " + kSource +
+	                        "/config/flatfish.yaml --quiet --out " + out.string() + kMemsOverrides + " " +
+	                        rawlog.string() + " > " + out.string() + ".log 2>&1";
 	const int rc = std::system(cmd.c_str());
 	EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << cmd;
 	std::ifstream tum(out / "trajectory.tum");
@@ -190,17 +199,18 @@ TEST(ImportSonia, NavigatorRunsToTheEndWithoutNan)
 {
 	SKIP_WITHOUT_DATA();
 	const fs::path d = scratch("run");
-	for (const auto& [run, last_imu_t] :
-		 std::vector<std::pair<std::string, double>>{{"2016-01-23_run1", 1453606228.9}, {"2016-01-23_run2_heading", 1453606358.4}})
+	for (const auto& [run, last_imu_t] : std::vector<std::pair<std::string, double>>{
+	         {"2016-01-23_run1", 1453606228.9}, {"2016-01-23_run2_heading", 1453606358.4}})
 	{
 		importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
 		const TrackExtent e = runNavigator(d / (run + ".rawlog"), d / run);
 		EXPECT_FALSE(e.nan) << run;
-		EXPECT_GT(e.rows, 700u) << run;	 // 10 Hz over 78-89 s
+		EXPECT_GT(e.rows, 700u) << run;  // 10 Hz over 78-89 s
 		EXPECT_NEAR(e.last_t, last_imu_t, 1.0) << run;
-		std::printf("%s: %zu rows, max horizontal %.2f m, max |depth| %.2f m, DVL accepted %zu rejected %zu\n",
-					run.c_str(), e.rows, e.max_horizontal_m, e.max_abs_depth_m,
-					dvlCount(d / run / "summary.json", "accepted"), dvlCount(d / run / "summary.json", "rejected"));
+		std::printf(
+		    "%s: %zu rows, max horizontal %.2f m, max |depth| %.2f m, DVL accepted %zu rejected %zu\n",
+		    run.c_str(), e.rows, e.max_horizontal_m, e.max_abs_depth_m,
+		    dvlCount(d / run / "summary.json", "accepted"), dvlCount(d / run / "summary.json", "rejected"));
 		if (run == "2016-01-23_run2_heading")
 		{
 			// The turning run stays in the pool and keeps every DVL ping.
@@ -258,12 +268,14 @@ std::string jsonString(const std::string& s, const std::string& key)
 }
 
 //! summary.json: the count `what` of the sensor entry with this label and plugin (-1 if none).
-long sensorCount(const std::string& s, const std::string& label, const std::string& plugin, const std::string& what)
+long sensorCount(const std::string& s, const std::string& label, const std::string& plugin,
+                 const std::string& what)
 {
 	const auto j = nlohmann::json::parse(s, nullptr, false);
 	if (!j.is_object() || !j.contains("sensors")) return -1;
 	for (const auto& sensor : j["sensors"])
-		if (sensor.value("label", "") == label && sensor.value("plugin", "") == plugin) return sensor.value(what, -1L);
+		if (sensor.value("label", "") == label && sensor.value("plugin", "") == plugin)
+			return sensor.value(what, -1L);
 	return -1;
 }
 }  // namespace
@@ -274,11 +286,13 @@ TEST(ImportSonia, SoniaProfileOnBothRunsIsConsistentWithTheMagnetometer)
 	const fs::path d = scratch("profile");
 	for (const std::string run : {"2016-01-23_run1", "2016-01-23_run2_heading"})
 	{
-		const ImportReport rep = importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
+		const ImportReport rep =
+		    importRun("sonia_pool_2016.yaml", {(kData / run).string()}, d / (run + ".rawlog"));
 		ASSERT_TRUE(rep.completed) << run;
 		const fs::path out = d / run;
-		const std::string cmd = kBin + "/auvnav-run --config " + kSource + "/config/sonia.yaml --quiet --out " +
-								out.string() + " " + (d / (run + ".rawlog")).string() + " > " + out.string() + ".log 2>&1";
+		const std::string cmd = kBin + "/auvnav-run --config " + kSource +
+		                        "/config/sonia.yaml --quiet --out " + out.string() + " " +
+		                        (d / (run + ".rawlog")).string() + " > " + out.string() + ".log 2>&1";
 		const int rc = std::system(cmd.c_str());
 		ASSERT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << cmd;  // 0: ok or degraded (README)
 
@@ -334,7 +348,8 @@ TEST(ImportSonia, SoniaProfileOnBothRunsIsConsistentWithTheMagnetometer)
 		EXPECT_GT(sig_lo, 0.6) << run;
 		// A pool a few metres across: the track stays within 6 m of its start.
 		EXPECT_LT(excursion, 6.0) << run;
-		std::printf("%s: status %s, MAG mean NIS %.3f, heading sigma from 10 s %.2f-%.2f deg, excursion %.2f m\n",
-					run.c_str(), jsonString(summary, "status").c_str(), nis_sum / dim_sum, sig_lo, sig_hi, excursion);
+		std::printf(
+		    "%s: status %s, MAG mean NIS %.3f, heading sigma from 10 s %.2f-%.2f deg, excursion %.2f m\n",
+		    run.c_str(), jsonString(summary, "status").c_str(), nis_sum / dim_sum, sig_lo, sig_hi, excursion);
 	}
 }

@@ -14,12 +14,18 @@ namespace fs = std::filesystem;
 
 namespace auvnav::test
 {
-double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
-double wrapPi(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+double yawOf(const Eigen::Matrix3d& R)
+{
+	return std::atan2(R(1, 0), R(0, 0));
+}
+double wrapPi(double a)
+{
+	return std::atan2(std::sin(a), std::cos(a));
+}
 
 RunResult runNavigator(const std::string& config_file, const std::string& rawlog,
-					   const std::vector<std::pair<std::string, std::string>>& overrides,
-					   const std::vector<DenialWindow>& denials)
+                       const std::vector<std::pair<std::string, std::string>>& overrides,
+                       const std::vector<DenialWindow>& denials)
 {
 	auto cfg = config::Node::load(config_file);
 	for (const auto& [k, v] : overrides) cfg.set(k, v);
@@ -29,7 +35,8 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 	RunResult res;
 	double next_row = 0;
 	RunCallbacks callbacks;
-	callbacks.on_predict = [&](const Navigator& n) {
+	callbacks.on_predict = [&](const Navigator& n)
+	{
 		if (n.time() < next_row) return;
 		next_row = std::floor(n.time()) + 1.0;
 		EstimateRow r;
@@ -72,10 +79,14 @@ HorizontalError horizontalError(const Navigator& nav, const std::vector<TruthRow
 	return e;
 }
 
-ScratchDir simulate(const std::string& mission, unsigned seed) { return simulate(mission, seed, {}, ""); }
+ScratchDir simulate(const std::string& mission, unsigned seed)
+{
+	return simulate(mission, seed, {}, "");
+}
 
 ScratchDir simulate(const std::string& mission, unsigned seed,
-					const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag)
+                    const std::vector<std::pair<std::string, std::string>>& sensor_overrides,
+                    const std::string& tag)
 {
 	auto spec = sim::MissionSpec::load(std::string(AUVNAV_SOURCE_DIR) + "/" + mission);
 	for (const auto& [k, v] : sensor_overrides) spec.sensors.set(k, v);

@@ -19,27 +19,33 @@ namespace auvnav::test
 // The ground truth through libnav's one reader (auvnav/io/trajectory.h), as
 // auvnav-experiment and auvnav-eval read it.
 using TruthRow = io::TrajectoryPoint;
-inline std::vector<TruthRow> readTruth(const std::filesystem::path& csv) { return io::readGroundTruth(csv); }
+inline std::vector<TruthRow> readTruth(const std::filesystem::path& csv)
+{
+	return io::readGroundTruth(csv);
+}
 /** The truth interpolated at t (clamped to the ends). */
-inline TruthRow truthAt(const std::vector<TruthRow>& truth, double t) { return io::at(truth, t); }
+inline TruthRow truthAt(const std::vector<TruthRow>& truth, double t)
+{
+	return io::at(truth, t);
+}
 
 struct EstimateRow
 {
 	double t_unix = 0;
-	Eigen::Vector3d p_n;	   //!< body origin
+	Eigen::Vector3d p_n;  //!< body origin
 	Eigen::Matrix3d R_nb;
-	Eigen::Matrix2d P_ne;	   //!< horizontal position covariance
-	Eigen::Matrix3d P_att;	   //!< attitude covariance (NED axes) [rad²]
-	double headingSigma() const { return std::sqrt(P_att(2, 2)); }	//!< [rad]
+	Eigen::Matrix2d P_ne;   //!< horizontal position covariance
+	Eigen::Matrix3d P_att;  //!< attitude covariance (NED axes) [rad²]
+	double headingSigma() const { return std::sqrt(P_att(2, 2)); }  //!< [rad]
 };
 
 struct RunResult
 {
-	std::vector<EstimateRow> rows;	//!< one per second of data
+	std::vector<EstimateRow> rows;  //!< one per second of data
 	std::vector<SensorStats> stats;
 	double wall_s = 0, data_s = 0;
 	std::size_t repairs = 0;
-	NavStatus status = NavStatus::Ok, worst = NavStatus::Ok;	//!< the divergence monitor at the end
+	NavStatus status = NavStatus::Ok, worst = NavStatus::Ok;  //!< the divergence monitor at the end
 	std::string status_reason;
 };
 
@@ -47,8 +53,8 @@ struct RunResult
  *  over the rawlog through libnav's run loop (rawlog_run.h); a rawlog or
  *  navigator error is rethrown. */
 RunResult runNavigator(const std::string& config_file, const std::string& rawlog,
-					   const std::vector<std::pair<std::string, std::string>>& overrides,
-					   const std::vector<DenialWindow>& denials = {});
+                       const std::vector<std::pair<std::string, std::string>>& overrides,
+                       const std::vector<DenialWindow>& denials = {});
 
 /** Heading (yaw) of R_nb [rad] and the wrapped difference a − b. */
 double yawOf(const Eigen::Matrix3d& R);
@@ -77,6 +83,7 @@ ScratchDir simulate(const std::string& mission, unsigned seed);
 /** The same with `sensor_overrides` (KEY=VALUE on the mission's sensor file,
  *  e.g. {"dvl.scale_factor_error", "0.005"}); `tag` keeps variants apart. */
 ScratchDir simulate(const std::string& mission, unsigned seed,
-					const std::vector<std::pair<std::string, std::string>>& sensor_overrides, const std::string& tag);
+                    const std::vector<std::pair<std::string, std::string>>& sensor_overrides,
+                    const std::string& tag);
 
 }  // namespace auvnav::test

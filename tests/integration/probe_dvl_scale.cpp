@@ -19,14 +19,14 @@
 #include <auvnav/so3.h>
 #include <mrpt/obs/CObservationGPS.h>
 
+#include <unistd.h>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
-#include <unistd.h>
-#include <cstdlib>
 
 #include "harness.h"
 #include "mission.h"
@@ -41,9 +41,9 @@ constexpr double kDeg = M_PI / 180;
 Eigen::Matrix3d yprDeg(const Eigen::Vector3d& ypr)
 {
 	return (Eigen::AngleAxisd(ypr[0] * kDeg, Eigen::Vector3d::UnitZ()) *
-			Eigen::AngleAxisd(ypr[1] * kDeg, Eigen::Vector3d::UnitY()) *
-			Eigen::AngleAxisd(ypr[2] * kDeg, Eigen::Vector3d::UnitX()))
-		.toRotationMatrix();
+	        Eigen::AngleAxisd(ypr[1] * kDeg, Eigen::Vector3d::UnitY()) *
+	        Eigen::AngleAxisd(ypr[2] * kDeg, Eigen::Vector3d::UnitX()))
+	    .toRotationMatrix();
 }
 Eigen::Vector3d pointAt(const std::vector<TruthRow>& truth, double t, const Eigen::Vector3d& r_b)
 {
@@ -79,9 +79,21 @@ int main(int argc, char** argv)
 	for (int a = 2; a < argc; ++a)
 	{
 		const std::string s = argv[a];
-		if (s == "nofilter") { filter = false; continue; }
-		if (s == "keep") { keep = true; continue; }
-		if (s == "nostates") { nostates = true; continue; }
+		if (s == "nofilter")
+		{
+			filter = false;
+			continue;
+		}
+		if (s == "keep")
+		{
+			keep = true;
+			continue;
+		}
+		if (s == "nostates")
+		{
+			nostates = true;
+			continue;
+		}
 		const auto eq = s.find('=');
 		const std::string k = s.substr(2, eq - 2), v = s.substr(eq + 1);
 		if (s[0] == 's') spec.sensors.set(k, v);
@@ -90,7 +102,8 @@ int main(int argc, char** argv)
 		if (s[0] == 'm') spec.mission.set(k, v);
 		if (s[0] == 's' && k.rfind("dvl.misalignment_ypr_deg.", 0) == 0) mis[k.back() - '0'] = std::stod(v);
 	}
-	const fs::path dir = fs::temp_directory_path() / ("probe_dvl_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
+	const fs::path dir =
+	    fs::temp_directory_path() / ("probe_dvl_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
 	fs::remove_all(dir);
 	sim::runMission(spec, seed, dir.string());
 	const auto truth = readTruth(dir / "ground_truth.csv");
@@ -102,9 +115,10 @@ int main(int argc, char** argv)
 	const Eigen::Vector3d r_dvl = spec.sensors.child("dvl").vector3("position_m");
 	const Eigen::Vector3d r_gps = spec.sensors.child("gps").vector3("position_m");
 	const Eigen::Matrix3d R_bs =
-		yprDeg(spec.sensors.child("dvl").vector3("orientation_ypr_deg")) * yprDeg(mis);
-	const earth::TangentFrame frame(earth::Geodetic{cfg.child("navigation_frame").child("origin").number("latitude_deg") * kDeg,
-													cfg.child("navigation_frame").child("origin").number("longitude_deg") * kDeg, 0});
+	    yprDeg(spec.sensors.child("dvl").vector3("orientation_ypr_deg")) * yprDeg(mis);
+	const earth::TangentFrame frame(
+	    earth::Geodetic{cfg.child("navigation_frame").child("origin").number("latitude_deg") * kDeg,
+	                    cfg.child("navigation_frame").child("origin").number("longitude_deg") * kDeg, 0});
 	Acc surf_h, sub_h, sub_v, all_v;
 	double gps_en = 0, gps_ee = 0, gps_nn = 0, gps_mean_n = 0, gps_mean_e = 0;
 	int gps_n = 0;
@@ -119,10 +133,12 @@ int main(int argc, char** argv)
 		{
 			if (!d->bottom_lock || t < truth.front().t_unix + 1 || t > truth.back().t_unix - 1) continue;
 			const double h = 0.05;
-			const Eigen::Vector3d v_true = (pointAt(truth, t + h, r_dvl) - pointAt(truth, t - h, r_dvl)) / (2 * h);
+			const Eigen::Vector3d v_true =
+			    (pointAt(truth, t + h, r_dvl) - pointAt(truth, t - h, r_dvl)) / (2 * h);
 			const Eigen::Matrix3d R_nb = truthAt(truth, t).q_nb.toRotationMatrix();
 			const Eigen::Vector3d v_meas =
-				R_nb * R_bs * Eigen::Vector3d(d->velocity_s_mps[0], d->velocity_s_mps[1], d->velocity_s_mps[2]);
+			    R_nb * R_bs *
+			    Eigen::Vector3d(d->velocity_s_mps[0], d->velocity_s_mps[1], d->velocity_s_mps[2]);
 			const bool submerged = t > t_dive && t < t_surf;
 			Eigen::Vector3d th = v_true, mh = v_meas;
 			th.z() = 0;
@@ -136,8 +152,9 @@ int main(int argc, char** argv)
 		{
 			if (!g->has_GGA_datum()) continue;
 			const auto& f = g->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields;
-			const Eigen::Vector3d p = frame.toNed(
-				earth::Geodetic{f.latitude_degrees * kDeg, f.longitude_degrees * kDeg, f.altitude_meters + f.geoidal_distance});
+			const Eigen::Vector3d p =
+			    frame.toNed(earth::Geodetic{f.latitude_degrees * kDeg, f.longitude_degrees * kDeg,
+			                                f.altitude_meters + f.geoidal_distance});
 			const Eigen::Vector3d tr = pointAt(truth, t, r_gps);
 			const Eigen::Vector3d e = p - tr;
 			if (e.head<2>().norm() > 8) continue;  // outliers
@@ -157,12 +174,16 @@ int main(int argc, char** argv)
 			have_prev = true;
 		}
 	}
-	std::printf("DATA seed %u: DVL horiz scale-1: surface %+.4f %% (%d), submerged %+.4f %% (%d); vertical submerged %+.4f %%, all %+.4f %%\n",
-				seed, 100 * surf_h.scale(), surf_h.n, 100 * sub_h.scale(), sub_h.n, 100 * sub_v.scale(),
-				100 * all_v.scale());
-	std::printf("DATA GPS: %d fixes, mean error N %.3f E %.3f m, error-vs-north slope %+.4f %%, path fix/truth-1 %+.4f %%\n",
-				gps_n, gps_mean_n / std::max(gps_n, 1), gps_mean_e / std::max(gps_n, 1), 100 * gps_en / gps_nn,
-				100 * (gps_path_fix / gps_path_truth - 1));
+	std::printf(
+	    "DATA seed %u: DVL horiz scale-1: surface %+.4f %% (%d), submerged %+.4f %% (%d); vertical submerged "
+	    "%+.4f %%, all %+.4f %%\n",
+	    seed, 100 * surf_h.scale(), surf_h.n, 100 * sub_h.scale(), sub_h.n, 100 * sub_v.scale(),
+	    100 * all_v.scale());
+	std::printf(
+	    "DATA GPS: %d fixes, mean error N %.3f E %.3f m, error-vs-north slope %+.4f %%, path fix/truth-1 "
+	    "%+.4f %%\n",
+	    gps_n, gps_mean_n / std::max(gps_n, 1), gps_mean_e / std::max(gps_n, 1), 100 * gps_en / gps_nn,
+	    100 * (gps_path_fix / gps_path_truth - 1));
 	if (!filter)
 	{
 		if (!keep) fs::remove_all(dir);
@@ -171,7 +192,8 @@ int main(int argc, char** argv)
 
 	// ---- filter with the states on
 	const double t0 = truth.front().t_unix;
-	cfg.set("filter.initial.heading_deg", std::to_string(yawOf(truth.front().q_nb.toRotationMatrix()) / kDeg + 10));
+	cfg.set("filter.initial.heading_deg",
+	        std::to_string(yawOf(truth.front().q_nb.toRotationMatrix()) / kDeg + 10));
 	cfg.set("filter.initial.heading_sigma_deg", "30");
 	if (!nostates)
 	{
@@ -185,28 +207,33 @@ int main(int argc, char** argv)
 	nav.addDenial({{"ADCP", "THRUSTERS"}, 0.0, 1e9});
 	double next_print = 0;
 	bool at_dive = false, at_surf = false;
-	auto print = [&](const Navigator& n, const char* tag) {
+	auto print = [&](const Navigator& n, const char* tag)
+	{
 		const auto& x = n.filter().state();
 		if (x.extra.size() == 0)
 		{
 			std::printf("  %-6s t=%6.0f s  err %.2f m\n", tag, n.time() - t0,
-						(n.bodyPosition_n() - truthAt(truth, n.time()).p_n).head<2>().norm());
+			            (n.bodyPosition_n() - truthAt(truth, n.time()).p_n).head<2>().norm());
 			return;
 		}
 		const auto& C = n.filter().covariance();
 		const auto tr = truthAt(truth, n.time());
 		const double err = (n.bodyPosition_n() - tr.p_n).head<2>().norm();
-		std::printf("  %-6s t=%6.0f s  scale %+.3f %% (%.3f)  mis %.2f %.2f %.2f deg  err %.2f m  sig_v %.4f %.4f corr_sv %.3f\n", tag, n.time() - t0,
-					100 * x.extra[0], 100 * std::sqrt(C(idx::extra, idx::extra)), x.extra[1] / kDeg, x.extra[2] / kDeg,
-					x.extra[3] / kDeg, err, std::sqrt(C(idx::vel, idx::vel)), std::sqrt(C(idx::vel + 1, idx::vel + 1)),
-					C(idx::vel, idx::extra) / std::sqrt(C(idx::vel, idx::vel) * C(idx::extra, idx::extra)));
+		std::printf(
+		    "  %-6s t=%6.0f s  scale %+.3f %% (%.3f)  mis %.2f %.2f %.2f deg  err %.2f m  sig_v %.4f %.4f "
+		    "corr_sv %.3f\n",
+		    tag, n.time() - t0, 100 * x.extra[0], 100 * std::sqrt(C(idx::extra, idx::extra)),
+		    x.extra[1] / kDeg, x.extra[2] / kDeg, x.extra[3] / kDeg, err, std::sqrt(C(idx::vel, idx::vel)),
+		    std::sqrt(C(idx::vel + 1, idx::vel + 1)),
+		    C(idx::vel, idx::extra) / std::sqrt(C(idx::vel, idx::vel) * C(idx::extra, idx::extra)));
 	};
 	RunCallbacks cb;
 	double last_scale = 0;
 	std::map<std::string, double> moved;  // phase/label -> sum of scale changes
 	auto phase = [&](double t) { return t < t_dive ? "surface" : t < t_surf ? "submerged" : "after"; };
 	std::map<std::string, std::pair<double, int>> innov;  // phase/label -> sum of innovation along z
-	cb.on_update = [&](const std::string& label, double t_obs, const Measurement& m, const UpdateResult& r) {
+	cb.on_update = [&](const std::string& label, double t_obs, const Measurement& m, const UpdateResult& r)
+	{
 		if (label == "DVL" && r.innovation.size() == 3 && m.z.size() == 3 && m.z.norm() > 0.1)
 		{
 			auto& a = innov[std::string(phase(t_obs)) + "/along"];
@@ -226,7 +253,8 @@ int main(int argc, char** argv)
 	double verr2 = 0, vvar = 0;
 	int nverr = 0;
 	double next_v = 0;
-	cb.on_predict = [&](const Navigator& n) {
+	cb.on_predict = [&](const Navigator& n)
+	{
 		if (n.time() >= next_v && n.time() > truth.front().t_unix + 5 && n.time() < truth.back().t_unix - 1)
 		{
 			next_v = n.time() + 0.5;
@@ -253,22 +281,35 @@ int main(int argc, char** argv)
 			next_print = std::floor(n.time() / 300) * 300 + 300;
 			print(n, "");
 		}
-		if (!at_dive && n.time() >= t_dive) { at_dive = true; print(n, "DIVE"); }
-		if (!at_surf && n.time() >= t_surf) { at_surf = true; print(n, "SURF"); }
+		if (!at_dive && n.time() >= t_dive)
+		{
+			at_dive = true;
+			print(n, "DIVE");
+		}
+		if (!at_surf && n.time() >= t_surf)
+		{
+			at_surf = true;
+			print(n, "SURF");
+		}
 	};
 	const auto run = runRawlog(nav, rawlog, cb);
 	run.rethrow();
 	for (const auto& st : run.stats)
-		std::printf("  stats %-10s acc %zu rec %zu rej %zu inv %zu skip %zu late %zu delayed %zu NIS/dim %.3f\n", st.label.c_str(),
-					st.accepted, st.recovered, st.rejected, st.invalid, st.skipped, st.late, st.delayed,
-					st.nis_sum / std::max(st.nis_dim_sum, 1.0));
+		std::printf(
+		    "  stats %-10s acc %zu rec %zu rej %zu inv %zu skip %zu late %zu delayed %zu NIS/dim %.3f\n",
+		    st.label.c_str(), st.accepted, st.recovered, st.rejected, st.invalid, st.skipped, st.late,
+		    st.delayed, st.nis_sum / std::max(st.nis_dim_sum, 1.0));
 	std::printf("  filter horizontal velocity / truth - 1: surface %+.4f %% (%d), submerged %+.4f %% (%d)\n",
-				100 * fv_surf.scale(), fv_surf.n, 100 * fv_sub.scale(), fv_sub.n);
-	std::printf("  horizontal velocity error rms %.4f m/s, filter sigma rms %.4f m/s\n", std::sqrt(verr2 / nverr), std::sqrt(vvar / nverr));
+	            100 * fv_surf.scale(), fv_surf.n, 100 * fv_sub.scale(), fv_sub.n);
+	std::printf("  horizontal velocity error rms %.4f m/s, filter sigma rms %.4f m/s\n",
+	            std::sqrt(verr2 / nverr), std::sqrt(vvar / nverr));
 	for (const auto& [k, v] : innov)
-		std::printf("  DVL innovation %-18s mean %+.6f (%d)\n", k.c_str(), v.first / std::max(v.second, 1), v.second);
+		std::printf("  DVL innovation %-18s mean %+.6f (%d)\n", k.c_str(), v.first / std::max(v.second, 1),
+		            v.second);
 	for (const auto& [k, v] : moved) std::printf("  moved %-22s %+.3f %%\n", k.c_str(), 100 * v);
-	if (!keep) fs::remove_all(dir);
-	else std::printf("kept %s\n", dir.c_str());
+	if (!keep)
+		fs::remove_all(dir);
+	else
+		std::printf("kept %s\n", dir.c_str());
 	return 0;
 }

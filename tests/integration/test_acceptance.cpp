@@ -6,8 +6,8 @@
 //    (σ 30°): heading error < 1° after 15 min and inside 3σ after the first
 //    minute, for every offset and 3 seeds.
 // The full sets are labelled `slow`; one seed of each runs by default.
-#include <gtest/gtest.h>
 #include <auvnav/so3.h>
+#include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -28,7 +28,10 @@ const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/flatfish.y
 // configuration's ADCP and model-aiding sensors are denied all along.
 const DenialWindow kInertialDvlPressureOnly{{"ADCP", "THRUSTERS"}, 0.0, 1e9};
 
-std::string fmt(double v) { return std::to_string(v); }
+std::string fmt(double v)
+{
+	return std::to_string(v);
+}
 
 struct SquareOutcome
 {
@@ -59,14 +62,16 @@ SquareOutcome runSquare(unsigned seed)
 	nav.addDenial(kInertialDvlPressureOnly);
 	SquareOutcome out;
 	bool recorded = false;
-	nav.on_predict = [&](const Navigator& n) {
+	nav.on_predict = [&](const Navigator& n)
+	{
 		if (recorded || n.time() < truth[surf].t_unix) return;
 		recorded = true;
 		const HorizontalError e = horizontalError(n, truth);
 		out.error_m = e.error_m;
 		out.two_sigma_m = e.two_sigma_m;
 		const auto& tr = truthAt(truth, n.time());
-		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
+		out.heading_err_deg =
+		    wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
 	runRawlog(nav, (dir / "square_5x50m.rawlog").string()).rethrow();
 	EXPECT_TRUE(recorded);
@@ -77,12 +82,15 @@ SquareOutcome runSquare(unsigned seed)
 void squareSeeds(const std::vector<unsigned>& seeds, int min_pass)
 {
 	int passed = 0;
-	std::printf("square_5x50m: seed | error at resurfacing [m] | distance submerged [m] | error %% | 2 sigma [m] | heading err [deg]\n");
+	std::printf(
+	    "square_5x50m: seed | error at resurfacing [m] | distance submerged [m] | error %% | 2 sigma [m] | "
+	    "heading err [deg]\n");
 	for (unsigned s : seeds)
 	{
 		const auto o = runSquare(s);
 		std::printf("  %u | %.2f | %.0f | %.3f %% | %.2f | %.3f | %s\n", s, o.error_m, o.distance_m,
-					100 * o.error_m / o.distance_m, o.two_sigma_m, o.heading_err_deg, o.pass() ? "pass" : "FAIL");
+		            100 * o.error_m / o.distance_m, o.two_sigma_m, o.heading_err_deg,
+		            o.pass() ? "pass" : "FAIL");
 		passed += o.pass();
 	}
 	EXPECT_GE(passed, min_pass);
@@ -99,7 +107,8 @@ struct HeadingOutcome
 	double worst_roll_ratio_line = 0;
 	bool pass() const
 	{
-		return std::abs(error_15min_deg) < 1.0 && worst_ratio_after_1min <= 3.0 && worst_roll_ratio_line <= 3.0;
+		return std::abs(error_15min_deg) < 1.0 && worst_ratio_after_1min <= 3.0 &&
+		       worst_roll_ratio_line <= 3.0;
 	}
 };
 
@@ -109,20 +118,21 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg, double sigma_d
 	const double t0 = truth.front().t_unix;
 	const double true_heading0 = yawOf(truth.front().q_nb.toRotationMatrix());
 	const auto run = runNavigator(kConfig, (dir / "heading.rawlog").string(),
-								  {{"filter.initial.heading_deg", fmt(true_heading0 / kDeg + offset_deg)},
-								   {"filter.initial.heading_sigma_deg", fmt(sigma_deg)},
-								   {"filter.initial.position", "config"},
-								   {"filter.initial.north_m", "0"},
-								   {"filter.initial.east_m", "0"}},
-								  {DenialWindow{{"GPS"}, 0.0, 1e9},	// GPS withheld for the whole run
-								   kInertialDvlPressureOnly});
+	                              {{"filter.initial.heading_deg", fmt(true_heading0 / kDeg + offset_deg)},
+	                               {"filter.initial.heading_sigma_deg", fmt(sigma_deg)},
+	                               {"filter.initial.position", "config"},
+	                               {"filter.initial.north_m", "0"},
+	                               {"filter.initial.east_m", "0"}},
+	                              {DenialWindow{{"GPS"}, 0.0, 1e9},  // GPS withheld for the whole run
+	                               kInertialDvlPressureOnly});
 	HeadingOutcome o;
 	bool at15 = false;
 	for (const auto& r : run.rows)
 	{
 		const Eigen::Matrix3d R_true = truthAt(truth, r.t_unix).q_nb.toRotationMatrix();
 		const double err = wrapPi(yawOf(r.R_nb) - yawOf(R_true));
-		if (r.t_unix - t0 > 60) o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.headingSigma());
+		if (r.t_unix - t0 > 60)
+			o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.headingSigma());
 		if (r.t_unix - t0 > 60 && r.t_unix - t0 < 420)
 		{
 			// Roll: the tilt error about the vehicle's horizontal forward axis.
@@ -150,33 +160,52 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg, double sigma_d
 	return o;
 }
 
-void headingSeeds(const std::vector<unsigned>& seeds, const std::vector<double>& offsets, double sigma_deg = 30)
+void headingSeeds(const std::vector<unsigned>& seeds, const std::vector<double>& offsets,
+                  double sigma_deg = 30)
 {
 	std::printf("initial heading sigma %.0f deg\n", sigma_deg);
-	std::printf("heading (no GPS): seed | offset [deg] | error at 15 min [deg] | sigma at 15 min [deg] | worst |err|/sigma after 1 min | worst |roll err|/sigma on the surface line\n");
+	std::printf(
+	    "heading (no GPS): seed | offset [deg] | error at 15 min [deg] | sigma at 15 min [deg] | worst "
+	    "|err|/sigma after 1 min | worst |roll err|/sigma on the surface line\n");
 	for (unsigned s : seeds)
 	{
 		const auto dir = simulate("config/missions/heading.yaml", s);
 		for (double off : offsets)
 		{
 			const auto o = runHeading(dir.path(), off, sigma_deg);
-			std::printf("  %u | %+.0f | %+.3f | %.3f | %.2f | %.2f | %s\n", s, off, o.error_15min_deg, o.sigma_15min_deg,
-						o.worst_ratio_after_1min, o.worst_roll_ratio_line, o.pass() ? "pass" : "FAIL");
+			std::printf("  %u | %+.0f | %+.3f | %.3f | %.2f | %.2f | %s\n", s, off, o.error_15min_deg,
+			            o.sigma_15min_deg, o.worst_ratio_after_1min, o.worst_roll_ratio_line,
+			            o.pass() ? "pass" : "FAIL");
 			EXPECT_TRUE(o.pass()) << "seed " << s << " offset " << off;
 		}
 	}
 }
 }  // namespace
 
-TEST(SquareMission, OneSeedResurfacesWithinHalfPercent) { squareSeeds({1}, 1); }
-TEST(SquareMissionSlow, FiveSeedsResurfaceWithinHalfPercent) { squareSeeds({1, 2, 3, 4, 5}, 4); }
-TEST(HeadingMission, OneSeedGyrocompassesWithoutGps) { headingSeeds({1}, {15.0}); }
-TEST(HeadingMissionSlow, ThreeSeedsThreeOffsetsGyrocompassWithoutGps) { headingSeeds({1, 2, 3}, {15.0, 0.0, -15.0}); }
+TEST(SquareMission, OneSeedResurfacesWithinHalfPercent)
+{
+	squareSeeds({1}, 1);
+}
+TEST(SquareMissionSlow, FiveSeedsResurfaceWithinHalfPercent)
+{
+	squareSeeds({1, 2, 3, 4, 5}, 4);
+}
+TEST(HeadingMission, OneSeedGyrocompassesWithoutGps)
+{
+	headingSeeds({1}, {15.0});
+}
+TEST(HeadingMissionSlow, ThreeSeedsThreeOffsetsGyrocompassWithoutGps)
+{
+	headingSeeds({1, 2, 3}, {15.0, 0.0, -15.0});
+}
 // The heading unknown (σ 180°) from half a turn off: the sigma points of an
 // attitude σ this large wrap around the circle unless their spread is
 // limited (ukf.h, max_attitude_spread_rad); without the limit the heading
 // was −111° off after 15 min with a σ of 1.4°.
-TEST(HeadingMission, HalfTurnOffWithUnknownHeadingGyrocompasses) { headingSeeds({1}, {180.0}, 180); }
+TEST(HeadingMission, HalfTurnOffWithUnknownHeadingGyrocompasses)
+{
+	headingSeeds({1}, {180.0}, 180);
+}
 TEST(HeadingMissionSlow, EveryInitialHeadingWithUnknownHeadingGyrocompasses)
 {
 	headingSeeds({1, 2}, {0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0}, 180);

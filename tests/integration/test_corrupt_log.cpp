@@ -54,7 +54,8 @@ void writeBytes(const fs::path& p, const std::vector<char>& bytes)
 /** The sample re-written gzip-compressed (level 6), once per process. */
 const std::vector<char>& compressedSample()
 {
-	static const std::vector<char> bytes = [] {
+	static const std::vector<char> bytes = []
+	{
 		const fs::path gz = scratch("sample_gz.rawlog");
 		{
 			io::RawlogReader in((kSample / "sample.rawlog").string());
@@ -70,10 +71,10 @@ const std::vector<char>& compressedSample()
 
 struct Outcome
 {
-	double t_end = 0;	   //!< navigator time at the end of the run
-	double error_m = 0;	   //!< horizontal error there
-	double sigma_m = 0;	   //!< 1-sigma horizontal there
-	std::string error;	   //!< what ended the run ("" if it completed)
+	double t_end = 0;                                      //!< navigator time at the end of the run
+	double error_m = 0;                                    //!< horizontal error there
+	double sigma_m = 0;                                    //!< 1-sigma horizontal there
+	std::string error;                                     //!< what ended the run ("" if it completed)
 	std::vector<std::pair<double, double>> error_by_time;  //!< (t, horizontal error) at every prediction
 };
 
@@ -86,7 +87,8 @@ Outcome run(const fs::path& rawlog, bool record)
 	Outcome o;
 	RunCallbacks cb;
 	if (record)
-		cb.on_predict = [&](const Navigator& n) {
+		cb.on_predict = [&](const Navigator& n)
+		{
 			if (n.initialized()) o.error_by_time.emplace_back(n.time(), horizontalError(n, truth).error_m);
 		};
 	const RunSummary s = runRawlog(nav, rawlog.string(), cb);
@@ -100,7 +102,8 @@ Outcome run(const fs::path& rawlog, bool record)
 
 const Outcome& clean()
 {
-	static const Outcome o = [] {
+	static const Outcome o = []
+	{
 		const fs::path p = scratch("clean.rawlog");
 		writeBytes(p, compressedSample());
 		Outcome c = run(p, true);
@@ -127,9 +130,9 @@ void expectWithinTwiceTheCleanError(const std::string& what, const std::vector<c
 	const Outcome o = run(p, false);
 	fs::remove(p);
 	const double clean_m = cleanErrorAt(o.t_end);
-	std::printf("%-34s stopped at t=%.2f s: error %.3f m (1 sigma %.3f), clean run there %.3f m; %s\n", what.c_str(),
-				o.t_end - clean().error_by_time.front().first, o.error_m, o.sigma_m, clean_m,
-				o.error.empty() ? "completed" : o.error.c_str());
+	std::printf("%-34s stopped at t=%.2f s: error %.3f m (1 sigma %.3f), clean run there %.3f m; %s\n",
+	            what.c_str(), o.t_end - clean().error_by_time.front().first, o.error_m, o.sigma_m, clean_m,
+	            o.error.empty() ? "completed" : o.error.c_str());
 	// The damage is noticed: the run ends with a rawlog error naming the file.
 	EXPECT_FALSE(o.error.empty()) << "the damaged log read as complete";
 	EXPECT_NE(o.error.find("damaged.rawlog"), std::string::npos) << o.error;

@@ -54,7 +54,8 @@ const SensorStats& statsOf(const Navigator& nav, const std::string& label, const
 /** The navigator of config/flatfish.yaml, position from the config; the
  *  pressure plugin without its bias floor (which reads the covariance in
  *  prepare, so a replay would keep the first pass's noise). */
-std::unique_ptr<Navigator> makeNavigator(PluginHost& host, const std::map<std::string, std::string>& extra = {})
+std::unique_ptr<Navigator> makeNavigator(PluginHost& host,
+                                         const std::map<std::string, std::string>& extra = {})
 {
 	config::Node cfg = config::Node::load(kConfig);
 	cfg.set("filter.initial.position", "config");
@@ -98,10 +99,11 @@ TEST(DelayedMeasurements, ReFilteringEqualsInOrderProcessing)
 	EXPECT_GT(delayed->replayedPredictions(), 7u * 130u);
 	const double dx = maxStateDifference(*in_order, *delayed);
 	std::printf("re-filtered vs in order: state %.3g, %zu re-predictions for %zu predictions\n", dx,
-				delayed->replayedPredictions(), delayed->predictions());
+	            delayed->replayedPredictions(), delayed->predictions());
 	EXPECT_LT(dx, 1e-9);
 	const double P_scale = in_order->filter().covariance().cwiseAbs().maxCoeff();
-	EXPECT_LT((in_order->filter().covariance() - delayed->filter().covariance()).cwiseAbs().maxCoeff(), 1e-9 * P_scale);
+	EXPECT_LT((in_order->filter().covariance() - delayed->filter().covariance()).cwiseAbs().maxCoeff(),
+	          1e-9 * P_scale);
 	// The depths reached the state: the last reading said 1.6 m.
 	EXPECT_GT(delayed->filter().state().p_n.z(), 1.3);
 }
@@ -122,7 +124,8 @@ TEST(DelayedMeasurements, ConfiguredLatencyGivesTheMeasurementTime)
 {
 	// Stamped on arrival, declared by the sensor entry's latency_s: as in order.
 	PluginHost host;
-	auto in_order = makeNavigator(host), declared = makeNavigator(host, {{"sensors.PRESSURE.latency_s", "1.3"}});
+	auto in_order = makeNavigator(host),
+	     declared = makeNavigator(host, {{"sensors.PRESSURE.latency_s", "1.3"}});
 	feed(*in_order, 0.0);
 	feed(*declared, 1.3, 1.3);
 	EXPECT_EQ(statsOf(*declared, "PRESSURE", "pressure").delayed, 7u);
@@ -157,11 +160,11 @@ TEST(DelayedMeasurements, SwitchedOffEverythingLateIsCountedLate)
 TEST(DelayedMeasurements, BadDelayConfigIsRefusedWithTheKey)
 {
 	PluginHost host;
-	for (const auto& [key, value] : std::map<std::string, std::string>{
-			 {"filter.delayed_measurements.max_delay_s", "-1"},
-			 {"filter.delayed_measurements.checkpoint_every_s", "0"},
-			 {"filter.delayed_measurements.max_dealy_s", "5"},
-			 {"sensors.PRESSURE.latency_s", "-0.5"}})
+	for (const auto& [key, value] :
+	     std::map<std::string, std::string>{{"filter.delayed_measurements.max_delay_s", "-1"},
+	                                        {"filter.delayed_measurements.checkpoint_every_s", "0"},
+	                                        {"filter.delayed_measurements.max_dealy_s", "5"},
+	                                        {"sensors.PRESSURE.latency_s", "-0.5"}})
 	{
 		try
 		{

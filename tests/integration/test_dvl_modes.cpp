@@ -17,9 +17,9 @@
 #include <unistd.h>
 
 #include <Eigen/Eigenvalues>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -55,14 +55,15 @@ config::Node dvlConfig(const std::string& frame, const std::string& sign = "vehi
 sim::Environment flatSeabed()
 {
 	return sim::Environment::fromConfig(
-		config::Node::fromText("current: {surface_ne_mps: [0, 0], deep_ne_mps: [0, 0], shear_depth_m: 10, "
-							   "tidal_amplitude_ne_mps: [0, 0], tidal_period_s: 44712, tidal_phase_deg: 0, "
-							   "wander_sigma_mps: 0, wander_tau_s: 3600}\n"
-							   "seabed: {depth_at_origin_m: 30, slope_ne: [0, 0], undulation_m: 0, wavelength_m: 100}\n"
-							   "water: {density_kg_m3: 1025, atmospheric_pressure_pa: 101325, "
-							   "surface_temperature_c: 27, temperature_gradient_c_per_m: -0.05}\n",
-							   "<flat seabed>"),
-		1);
+	    config::Node::fromText(
+	        "current: {surface_ne_mps: [0, 0], deep_ne_mps: [0, 0], shear_depth_m: 10, "
+	        "tidal_amplitude_ne_mps: [0, 0], tidal_period_s: 44712, tidal_phase_deg: 0, "
+	        "wander_sigma_mps: 0, wander_tau_s: 3600}\n"
+	        "seabed: {depth_at_origin_m: 30, slope_ne: [0, 0], undulation_m: 0, wavelength_m: 100}\n"
+	        "water: {density_kg_m3: 1025, atmospheric_pressure_pa: 101325, "
+	        "surface_temperature_c: 27, temperature_gradient_c_per_m: -0.05}\n",
+	        "<flat seabed>"),
+	    1);
 }
 
 /** A vehicle 10 m deep, heading 70°, pitched and rolled a little, moving and turning. */
@@ -74,8 +75,8 @@ struct Scene
 	{
 		x.p_n = {0, 0, 10};
 		x.q_nb = Eigen::AngleAxisd(70 * kDeg, Eigen::Vector3d::UnitZ()) *
-				 Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitY()) *
-				 Eigen::AngleAxisd(-3 * kDeg, Eigen::Vector3d::UnitX());
+		         Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitY()) *
+		         Eigen::AngleAxisd(-3 * kDeg, Eigen::Vector3d::UnitX());
 		x.nu_b << 0.8, -0.1, 0.05, 0.01, -0.02, 0.12;
 		t.x = &x;
 	}
@@ -106,15 +107,19 @@ Eigen::Matrix3d covarianceOf(const CObservationDVL& o)
 	return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(o.velocity_cov.data());
 }
 
-Eigen::Matrix3d nominalRbs() { return Eigen::AngleAxisd(-22.5 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix(); }
+Eigen::Matrix3d nominalRbs()
+{
+	return Eigen::AngleAxisd(-22.5 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+}
 Eigen::Matrix3d trueRbs()
 {
 	// orientation_ypr_deg [-22.5, 0, 0] then misalignment_ypr_deg [0.15, -0.05, 0.05] (Z-Y-X each).
-	const auto ypr = [](double y, double p, double r) {
+	const auto ypr = [](double y, double p, double r)
+	{
 		return (Eigen::AngleAxisd(y * kDeg, Eigen::Vector3d::UnitZ()) *
-				Eigen::AngleAxisd(p * kDeg, Eigen::Vector3d::UnitY()) *
-				Eigen::AngleAxisd(r * kDeg, Eigen::Vector3d::UnitX()))
-			.toRotationMatrix();
+		        Eigen::AngleAxisd(p * kDeg, Eigen::Vector3d::UnitY()) *
+		        Eigen::AngleAxisd(r * kDeg, Eigen::Vector3d::UnitX()))
+		    .toRotationMatrix();
 	};
 	return ypr(-22.5, 0, 0) * ypr(0.15, -0.05, 0.05);
 }
@@ -159,21 +164,22 @@ TEST(DvlSimModes, EveryModeReportsTheSamePing)
 	Scene s;
 	const Eigen::Matrix3d R_nb = s.x.R_nb();
 	const Eigen::Matrix3d P = nedToEnu();
-	sim::DvlSim inst(dvlConfig("instrument"), 11), veh(dvlConfig("vehicle"), 11), ned(dvlConfig("earth_ned"), 11),
-		enu(dvlConfig("earth_enu"), 11), beam(dvlConfig("beam"), 11),
-		pd0(dvlConfig("instrument", "bottom_over_instrument"), 11),
-		beam_pd0(dvlConfig("beam", "bottom_over_instrument"), 11);
+	sim::DvlSim inst(dvlConfig("instrument"), 11), veh(dvlConfig("vehicle"), 11),
+	    ned(dvlConfig("earth_ned"), 11), enu(dvlConfig("earth_enu"), 11), beam(dvlConfig("beam"), 11),
+	    pd0(dvlConfig("instrument", "bottom_over_instrument"), 11),
+	    beam_pd0(dvlConfig("beam", "bottom_over_instrument"), 11);
 	int locked = 0;
 	for (int k = 0; k < 50; ++k)
 	{
 		const auto oi = inst.sample(s.t, env), ov = veh.sample(s.t, env), on = ned.sample(s.t, env),
-				   oe = enu.sample(s.t, env), ob = beam.sample(s.t, env), op = pd0.sample(s.t, env),
-				   obp = beam_pd0.sample(s.t, env);
+		           oe = enu.sample(s.t, env), ob = beam.sample(s.t, env), op = pd0.sample(s.t, env),
+		           obp = beam_pd0.sample(s.t, env);
 		for (const auto* o : {ov.get(), on.get(), oe.get(), ob.get(), op.get(), obp.get()})
 		{
 			ASSERT_EQ(o->bottom_lock, oi->bottom_lock) << "ping " << k;
 			ASSERT_EQ(o->beams.size(), oi->beams.size());
-			for (std::size_t i = 0; i < o->beams.size(); ++i) EXPECT_EQ(o->beams[i].valid, oi->beams[i].valid);
+			for (std::size_t i = 0; i < o->beams.size(); ++i)
+				EXPECT_EQ(o->beams[i].valid, oi->beams[i].valid);
 		}
 		EXPECT_EQ(ov->frame, DvlFrame::Vehicle);
 		EXPECT_EQ(on->frame, DvlFrame::EarthNed);
@@ -210,7 +216,7 @@ TEST(DvlSimModes, EveryModeReportsTheSamePing)
 			}
 			const double incl = ob->beam_inclination_rad;
 			A.row(n) << std::sin(incl) * std::cos(b.azimuth_rad), std::sin(incl) * std::sin(b.azimuth_rad),
-				std::cos(incl);
+			    std::cos(incl);
 			u[n] = b.velocity_mps;
 			EXPECT_EQ(obp->beams[i].velocity_mps, -b.velocity_mps);
 			++n;
@@ -240,7 +246,7 @@ TEST(DvlSimModes, CompassHeadingErrorIsConstantPerRunAndOnlyInEarthFrames)
 		// Rotated by the true attitude, then by the compass error about down;
 		// the beam noise is the same as without it.
 		const Eigen::Matrix3d R_compass =
-			Eigen::AngleAxisd(a.headingError_rad(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+		    Eigen::AngleAxisd(a.headingError_rad(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
 		const Eigen::Matrix3d R = R_compass * s.x.R_nb() * trueRbs();
 		EXPECT_LT((velocityOf(*oa) - R * velocityOf(*oi)).norm(), 1e-12);
 	}
@@ -248,7 +254,8 @@ TEST(DvlSimModes, CompassHeadingErrorIsConstantPerRunAndOnlyInEarthFrames)
 
 TEST(DvlSimModes, BadKeysAreRefusedNamingThem)
 {
-	auto expectRefused = [](const config::Node& n, const std::string& key) {
+	auto expectRefused = [](const config::Node& n, const std::string& key)
+	{
 		try
 		{
 			sim::DvlSim d(n, 1);
@@ -264,8 +271,8 @@ TEST(DvlSimModes, BadKeysAreRefusedNamingThem)
 	auto cfg = dvlConfig("beam");
 	cfg.set("heading_error_sigma_deg", "-1");
 	expectRefused(cfg, "heading_error_sigma_deg");
-	expectRefused(withAzimuths("[0, 90, 180]"), "beam_azimuths_deg");		// 3 azimuths for 4 beams
-	expectRefused(withAzimuths("[10, 10, 10, 10]"), "beam_azimuths_deg");	// all beams in one plane
+	expectRefused(withAzimuths("[0, 90, 180]"), "beam_azimuths_deg");      // 3 azimuths for 4 beams
+	expectRefused(withAzimuths("[10, 10, 10, 10]"), "beam_azimuths_deg");  // all beams in one plane
 	// An RDI-like layout (beams on the sensor axes) is accepted and used.
 	sim::DvlSim rdi(withAzimuths("[0, 180, 90, 270]"), 1);
 	Scene s;
@@ -284,17 +291,17 @@ struct Mode
 	const char* sign;
 };
 constexpr Mode kModes[] = {{"instrument", "instrument", "vehicle_over_bottom"},
-						   {"vehicle", "vehicle", "vehicle_over_bottom"},
-						   {"earth_ned", "earth_ned", "vehicle_over_bottom"},
-						   {"earth_enu", "earth_enu", "vehicle_over_bottom"},
-						   {"beam", "beam", "vehicle_over_bottom"},
-						   {"instrument_pd0", "instrument", "bottom_over_instrument"}};
+                           {"vehicle", "vehicle", "vehicle_over_bottom"},
+                           {"earth_ned", "earth_ned", "vehicle_over_bottom"},
+                           {"earth_enu", "earth_enu", "vehicle_over_bottom"},
+                           {"beam", "beam", "vehicle_over_bottom"},
+                           {"instrument_pd0", "instrument", "bottom_over_instrument"}};
 
 struct Outcome
 {
-	double error_m = 0;			//!< horizontal error at resurfacing
-	double error_dive_m = 0;	//!< horizontal error when the vehicle dived (the GPS-limited start)
-	double drift_m = 0;			//!< |error vector at resurfacing − error vector at the dive|: the dive's own share
+	double error_m = 0;       //!< horizontal error at resurfacing
+	double error_dive_m = 0;  //!< horizontal error when the vehicle dived (the GPS-limited start)
+	double drift_m = 0;  //!< |error vector at resurfacing − error vector at the dive|: the dive's own share
 	double two_sigma_m = 0, distance_m = 0, heading_err_deg = 0, dvl_nis_per_dim = 0;
 	std::size_t dvl_accepted = 0, dvl_rejected = 0, dvl_skipped = 0;
 	double wall_s = 0;
@@ -327,7 +334,8 @@ Outcome runMode(const Mode& mode, unsigned seed)
 	Outcome out;
 	Eigen::Vector2d e_dive = Eigen::Vector2d::Zero();
 	bool at_dive = false, recorded = false;
-	nav.on_predict = [&](const Navigator& n) {
+	nav.on_predict = [&](const Navigator& n)
+	{
 		if (!at_dive && n.time() >= truth[dive].t_unix)
 		{
 			at_dive = true;
@@ -341,8 +349,10 @@ Outcome runMode(const Mode& mode, unsigned seed)
 		out.error_dive_m = e_dive.norm();
 		out.drift_m = (e - e_dive).norm();
 		const Eigen::Matrix2d P = n.filter().covariance().block<2, 2>(idx::pos, idx::pos);
-		out.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
-		out.heading_err_deg = wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
+		out.two_sigma_m =
+		    2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
+		out.heading_err_deg =
+		    wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
 	RunCallbacks until_recorded;
 	until_recorded.stop = [&] { return recorded; };
@@ -362,7 +372,10 @@ Outcome runMode(const Mode& mode, unsigned seed)
 	return out;
 }
 
-bool isEarth(const Mode& m) { return std::string(m.frame).rfind("earth", 0) == 0; }
+bool isEarth(const Mode& m)
+{
+	return std::string(m.frame).rfind("earth", 0) == 0;
+}
 
 /** Runs `modes` (the first must be the instrument frame) on one seed, prints
  *  the table and checks each against the instrument figure:
@@ -379,20 +392,23 @@ bool isEarth(const Mode& m) { return std::string(m.frame).rfind("earth", 0) == 0
  *  And every mode inside its 2σ. */
 std::vector<Outcome> checkModes(const std::vector<Mode>& modes, unsigned seed)
 {
-	std::printf("sample mission (config/missions/sample.yaml), seed %u, inertial + DVL + pressure, GPS withheld "
-				"from the dive on:\n",
-				seed);
-	std::printf("  mode | horizontal error at resurfacing [m] | at the dive [m] | drift during the dive [m] | "
-				"2 sigma [m] | submerged distance [m] | heading err [deg] | DVL updates accepted / rejected / "
-				"skipped | DVL NIS/dim | navigator [s]\n");
+	std::printf(
+	    "sample mission (config/missions/sample.yaml), seed %u, inertial + DVL + pressure, GPS withheld "
+	    "from the dive on:\n",
+	    seed);
+	std::printf(
+	    "  mode | horizontal error at resurfacing [m] | at the dive [m] | drift during the dive [m] | "
+	    "2 sigma [m] | submerged distance [m] | heading err [deg] | DVL updates accepted / rejected / "
+	    "skipped | DVL NIS/dim | navigator [s]\n");
 	std::vector<Outcome> outs;
 	for (const auto& m : modes)
 	{
 		outs.push_back(runMode(m, seed));
 		const auto& o = outs.back();
-		std::printf("  %-14s | %.3f | %.3f | %.3f | %.3f | %.0f | %+.3f | %zu / %zu / %zu | %.2f | %.1f\n", m.name,
-					o.error_m, o.error_dive_m, o.drift_m, o.two_sigma_m, o.distance_m, o.heading_err_deg,
-					o.dvl_accepted, o.dvl_rejected, o.dvl_skipped, o.dvl_nis_per_dim, o.wall_s);
+		std::printf("  %-14s | %.3f | %.3f | %.3f | %.3f | %.0f | %+.3f | %zu / %zu / %zu | %.2f | %.1f\n",
+		            m.name, o.error_m, o.error_dive_m, o.drift_m, o.two_sigma_m, o.distance_m,
+		            o.heading_err_deg, o.dvl_accepted, o.dvl_rejected, o.dvl_skipped, o.dvl_nis_per_dim,
+		            o.wall_s);
 		std::fflush(stdout);
 	}
 	EXPECT_STREQ(modes[0].name, "instrument");
@@ -403,11 +419,11 @@ std::vector<Outcome> checkModes(const std::vector<Mode>& modes, unsigned seed)
 		const Outcome& o = outs[i];
 		const double tolerance = 0.10 * ref.error_m + (isEarth(modes[i]) ? 0.10 : 0.0);
 		EXPECT_LE(std::abs(o.error_m - ref.error_m), tolerance)
-			<< modes[i].name << ": " << o.error_m << " m vs instrument " << ref.error_m << " m";
+		    << modes[i].name << ": " << o.error_m << " m vs instrument " << ref.error_m << " m";
 		if (isEarth(modes[i]))
 		{
-			EXPECT_LE(o.drift_m, 1.1 * ref.drift_m) << modes[i].name << ": drift " << o.drift_m << " m vs instrument "
-													 << ref.drift_m << " m";
+			EXPECT_LE(o.drift_m, 1.1 * ref.drift_m)
+			    << modes[i].name << ": drift " << o.drift_m << " m vs instrument " << ref.drift_m << " m";
 		}
 		EXPECT_LE(o.error_m, o.two_sigma_m) << modes[i].name << " outside its 2 sigma";
 		EXPECT_GT(o.dvl_accepted, 3000u) << modes[i].name;

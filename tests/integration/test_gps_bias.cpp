@@ -52,15 +52,16 @@ AtDive runToDive(const fs::path& dir, bool bias_state)
 		return {};
 	}
 	std::vector<std::pair<std::string, std::string>> overrides{{"sensors.GPS.config.min_interval_s", "0"},
-															   {"sensors.GPS.config.correlated_sigma_m", "0"},
-															   {"sensors.GPS.config.sigma_m", "1.0"}};
+	                                                           {"sensors.GPS.config.correlated_sigma_m", "0"},
+	                                                           {"sensors.GPS.config.sigma_m", "1.0"}};
 	if (bias_state)
-		for (const auto& [key, value] :
-			 {std::pair<std::string, std::string>{"sigma", "3"}, {"process", "gauss_markov"}, {"process_sigma", "3"},
-			  {"tau_s", "600"}})
+		for (const auto& [key, value] : {std::pair<std::string, std::string>{"sigma", "3"},
+		                                 {"process", "gauss_markov"},
+		                                 {"process_sigma", "3"},
+		                                 {"tau_s", "600"}})
 			overrides.emplace_back("sensors.GPS.config.states.bias." + key, value);
 	const RunResult r = runNavigator(kConfig, (dir / "usbl_sample.rawlog").string(), overrides,
-									 {DenialWindow{{"USBL"}, 0, 1e9}});
+	                                 {DenialWindow{{"USBL"}, 0, 1e9}});
 	AtDive a;
 	a.status = r.status;
 	a.status_reason = r.status_reason;
@@ -68,7 +69,8 @@ AtDive runToDive(const fs::path& dir, bool bias_state)
 	{
 		if (row.t_unix < truth[dive].t_unix) continue;
 		a.error_m = (row.p_n - truthAt(truth, row.t_unix).p_n).head<2>().norm();
-		a.sigma_m = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(row.P_ne).eigenvalues().maxCoeff());
+		a.sigma_m =
+		    std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(row.P_ne).eigenvalues().maxCoeff());
 		break;
 	}
 	for (const auto& s : r.stats)
@@ -79,13 +81,14 @@ AtDive runToDive(const fs::path& dir, bool bias_state)
 
 TEST(GpsBiasState, KeepsThePositionSigmaOfASlowGpsErrorAtTheDive)
 {
-	const auto dir =
-		simulate(kMission, 2, {{"gps.correlated_sigma_m", "3.0"}, {"gps.correlation_time_s", "600"}}, "_slow_gps");
+	const auto dir = simulate(
+	    kMission, 2, {{"gps.correlated_sigma_m", "3.0"}, {"gps.correlation_time_s", "600"}}, "_slow_gps");
 	const AtDive white = runToDive(dir.path(), false);
 	const AtDive state = runToDive(dir.path(), true);
-	std::printf("at the dive: as white noise error %.2f m, sigma %.3f m (%zu fixes); with the bias state error "
-				"%.2f m, sigma %.2f m (%zu fixes)\n",
-				white.error_m, white.sigma_m, white.gps_used, state.error_m, state.sigma_m, state.gps_used);
+	std::printf(
+	    "at the dive: as white noise error %.2f m, sigma %.3f m (%zu fixes); with the bias state error "
+	    "%.2f m, sigma %.2f m (%zu fixes)\n",
+	    white.error_m, white.sigma_m, white.gps_used, state.error_m, state.sigma_m, state.gps_used);
 	EXPECT_GT(state.gps_used, 200u);  // 1 Hz for ~5 min, both ways
 	EXPECT_GT(white.gps_used, 200u);
 	// With the state: the error inside 3σ, and σ of the slow error's size

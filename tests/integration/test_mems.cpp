@@ -35,12 +35,15 @@ constexpr double kDeg = M_PI / 180;
 const std::string kConfig = std::string(AUVNAV_SOURCE_DIR) + "/config/bluerov2.yaml";
 constexpr double kAlignedAfterS = 60;
 
-double chi2Quantile(int dof, double p) { return boost::math::quantile(boost::math::chi_squared(dof), p); }
+double chi2Quantile(int dof, double p)
+{
+	return boost::math::quantile(boost::math::chi_squared(dof), p);
+}
 
 struct MemsOutcome
 {
 	double end_error_m = 0, end_two_sigma_m = 0, distance_m = 0;
-	double worst_heading_ratio = 0;	 //!< max |heading err| / σ after alignment
+	double worst_heading_ratio = 0;  //!< max |heading err| / σ after alignment
 	double nees_pos_inside = 0, nees_att_inside = 0;
 	double nees_tilt_inside = 0;  //!< the attitude NEES's roll/pitch part (2 dof, NED north/east axes)
 	double min_heading_sigma_deg = 1e9, end_position_sigma_m = 0;
@@ -64,7 +67,7 @@ Eigen::Matrix3d imuMounting(const std::string& mission)
 }
 
 MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool with_magnetometer,
-					const Overrides& extra = {}, const Eigen::Matrix3d& R_b_imu = Eigen::Matrix3d::Identity())
+                    const Overrides& extra = {}, const Eigen::Matrix3d& R_b_imu = Eigen::Matrix3d::Identity())
 {
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const double t0 = truth.front().t_unix;
@@ -73,8 +76,8 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 	std::vector<DenialWindow> denials;
 	if (!with_magnetometer) denials.push_back(DenialWindow{{"MAG"}, 0.0, 1e9});
 	Overrides overrides = {{"filter.initial.north_m", std::to_string(p0.x())},
-						   {"filter.initial.east_m", std::to_string(p0.y())},
-						   {"filter.initial.depth_m", std::to_string(p0.z())}};
+	                       {"filter.initial.east_m", std::to_string(p0.y())},
+	                       {"filter.initial.depth_m", std::to_string(p0.z())}};
 	overrides.insert(overrides.end(), extra.begin(), extra.end());
 	const auto run = runNavigator(kConfig, (dir / (mission_name + ".rawlog")).string(), overrides, denials);
 	MemsOutcome o;
@@ -89,14 +92,16 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 		const double heading_err = wrapPi(yawOf(r.R_nb) - yawOf(R_true));
 		o.min_heading_sigma_deg = std::min(o.min_heading_sigma_deg, r.headingSigma() / kDeg);
 		const Eigen::Vector2d e = (r.p_n - tr.p_n).head<2>();
-		const double major = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(r.P_ne).eigenvalues()(1));
+		const double major =
+		    std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(r.P_ne).eigenvalues()(1));
 		o.end_error_m = e.norm();
 		o.end_two_sigma_m = 2 * major;
 		o.worst_error_to_two_sigma = std::max(o.worst_error_to_two_sigma, e.norm() / (2 * major));
 		o.end_position_sigma_m = major;
 		o.distance_m = tr.distance_m;
 		const double displacement = (tr.p_n - p0).head<2>().norm();
-		if (displacement > 2) o.worst_displacement_ratio = std::max(o.worst_displacement_ratio, displacement / major);
+		if (displacement > 2)
+			o.worst_displacement_ratio = std::max(o.worst_displacement_ratio, displacement / major);
 		if (r.t_unix - t0 < kAlignedAfterS) continue;
 		++n_after;
 		o.worst_heading_ratio = std::max(o.worst_heading_ratio, std::abs(heading_err) / r.headingSigma());
@@ -113,19 +118,20 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 }
 
 void memsSeeds(const std::string& mission, const std::string& name, const std::vector<unsigned>& seeds,
-			   bool check_heading, bool check_attitude_nees = false, bool check_sigma = true)
+               bool check_heading, bool check_attitude_nees = false, bool check_sigma = true)
 {
-	std::printf("%s, config/bluerov2.yaml: seed | end error [m] | distance [m] | %% | 2 sigma [m] | worst |heading "
-				"err|/sigma | NEES pos / att (tilt) inside 95%% | status\n",
-				name.c_str());
+	std::printf(
+	    "%s, config/bluerov2.yaml: seed | end error [m] | distance [m] | %% | 2 sigma [m] | worst |heading "
+	    "err|/sigma | NEES pos / att (tilt) inside 95%% | status\n",
+	    name.c_str());
 	for (unsigned s : seeds)
 	{
 		const auto dir = simulate(mission, s);
 		const MemsOutcome o = runMems(dir.path(), name, true, {}, imuMounting(mission));
 		std::printf("  %u | %.2f | %.0f | %.2f %% | %.2f | %.2f | %.0f %% / %.0f %% (%.0f %%) | %s %s\n", s,
-					o.end_error_m, o.distance_m, 100 * o.end_error_m / o.distance_m, o.end_two_sigma_m,
-					o.worst_heading_ratio, 100 * o.nees_pos_inside, 100 * o.nees_att_inside, 100 * o.nees_tilt_inside,
-					navStatusName(o.status), o.reason.c_str());
+		            o.end_error_m, o.distance_m, 100 * o.end_error_m / o.distance_m, o.end_two_sigma_m,
+		            o.worst_heading_ratio, 100 * o.nees_pos_inside, 100 * o.nees_att_inside,
+		            100 * o.nees_tilt_inside, navStatusName(o.status), o.reason.c_str());
 		EXPECT_LE(o.end_error_m, 0.01 * o.distance_m) << name << " seed " << s;
 		if (check_sigma)
 		{
@@ -154,9 +160,11 @@ TEST(MemsVehicle, NoHeadingSourceKeepsTheHeadingUnknown)
 {
 	const auto dir = simulate("config/missions/bluerov2_pool_square.yaml", 1);
 	const MemsOutcome o = runMems(dir.path(), "bluerov2_pool_square", false);
-	std::printf("no heading source: min heading sigma %.1f deg, worst displacement from the start / position sigma %.2f, "
-				"status %s (%s)\n",
-				o.min_heading_sigma_deg, o.worst_displacement_ratio, navStatusName(o.status), o.reason.c_str());
+	std::printf(
+	    "no heading source: min heading sigma %.1f deg, worst displacement from the start / position sigma "
+	    "%.2f, "
+	    "status %s (%s)\n",
+	    o.min_heading_sigma_deg, o.worst_displacement_ratio, navStatusName(o.status), o.reason.c_str());
 	EXPECT_GE(o.min_heading_sigma_deg, 90.0);
 	EXPECT_EQ(o.status, NavStatus::Degraded) << o.reason;
 }
@@ -202,7 +210,8 @@ TEST(MemsVehicleSlow, ThreeSeedsPoolSquare)
 // 1.67 / 1.40 m of 520 m (0.24 / 0.32 / 0.27 %), status ok.
 TEST(MemsVehicleSlow, ThreeSeedsLawnmowerWithinOnePercent)
 {
-	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, false, false, false);
+	memsSeeds("config/missions/bluerov2_lawnmower.yaml", "bluerov2_lawnmower", {1, 2, 3}, false, false,
+	          false);
 }
 
 // With the heading-bias state (above). Measured, seeds 1-3: end error
@@ -223,13 +232,15 @@ TEST(MemsVehicleSlow, ThreeSeedsLawnmowerInsideTwoSigma)
 // error 0.91 of 2σ, end error 2.25 m of 520 m (2σ 4.21 m), status ok.
 TEST(MemsVehicle, UndisclosedDvlScaleErrorIsNeverOkWithAWrongPosition)
 {
-	const auto dir = simulate("config/missions/bluerov2_lawnmower.yaml", 1, {{"dvl.scale_factor_error", "0.05"}},
-								  "_dvl_scale_5pct");
+	const auto dir = simulate("config/missions/bluerov2_lawnmower.yaml", 1,
+	                          {{"dvl.scale_factor_error", "0.05"}}, "_dvl_scale_5pct");
 	const MemsOutcome o = runMems(dir.path(), "bluerov2_lawnmower", true, {},
-								  imuMounting("config/missions/bluerov2_lawnmower.yaml"));
-	std::printf("DVL 5 %% high, lawnmower seed 1: end error %.2f m (2 sigma %.2f m), worst error / 2 sigma %.2f, "
-				"status %s (%s)\n",
-				o.end_error_m, o.end_two_sigma_m, o.worst_error_to_two_sigma, navStatusName(o.status), o.reason.c_str());
+	                              imuMounting("config/missions/bluerov2_lawnmower.yaml"));
+	std::printf(
+	    "DVL 5 %% high, lawnmower seed 1: end error %.2f m (2 sigma %.2f m), worst error / 2 sigma %.2f, "
+	    "status %s (%s)\n",
+	    o.end_error_m, o.end_two_sigma_m, o.worst_error_to_two_sigma, navStatusName(o.status),
+	    o.reason.c_str());
 	if (o.status == NavStatus::Ok)
 	{
 		EXPECT_LE(o.worst_error_to_two_sigma, 1.0);
@@ -250,16 +261,16 @@ struct NoiseKey
 
 // Every noise figure the MEMS profile tunes (values as in config/bluerov2.yaml).
 const std::vector<NoiseKey> kMemsNoise = {
-	{"filter.process_noise.gyro_arw_deg_per_sqrt_h", 0.5, false},
-	{"filter.process_noise.gyro_bias_deg_per_h.sigma", 500, false},
-	{"filter.process_noise.accel_bias_mg.sigma", 0.5, false},
-	{"filter.process_noise.jerk_psd", 1.0e-2, true},
-	{"filter.process_noise.velocity_psd", 1.0e-4, true},
-	{"sensors.IMU.config.vrw_mg_per_sqrt_hz", 0.1, false},
-	{"sensors.IMU.config.extra_sigma_mps2", 0.05, false},
-	{"sensors.DVL.config.sigma_mps", 0.01, false},
-	{"sensors.PRESSURE.config.sigma_pa", 30, false},
-	{"sensors.MAG.config.heading_sigma_deg", 6.0, false},
+    {"filter.process_noise.gyro_arw_deg_per_sqrt_h", 0.5, false},
+    {"filter.process_noise.gyro_bias_deg_per_h.sigma", 500, false},
+    {"filter.process_noise.accel_bias_mg.sigma", 0.5, false},
+    {"filter.process_noise.jerk_psd", 1.0e-2, true},
+    {"filter.process_noise.velocity_psd", 1.0e-4, true},
+    {"sensors.IMU.config.vrw_mg_per_sqrt_hz", 0.1, false},
+    {"sensors.IMU.config.extra_sigma_mps2", 0.05, false},
+    {"sensors.DVL.config.sigma_mps", 0.01, false},
+    {"sensors.PRESSURE.config.sigma_pa", 30, false},
+    {"sensors.MAG.config.heading_sigma_deg", 6.0, false},
 };
 
 Overrides scaled(const std::vector<NoiseKey>& keys, double k)
@@ -272,16 +283,19 @@ Overrides scaled(const std::vector<NoiseKey>& keys, double k)
 /** The sweep of issue 13 on one simulated pool square: `keys` scaled
  *  together by each factor. Converged: the end error ≤ 1 % of the distance
  *  travelled and the monitor neither 'diverged' nor 'not_initialized'. */
-void noiseSweep(const fs::path& dir, const std::vector<std::vector<NoiseKey>>& sets, const std::vector<double>& factors)
+void noiseSweep(const fs::path& dir, const std::vector<std::vector<NoiseKey>>& sets,
+                const std::vector<double>& factors)
 {
-	std::printf("noise sweep, pool square: keys | factor | end error [m] | %% of distance | 2 sigma [m] | status\n");
+	std::printf(
+	    "noise sweep, pool square: keys | factor | end error [m] | %% of distance | 2 sigma [m] | status\n");
 	for (double k : factors)
 		for (const auto& keys : sets)
 		{
 			const MemsOutcome r = runMems(dir, "bluerov2_pool_square", true, scaled(keys, k));
 			const std::string what = keys.size() == 1 ? keys[0].key : "all";
 			std::printf("  %s | x%.1f | %.2f | %.2f %% | %.2f | %s %s\n", what.c_str(), k, r.end_error_m,
-						100 * r.end_error_m / r.distance_m, r.end_two_sigma_m, navStatusName(r.status), r.reason.c_str());
+			            100 * r.end_error_m / r.distance_m, r.end_two_sigma_m, navStatusName(r.status),
+			            r.reason.c_str());
 			EXPECT_LE(r.end_error_m, 0.01 * r.distance_m) << what << " x" << k;
 			EXPECT_NE(r.status, NavStatus::Diverged) << what << " x" << k << ": " << r.reason;
 			EXPECT_NE(r.status, NavStatus::NotInitialized) << what << " x" << k;

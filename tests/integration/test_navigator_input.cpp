@@ -47,7 +47,8 @@ auvnav::obs::CObservationPressure::Ptr pressureAt(double t, double pa)
 	return o;
 }
 
-const SensorStats& statsOf(const std::vector<SensorStats>& all, const std::string& label, const std::string& plugin)
+const SensorStats& statsOf(const std::vector<SensorStats>& all, const std::string& label,
+                           const std::string& plugin)
 {
 	for (const auto& s : all)
 		if (s.label == label && s.plugin == plugin) return s;
@@ -106,8 +107,8 @@ TEST(NavigatorInput, DuplicateAndBackwardImuTimestampsAreRejected)
 {
 	Fixture f;
 	const std::size_t preds = f.nav->predictions();
-	f.nav->process(*imuAt(f.t));		 // duplicate
-	f.nav->process(*imuAt(f.t - 0.5));	 // backwards
+	f.nav->process(*imuAt(f.t));        // duplicate
+	f.nav->process(*imuAt(f.t - 0.5));  // backwards
 	EXPECT_EQ(f.nav->imuStats().invalid, 2u);
 	EXPECT_EQ(f.nav->predictions(), preds);
 	EXPECT_NE(f.nav->imuStats().last_problem.find("backwards"), std::string::npos);
@@ -116,7 +117,7 @@ TEST(NavigatorInput, DuplicateAndBackwardImuTimestampsAreRejected)
 TEST(NavigatorInput, ImuGapIsBridgedAndCounted)
 {
 	Fixture f;
-	f.t += 2.0;	 // 2 s without IMU
+	f.t += 2.0;  // 2 s without IMU
 	f.nav->process(*imuAt(f.t));
 	EXPECT_EQ(f.nav->imuGaps(), 1u);
 	EXPECT_TRUE(f.nav->filter().state().allFinite());
@@ -145,7 +146,7 @@ TEST(NavigatorInput, LateObservationsAndDeniedSensorsAreCountedNotApplied)
 {
 	Fixture f;
 	const NavState before = f.nav->filter().state();
-	f.nav->process(*pressureAt(f.t - 5.0, 200000));	 // 5 s older than the filter
+	f.nav->process(*pressureAt(f.t - 5.0, 200000));  // 5 s older than the filter
 	EXPECT_EQ(statsOf(f.nav->stats(), "PRESSURE", "pressure").late, 1u);
 	f.nav->addDenial({{"PRESSURE"}, 0.0, 1e9});
 	f.nav->process(*pressureAt(f.t, 200000));
@@ -183,7 +184,8 @@ TEST(NavigatorInput, FirstFixComesFromTheFixSensorsPluginAtItsAntenna)
 	for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));  // past the levelling
 	EXPECT_FALSE(nav.initialized());
 	EXPECT_NE(nav.waitingFor().find("GPS fix"), std::string::npos) << nav.waitingFor();
-	auto gpsAt = [&](const Eigen::Vector3d& p_n) {
+	auto gpsAt = [&](const Eigen::Vector3d& p_n)
+	{
 		auto gps = mrpt::obs::CObservationGPS::Create();
 		gps->sensorLabel = "GPS";
 		gps->timestamp = mrpt::Clock::fromDouble(t + 0.005);
@@ -265,7 +267,7 @@ TEST(NavigatorInput, ForwardClockJumpStopsWithAClearErrorByDefault)
 			EXPECT_NE(std::string(e.what()).find("clock jumped by +"), std::string::npos) << e.what();
 			EXPECT_NE(std::string(e.what()).find("clock.on_jump"), std::string::npos) << e.what();
 		}
-		EXPECT_EQ(f.nav->predictions(), preds);	 // not one blind step
+		EXPECT_EQ(f.nav->predictions(), preds);  // not one blind step
 		EXPECT_TRUE(f.nav->filter().state().allFinite());
 	}
 }
@@ -287,14 +289,15 @@ TEST(NavigatorInput, ClockJumpsReinitialiseWhenConfiguredAndNothingAfterThemIsLo
 		nav.process(*imuAt(t));
 		EXPECT_EQ(nav.clockJumps(), 1u) << jump;
 		EXPECT_FALSE(nav.initialized()) << jump;  // levelling again
-		EXPECT_NE(nav.imuStats().last_problem.find("re-initialised"), std::string::npos) << nav.imuStats().last_problem;
+		EXPECT_NE(nav.imuStats().last_problem.find("re-initialised"), std::string::npos)
+		    << nav.imuStats().last_problem;
 		for (int k = 0; k < 150; ++k) nav.process(*imuAt(t += 0.01));
 		// Initialised again after the levelling second, predicting from the new clock on.
 		EXPECT_TRUE(nav.initialized()) << jump;
 		EXPECT_GT(nav.predictions(), preds + 40) << jump;
 		EXPECT_NEAR(nav.time(), t, 1e-6) << jump;
 		EXPECT_TRUE(nav.filter().state().allFinite());
-		EXPECT_LT(nav.filter().state().p_n.head<2>().norm(), 1.0) << jump;	// no hour of blind drift
+		EXPECT_LT(nav.filter().state().p_n.head<2>().norm(), 1.0) << jump;  // no hour of blind drift
 		// Readings on the new clock are used.
 		nav.process(*pressureAt(t, 101325 + 1025 * 9.782 * (2.0 + 0.3)));
 		EXPECT_EQ(statsOf(nav.stats(), "PRESSURE", "pressure").accepted, 1u) << jump;
@@ -305,7 +308,7 @@ TEST(NavigatorInput, ASmallBackwardStepDropsTheSampleAndAReadingFromTheFutureIsR
 {
 	Fixture f;
 	const std::size_t preds = f.nav->predictions();
-	f.nav->process(*imuAt(f.t - 0.5));	// within clock.max_backward_jump_s: dropped
+	f.nav->process(*imuAt(f.t - 0.5));  // within clock.max_backward_jump_s: dropped
 	EXPECT_EQ(f.nav->predictions(), preds);
 	EXPECT_EQ(f.nav->imuStats().invalid, 1u);
 	const NavState before = f.nav->filter().state();
@@ -319,8 +322,10 @@ TEST(NavigatorInput, ASmallBackwardStepDropsTheSampleAndAReadingFromTheFutureIsR
 TEST(NavigatorInput, BadClockConfigIsRefusedWithTheKey)
 {
 	PluginHost host;
-	for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
-			 {"clock.on_jump", "ignore"}, {"clock.max_forward_jump_s", "0"}, {"clock.max_forward_jump_s", "0.2"}})
+	for (const auto& [key, value] :
+	     std::vector<std::pair<std::string, std::string>>{{"clock.on_jump", "ignore"},
+	                                                      {"clock.max_forward_jump_s", "0"},
+	                                                      {"clock.max_forward_jump_s", "0.2"}})
 	{
 		config::Node cfg = config::Node::load(kConfig);
 		cfg.set(key, value);

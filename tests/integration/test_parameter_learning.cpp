@@ -39,10 +39,11 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 		cfg.set("filter.vehicle_model_file", prior_file.string());
 		PluginHost host;
 		Navigator nav(cfg, host);
-		nav.addDenial({{"GPS"}, 1240.0, 1e9});	// GPS only before the dive
+		nav.addDenial({{"GPS"}, 1240.0, 1e9});  // GPS only before the dive
 		double sigma0 = -1;
 		RunCallbacks first_sigma;
-		first_sigma.on_observation = [&](const Navigator& n) {
+		first_sigma.on_observation = [&](const Navigator& n)
+		{
 			if (sigma0 < 0 && n.initialized())
 				sigma0 = std::sqrt(n.filter().covariance()(idx::damping_lin, idx::damping_lin));
 		};
@@ -50,8 +51,10 @@ TEST(ParameterLearningSlow, SurgeDampingLearnedFromATwentyPercentOffPrior)
 		const double estimate = physicalSub(nav.filter().state().Dl_sub)(0, 0);
 		const double sigma = std::sqrt(nav.filter().covariance()(idx::damping_lin, idx::damping_lin));
 		const bool ok = std::abs(estimate - truth) < std::abs(prior - truth) && sigma < sigma0;
-		std::printf("seed %u: surge linear damping prior %.2f -> %.2f (simulator %.2f), sigma %.1f %% -> %.1f %% %s\n",
-					seed, prior, estimate, truth, 100 * sigma0, 100 * sigma, ok ? "pass" : "FAIL");
+		std::printf(
+		    "seed %u: surge linear damping prior %.2f -> %.2f (simulator %.2f), sigma %.1f %% -> %.1f %% "
+		    "%s\n",
+		    seed, prior, estimate, truth, 100 * sigma0, 100 * sigma, ok ? "pass" : "FAIL");
 		closer += ok;
 	}
 	EXPECT_GE(closer, 4);

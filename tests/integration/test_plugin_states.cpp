@@ -61,16 +61,16 @@ const Eigen::Vector3d kMisalignmentYprDeg(1.0, 0.3, -0.3);
 Eigen::Matrix3d yprDeg(const Eigen::Vector3d& ypr)
 {
 	return (Eigen::AngleAxisd(ypr[0] * kDeg, Eigen::Vector3d::UnitZ()) *
-			Eigen::AngleAxisd(ypr[1] * kDeg, Eigen::Vector3d::UnitY()) *
-			Eigen::AngleAxisd(ypr[2] * kDeg, Eigen::Vector3d::UnitX()))
-		.toRotationMatrix();
+	        Eigen::AngleAxisd(ypr[1] * kDeg, Eigen::Vector3d::UnitY()) *
+	        Eigen::AngleAxisd(ypr[2] * kDeg, Eigen::Vector3d::UnitX()))
+	    .toRotationMatrix();
 }
 
 /** The simulator mounts the DVL at R_bs·R_mis; the plugin's state is the body
  *  rotation δ with Exp(δ)·R_bs = R_bs·R_mis, i.e. δ = R_bs Log(R_mis). */
 Eigen::Vector3d trueMisalignment_b()
 {
-	const Eigen::Matrix3d R_bs = yprDeg(Eigen::Vector3d(-22.5, 0, 0));	// flatfish_sensors.yaml
+	const Eigen::Matrix3d R_bs = yprDeg(Eigen::Vector3d(-22.5, 0, 0));  // flatfish_sensors.yaml
 	return R_bs * so3::Log(yprDeg(kMisalignmentYprDeg));
 }
 
@@ -81,7 +81,7 @@ struct Outcome
 };
 
 Outcome runSquare(const fs::path& dir, bool states,
-				  const std::vector<std::pair<std::string, std::string>>& nav_overrides = {})
+                  const std::vector<std::pair<std::string, std::string>>& nav_overrides = {})
 {
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const auto span = diveAndResurfacing(truth);
@@ -89,7 +89,8 @@ Outcome runSquare(const fs::path& dir, bool states,
 	EXPECT_LT(surf, truth.size());
 	const double t0 = truth.front().t_unix;
 	auto cfg = config::Node::load(kConfig);
-	cfg.set("filter.initial.heading_deg", std::to_string(yawOf(truth.front().q_nb.toRotationMatrix()) / kDeg + 10));
+	cfg.set("filter.initial.heading_deg",
+	        std::to_string(yawOf(truth.front().q_nb.toRotationMatrix()) / kDeg + 10));
 	cfg.set("filter.initial.heading_sigma_deg", "30");
 	if (states)
 	{
@@ -111,7 +112,8 @@ Outcome runSquare(const fs::path& dir, bool states,
 	}
 	Outcome out;
 	bool recorded = false;
-	nav.on_predict = [&](const Navigator& n) {
+	nav.on_predict = [&](const Navigator& n)
+	{
 		if (recorded || n.time() < truth[surf].t_unix) return;
 		recorded = true;
 		const HorizontalError e = horizontalError(n, truth);
@@ -144,55 +146,64 @@ SeedMeans dvlStateSeeds(const std::vector<unsigned>& seeds)
 	SeedMeans mean;
 	const Eigen::Vector3d mis_b = trueMisalignment_b();
 	const Eigen::Vector4d truth(kScaleError, mis_b.x(), mis_b.y(), mis_b.z());
-	std::printf("DVL scale %.3f %%, misalignment (body) %.3f %.3f %.3f deg\n", 100 * kScaleError, mis_b.x() / kDeg,
-				mis_b.y() / kDeg, mis_b.z() / kDeg);
-	std::printf("seed | error [m]: no DVL error | no DVL error, states on | errors, states off | errors, states on "
-				"(2 sigma) | scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
+	std::printf("DVL scale %.3f %%, misalignment (body) %.3f %.3f %.3f deg\n", 100 * kScaleError,
+	            mis_b.x() / kDeg, mis_b.y() / kDeg, mis_b.z() / kDeg);
+	std::printf(
+	    "seed | error [m]: no DVL error | no DVL error, states on | errors, states off | errors, states on "
+	    "(2 sigma) | scale est/sigma [%%] | misalignment est (sigma) [deg]\n");
 	for (unsigned seed : seeds)
 	{
 		const auto clean = simulate(kMission, seed,
-										{{"dvl.scale_factor_error", "0"},
-										 {"dvl.misalignment_ypr_deg.0", "0"},
-										 {"dvl.misalignment_ypr_deg.1", "0"},
-										 {"dvl.misalignment_ypr_deg.2", "0"}},
-										"_clean");
+		                            {{"dvl.scale_factor_error", "0"},
+		                             {"dvl.misalignment_ypr_deg.0", "0"},
+		                             {"dvl.misalignment_ypr_deg.1", "0"},
+		                             {"dvl.misalignment_ypr_deg.2", "0"}},
+		                            "_clean");
 		const Outcome base = runSquare(clean.path(), false);
 		const Outcome base_on = runSquare(clean.path(), true);
 		const auto bad = simulate(kMission, seed,
-									  {{"dvl.scale_factor_error", std::to_string(kScaleError)},
-									   {"dvl.misalignment_ypr_deg.0", std::to_string(kMisalignmentYprDeg[0])},
-									   {"dvl.misalignment_ypr_deg.1", std::to_string(kMisalignmentYprDeg[1])},
-									   {"dvl.misalignment_ypr_deg.2", std::to_string(kMisalignmentYprDeg[2])}},
-									  "_misaligned");
+		                          {{"dvl.scale_factor_error", std::to_string(kScaleError)},
+		                           {"dvl.misalignment_ypr_deg.0", std::to_string(kMisalignmentYprDeg[0])},
+		                           {"dvl.misalignment_ypr_deg.1", std::to_string(kMisalignmentYprDeg[1])},
+		                           {"dvl.misalignment_ypr_deg.2", std::to_string(kMisalignmentYprDeg[2])}},
+		                          "_misaligned");
 		const Outcome off = runSquare(bad.path(), false);
 		const Outcome on = runSquare(bad.path(), true);
-		std::printf("  %u | %.2f | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
-					base.error_m, base_on.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0],
-					100 * on.sigma[0],
-					on.estimate[1] / kDeg, on.estimate[2] / kDeg, on.estimate[3] / kDeg, on.sigma[1] / kDeg,
-					on.sigma[2] / kDeg, on.sigma[3] / kDeg);
-		std::printf("    states on / no DVL error: %.2f (states on both: %.2f); states on / states off: %.2f; "
-					"scale with no DVL error: %.3f / %.3f %%\n",
-					on.error_m / base.error_m, on.error_m / base_on.error_m, on.error_m / off.error_m,
-					100 * base_on.estimate[0], 100 * base_on.sigma[0]);
+		std::printf(
+		    "  %u | %.2f | %.2f | %.2f | %.2f (%.2f) | %.3f / %.3f | %.2f %.2f %.2f (%.2f %.2f %.2f)\n", seed,
+		    base.error_m, base_on.error_m, off.error_m, on.error_m, on.two_sigma_m, 100 * on.estimate[0],
+		    100 * on.sigma[0], on.estimate[1] / kDeg, on.estimate[2] / kDeg, on.estimate[3] / kDeg,
+		    on.sigma[1] / kDeg, on.sigma[2] / kDeg, on.sigma[3] / kDeg);
+		std::printf(
+		    "    states on / no DVL error: %.2f (states on both: %.2f); states on / states off: %.2f; "
+		    "scale with no DVL error: %.3f / %.3f %%\n",
+		    on.error_m / base.error_m, on.error_m / base_on.error_m, on.error_m / off.error_m,
+		    100 * base_on.estimate[0], 100 * base_on.sigma[0]);
 		EXPECT_LT(on.error_m, off.error_m) << "seed " << seed;
 		for (int i = 0; i < 4; ++i)
-			EXPECT_LE(std::abs(on.estimate[i] - truth[i]), 3 * on.sigma[i]) << "seed " << seed << " state " << i;
+			EXPECT_LE(std::abs(on.estimate[i] - truth[i]), 3 * on.sigma[i])
+			    << "seed " << seed << " state " << i;
 		const double w = 1.0 / static_cast<double>(seeds.size());
 		mean.clean_states_off += w * base.error_m;
 		mean.clean_states_on += w * base_on.error_m;
 		mean.errors_states_off += w * off.error_m;
 		mean.errors_states_on += w * on.error_m;
 	}
-	std::printf("mean over %zu seeds [m]: no DVL error %.3f (states on %.3f) | DVL errors, states off %.3f, states on "
-				"%.3f | states on, errors / no errors: %.2f; against the states-off figure: %.2f\n",
-				seeds.size(), mean.clean_states_off, mean.clean_states_on, mean.errors_states_off, mean.errors_states_on,
-				mean.errors_states_on / mean.clean_states_on, mean.errors_states_on / mean.clean_states_off);
+	std::printf(
+	    "mean over %zu seeds [m]: no DVL error %.3f (states on %.3f) | DVL errors, states off %.3f, states "
+	    "on "
+	    "%.3f | states on, errors / no errors: %.2f; against the states-off figure: %.2f\n",
+	    seeds.size(), mean.clean_states_off, mean.clean_states_on, mean.errors_states_off,
+	    mean.errors_states_on, mean.errors_states_on / mean.clean_states_on,
+	    mean.errors_states_on / mean.clean_states_off);
 	return mean;
 }
 }  // namespace
 
-TEST(DvlPluginStates, ScaleAndMisalignmentEstimatedOnTheSquareMission) { dvlStateSeeds({1}); }
+TEST(DvlPluginStates, ScaleAndMisalignmentEstimatedOnTheSquareMission)
+{
+	dvlStateSeeds({1});
+}
 
 TEST(DvlPluginStates, ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate)
 {
@@ -203,24 +214,25 @@ TEST(DvlPluginStates, ScaleFactorNotPulledLowByTheNoiseOfTheVelocityEstimate)
 	// at resurfacing for a true 0, σ 0.23 %. With the scale's term at the velocity estimate of
 	// 10 s before (dvl.h, scale_reference_lag_s) it lands within 2σ of 0.
 	const auto dir = simulate(kMission, 1,
-								  {{"dvl.scale_factor_error", "0"},
-								   {"dvl.misalignment_ypr_deg.0", "0"},
-								   {"dvl.misalignment_ypr_deg.1", "0"},
-								   {"dvl.misalignment_ypr_deg.2", "0"},
-								   {"gps.white_sigma_m", "0"},
-								   {"gps.correlated_sigma_m", "0"},
-								   {"gps.outlier_probability", "0"}},
-								  "_noisy_velocity");
+	                          {{"dvl.scale_factor_error", "0"},
+	                           {"dvl.misalignment_ypr_deg.0", "0"},
+	                           {"dvl.misalignment_ypr_deg.1", "0"},
+	                           {"dvl.misalignment_ypr_deg.2", "0"},
+	                           {"gps.white_sigma_m", "0"},
+	                           {"gps.correlated_sigma_m", "0"},
+	                           {"gps.outlier_probability", "0"}},
+	                          "_noisy_velocity");
 	const std::vector<std::pair<std::string, std::string>> weak_accelerometer = {
-		{"sensors.IMU.config.extra_sigma_mps2", "2"}};
+	    {"sensors.IMU.config.extra_sigma_mps2", "2"}};
 	auto former = weak_accelerometer;
 	former.emplace_back("sensors.DVL.config.scale_reference_lag_s", "0");
 	const Outcome now = runSquare(dir.path(), true, weak_accelerometer);
 	const Outcome before = runSquare(dir.path(), true, former);
-	std::printf("scale at resurfacing, true 0: %.3f / %.3f %% (lag 10 s), %.3f / %.3f %% (lag 0: h at the state's "
-				"velocity); error %.2f / %.2f m\n",
-				100 * now.estimate[0], 100 * now.sigma[0], 100 * before.estimate[0], 100 * before.sigma[0], now.error_m,
-				before.error_m);
+	std::printf(
+	    "scale at resurfacing, true 0: %.3f / %.3f %% (lag 10 s), %.3f / %.3f %% (lag 0: h at the state's "
+	    "velocity); error %.2f / %.2f m\n",
+	    100 * now.estimate[0], 100 * now.sigma[0], 100 * before.estimate[0], 100 * before.sigma[0],
+	    now.error_m, before.error_m);
 	EXPECT_LT(std::abs(now.estimate[0]), 2 * now.sigma[0]);
 	EXPECT_LT(before.estimate[0], -4 * before.sigma[0]) << "the pull the lagged reference removes";
 }

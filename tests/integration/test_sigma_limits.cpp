@@ -20,8 +20,8 @@ const std::string kSample = std::string(AUVNAV_SOURCE_DIR) + "/share/sample/samp
 
 struct Sigmas
 {
-	double max_pos_n = 0;		  // [m] largest north σ after the start
-	double min_vel_e = 1;	  // [m/s] smallest east velocity σ
+	double max_pos_n = 0;  // [m] largest north σ after the start
+	double min_vel_e = 1;  // [m/s] smallest east velocity σ
 	std::size_t hits = 0;
 };
 
@@ -34,7 +34,8 @@ Sigmas run(const std::vector<std::pair<std::string, std::string>>& overrides)
 	PluginHost host;
 	Navigator nav(cfg, host);
 	Sigmas s;
-	auto look = [&](const Navigator& n) {
+	auto look = [&](const Navigator& n)
+	{
 		const Covariance& P = n.filter().covariance();
 		s.max_pos_n = std::max(s.max_pos_n, std::sqrt(P(idx::pos, idx::pos)));
 		s.min_vel_e = std::min(s.min_vel_e, std::sqrt(P(idx::vel + 1, idx::vel + 1)));
@@ -58,22 +59,24 @@ TEST(SigmaLimits, AFloorAndACeilingHoldThroughARealRun)
 	char floor_text[32], ceiling_text[32];
 	std::snprintf(floor_text, sizeof floor_text, "%.17g", floor);
 	std::snprintf(ceiling_text, sizeof ceiling_text, "%.17g", ceiling);
-	const Sigmas limited = run({{"filter.sigma_limits.vel_e.min", floor_text},
-								{"filter.sigma_limits.pos.max", ceiling_text}});
-	std::printf("free: pos_n sigma up to %.3f m, vel_e sigma down to %.3g m/s; limited (floor %.3g, "
-				"ceiling %.3f): %.3f m, %.3g m/s, %zu hits\n",
-				free.max_pos_n, free.min_vel_e, floor, ceiling, limited.max_pos_n, limited.min_vel_e,
-				limited.hits);
+	const Sigmas limited =
+	    run({{"filter.sigma_limits.vel_e.min", floor_text}, {"filter.sigma_limits.pos.max", ceiling_text}});
+	std::printf(
+	    "free: pos_n sigma up to %.3f m, vel_e sigma down to %.3g m/s; limited (floor %.3g, "
+	    "ceiling %.3f): %.3f m, %.3g m/s, %zu hits\n",
+	    free.max_pos_n, free.min_vel_e, floor, ceiling, limited.max_pos_n, limited.min_vel_e, limited.hits);
 	EXPECT_GT(limited.hits, 0u);
 	EXPECT_LE(limited.max_pos_n, ceiling * (1 + 1e-12));
 	EXPECT_GE(limited.min_vel_e, floor * (1 - 1e-12));
-	EXPECT_NEAR(limited.min_vel_e, floor, 1e-9 * floor);	// it wanted to go lower: held on the floor
+	EXPECT_NEAR(limited.min_vel_e, floor, 1e-9 * floor);  // it wanted to go lower: held on the floor
 	EXPECT_NEAR(limited.max_pos_n, ceiling, 1e-9 * ceiling);
 }
 
 TEST(SigmaLimits, BadLimitsAreRefusedNamingTheKey)
 {
-	auto expectRefused = [](const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& what) {
+	auto expectRefused =
+	    [](const std::vector<std::pair<std::string, std::string>>& overrides, const std::string& what)
+	{
 		auto cfg = config::Node::load(kConfig);
 		for (const auto& [k, v] : overrides) cfg.set(k, v);
 		PluginHost host;
@@ -88,11 +91,13 @@ TEST(SigmaLimits, BadLimitsAreRefusedNamingTheKey)
 		}
 	};
 	expectRefused({{"filter.sigma_limits.gyro_bais.min", "1e-6"}},
-				  "filter.sigma_limits.gyro_bais: unknown key (did you mean 'gyro_bias'");
-	expectRefused({{"filter.sigma_limits.pos.mx", "3"}}, "filter.sigma_limits.pos.mx: unknown key (did you mean 'max'");
+	              "filter.sigma_limits.gyro_bais: unknown key (did you mean 'gyro_bias'");
+	expectRefused({{"filter.sigma_limits.pos.mx", "3"}},
+	              "filter.sigma_limits.pos.mx: unknown key (did you mean 'max'");
 	expectRefused({{"filter.sigma_limits.vel.min", "2"}, {"filter.sigma_limits.vel.max", "1"}},
-				  "filter.sigma_limits.vel.max: is below min");
+	              "filter.sigma_limits.vel.max: is below min");
 	expectRefused({{"filter.sigma_limits.vel.min", "-1"}}, "filter.sigma_limits.vel.min");
 	// The start's own σ must lie inside (1° heading ceiling against 30° initial).
-	expectRefused({{"filter.sigma_limits.att_d.max", "0.017"}}, "filter.sigma_limits.att_d: its initial sigma");
+	expectRefused({{"filter.sigma_limits.att_d.max", "0.017"}},
+	              "filter.sigma_limits.att_d: its initial sigma");
 }

@@ -31,7 +31,8 @@ HeadingError headingError(const RunResult& r, const std::vector<TruthRow>& truth
 	for (const auto& row : r.rows)
 	{
 		if (row.t_unix - truth.front().t_unix < from_s) continue;
-		const double err = wrapPi(yawOf(row.R_nb) - yawOf(truthAt(truth, row.t_unix).q_nb.toRotationMatrix())) / kDeg;
+		const double err =
+		    wrapPi(yawOf(row.R_nb) - yawOf(truthAt(truth, row.t_unix).q_nb.toRotationMatrix())) / kDeg;
 		sq += err * err;
 		e.worst_deg = std::max(e.worst_deg, std::abs(err));
 		e.final_sigma_deg = row.headingSigma() / kDeg;
@@ -48,17 +49,19 @@ void sonarHeadingSeeds(std::initializer_list<unsigned> seeds)
 	// has the KVH's: ARW ×1.25, bias wander σ 1.23 °/h (the simulator's, for
 	// this ARW and floor) and turn-on 1 °/h together ≈ 1.6 °/h.
 	const std::vector<std::pair<std::string, std::string>> poor_gyro = {
-		{"filter.process_noise.gyro_arw_deg_per_sqrt_h", "0.15"},
-		{"filter.process_noise.gyro_bias_deg_per_h.sigma", "1.6"},
-		{"filter.initial.gyro_bias_sigma_deg_per_h", "1.6"},
-		{"filter.initial.heading_deg", "190"}};  // a compass guess 10° off the true 180° (σ 30°)
+	    {"filter.process_noise.gyro_arw_deg_per_sqrt_h", "0.15"},
+	    {"filter.process_noise.gyro_bias_deg_per_h.sigma", "1.6"},
+	    {"filter.initial.gyro_bias_sigma_deg_per_h", "1.6"},
+	    {"filter.initial.heading_deg", "190"}};  // a compass guess 10° off the true 180° (σ 30°)
 	auto with_sonar = poor_gyro;
 	with_sonar.push_back({"sensors.SONAR.config.mode", "update"});
 	DenialWindow no_gps;
 	no_gps.labels = {"GPS"};
 	no_gps.from_s = 60;
 	no_gps.to_s = 1e9;
-	std::printf("| seed | heading RMS without sonar | with sonar updates | worst without | worst with | sonar bearings used |\n");
+	std::printf(
+	    "| seed | heading RMS without sonar | with sonar updates | worst without | worst with | sonar "
+	    "bearings used |\n");
 	for (unsigned seed : seeds)
 	{
 		const auto dir = simulate("config/missions/sonar_poles_poor_gyro.yaml", seed);
@@ -73,11 +76,13 @@ void sonarHeadingSeeds(std::initializer_list<unsigned> seeds)
 			if (s.label == "SONAR")
 			{
 				used = s.accepted + s.recovered;
-				std::printf("seed %u: SONAR bearings accepted %zu, rejected %zu; final heading sigma without %.2f°, with %.2f°\n",
-							seed, s.accepted, s.rejected, a.final_sigma_deg, b.final_sigma_deg);
+				std::printf(
+				    "seed %u: SONAR bearings accepted %zu, rejected %zu; final heading sigma without %.2f°, "
+				    "with %.2f°\n",
+				    seed, s.accepted, s.rejected, a.final_sigma_deg, b.final_sigma_deg);
 			}
-		std::printf("| %u | %.2f° | %.2f° | %.2f° | %.2f° | %zu |\n", seed, a.rms_deg, b.rms_deg, a.worst_deg, b.worst_deg,
-					used);
+		std::printf("| %u | %.2f° | %.2f° | %.2f° | %.2f° | %zu |\n", seed, a.rms_deg, b.rms_deg, a.worst_deg,
+		            b.worst_deg, used);
 		EXPECT_GT(used, 200u) << "seed " << seed;
 		EXPECT_LT(b.rms_deg, 0.5 * a.rms_deg) << "seed " << seed;
 		EXPECT_LT(b.rms_deg, 1.5) << "seed " << seed;
@@ -86,5 +91,11 @@ void sonarHeadingSeeds(std::initializer_list<unsigned> seeds)
 }
 }  // namespace
 
-TEST(SonarHeading, OneSeedPolesBeatAPoorGyro) { sonarHeadingSeeds({1}); }
-TEST(SonarHeadingSlow, ThreeSeedsPolesBeatAPoorGyro) { sonarHeadingSeeds({1, 2, 3}); }
+TEST(SonarHeading, OneSeedPolesBeatAPoorGyro)
+{
+	sonarHeadingSeeds({1});
+}
+TEST(SonarHeadingSlow, ThreeSeedsPolesBeatAPoorGyro)
+{
+	sonarHeadingSeeds({1, 2, 3});
+}

@@ -11,8 +11,8 @@
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/navigator.h>
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include <cmath>
 #include <cstdio>
@@ -61,7 +61,8 @@ Figures run(const fs::path& dir, const std::vector<std::pair<std::string, std::s
 		sum2 += e * e;
 		++n;
 		f.final_m = e;
-		f.two_sigma_m = 2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(row.P_ne).eigenvalues().maxCoeff());
+		f.two_sigma_m =
+		    2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(row.P_ne).eigenvalues().maxCoeff());
 	}
 	f.rms_m = n ? std::sqrt(sum2 / n) : NAN;
 	const SensorStats& s = usblStats(r);
@@ -74,9 +75,10 @@ Figures run(const fs::path& dir, const std::vector<std::pair<std::string, std::s
 
 void print(const char* what, unsigned seed, const Figures& f)
 {
-	std::printf("seed %u %-34s final %.3f m (2σ %.3f m)  RMS submerged %.3f m  USBL %zu accepted, %zu rejected, "
-				"%zu re-filtered\n",
-				seed, what, f.final_m, f.two_sigma_m, f.rms_m, f.accepted, f.rejected, f.delayed);
+	std::printf(
+	    "seed %u %-34s final %.3f m (2σ %.3f m)  RMS submerged %.3f m  USBL %zu accepted, %zu rejected, "
+	    "%zu re-filtered\n",
+	    seed, what, f.final_m, f.two_sigma_m, f.rms_m, f.accepted, f.rejected, f.delayed);
 }
 
 void checkSeed(unsigned seed)
@@ -85,7 +87,8 @@ void checkSeed(unsigned seed)
 	const Figures immediate = run(immediate_dir.path());
 	const auto late_dir = simulate(kMission, seed, {}, "_lat2");
 	const Figures handled = run(late_dir.path());
-	const auto untimed_dir = simulate(kMission, seed, {{"usbl.report_measurement_time", "false"}}, "_untimed");
+	const auto untimed_dir =
+	    simulate(kMission, seed, {{"usbl.report_measurement_time", "false"}}, "_untimed");
 	const Figures declared = run(untimed_dir.path(), {{"sensors.USBL.latency_s", "2"}});
 	const Figures ignored = run(untimed_dir.path());
 	print("no latency", seed, immediate);
@@ -106,7 +109,10 @@ void checkSeed(unsigned seed)
 }
 }  // namespace
 
-TEST(UsblMission, LateFixesAppliedAtTheirTimeAreAsGoodAsImmediateOnes) { checkSeed(1); }
+TEST(UsblMission, LateFixesAppliedAtTheirTimeAreAsGoodAsImmediateOnes)
+{
+	checkSeed(1);
+}
 
 TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 {
@@ -114,7 +120,8 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 	// alignment error). On the surface the GPS tells the bias apart, as well as
 	// its 5 min of fixes 30 s apart with σ ≈ 3 m each can (σ ≈ 0.8 m); submerged
 	// (GPS denied) the state keeps it. Without it the track sits on the bias.
-	const auto dir = simulate(kMission, 1, {{"usbl.bias_north_m", "3.0"}, {"usbl.bias_east_m", "-2.0"}}, "_bias");
+	const auto dir =
+	    simulate(kMission, 1, {{"usbl.bias_north_m", "3.0"}, {"usbl.bias_east_m", "-2.0"}}, "_bias");
 	const Figures off = run(dir.path());
 	const auto truth = readTruth(dir / "ground_truth.csv");
 	const std::size_t dive = diveAndResurfacing(truth).first;
@@ -126,7 +133,8 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 	double sum2 = 0;
 	std::size_t n = 0;
 	double next = 0;
-	nav.on_predict = [&](const Navigator& x) {
+	nav.on_predict = [&](const Navigator& x)
+	{
 		if (x.time() < truth[dive].t_unix || x.time() < next) return;
 		next = x.time() + 1;
 		const double e = (x.bodyPosition_n() - truthAt(truth, x.time()).p_n).head<2>().norm();
@@ -139,9 +147,10 @@ TEST(UsblMission, AShipBiasIsLearnedAtTheSurfaceAsAPluginState)
 	const Eigen::Vector2d b = nav.filter().state().extra.segment<2>(at - idx::core_dim);
 	const Eigen::Vector2d sigma = nav.filter().covariance().diagonal().segment<2>(at).cwiseSqrt();
 	const double rms = std::sqrt(sum2 / std::max<std::size_t>(n, 1));
-	std::printf("bias estimate %.3f, %.3f m (σ %.3f, %.3f; true 3.0, -2.0); RMS submerged %.3f m with the state, "
-				"%.3f m without\n",
-				b.x(), b.y(), sigma.x(), sigma.y(), rms, off.rms_m);
+	std::printf(
+	    "bias estimate %.3f, %.3f m (σ %.3f, %.3f; true 3.0, -2.0); RMS submerged %.3f m with the state, "
+	    "%.3f m without\n",
+	    b.x(), b.y(), sigma.x(), sigma.y(), rms, off.rms_m);
 	EXPECT_NEAR(b.x(), 3.0, 3 * sigma.x());
 	EXPECT_NEAR(b.y(), -2.0, 3 * sigma.y());
 	EXPECT_LT(sigma.maxCoeff(), 1.0);  // prior 5 m

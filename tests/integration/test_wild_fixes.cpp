@@ -41,8 +41,8 @@ fs::path editedSample(const ScratchDir& dir, const FixEdit& edit)
 {
 	const auto cfg = config::Node::load(kConfig);
 	const auto o = cfg.child("navigation_frame").child("origin");
-	const earth::TangentFrame frame(
-		earth::Geodetic{o.number("latitude_deg") * kDeg, o.number("longitude_deg") * kDeg, o.number("height_m")});
+	const earth::TangentFrame frame(earth::Geodetic{o.number("latitude_deg") * kDeg,
+	                                                o.number("longitude_deg") * kDeg, o.number("height_m")});
 	const fs::path out = dir / "edited.rawlog";
 	io::RawlogReader in((kSample / "sample.rawlog").string());
 	io::RawlogWriter w(out.string(), 1);
@@ -58,7 +58,8 @@ fs::path editedSample(const ScratchDir& dir, const FixEdit& edit)
 			{
 				const double t = mrpt::Clock::toDouble(obs->timestamp);
 				if (!t_first) t_first = t;
-				Eigen::Vector3d p_n = frame.toNed({f.latitude_degrees * kDeg, f.longitude_degrees * kDeg, 0.0});
+				Eigen::Vector3d p_n =
+				    frame.toNed({f.latitude_degrees * kDeg, f.longitude_degrees * kDeg, 0.0});
 				p_n.head<2>() += edit(index++, t - *t_first);
 				const earth::Geodetic g = frame.toGeodetic(p_n);
 				f.latitude_degrees = g.lat_rad / kDeg;
@@ -87,7 +88,8 @@ Figures run(const fs::path& rawlog, const std::vector<std::pair<std::string, std
 	PluginHost host;
 	Navigator nav(cfg, host);
 	Figures f;
-	nav.on_predict = [&](const Navigator& n) {
+	nav.on_predict = [&](const Navigator& n)
+	{
 		if (!std::isnan(f.at_dive_m) || n.time() < t_dive) return;
 		const HorizontalError e = horizontalError(n, truth);
 		f.at_dive_m = e.error_m;
@@ -116,14 +118,15 @@ const Figures& clean()
 
 void print(const char* what, const Figures& f)
 {
-	std::printf("%-16s error at the dive %7.2f m (1 sigma %.2f m), final %7.2f m; GPS %zu accepted, %zu rejected, "
-				"%zu recovered; position re-initialisations %zu (%.1f s)\n",
-				what, f.at_dive_m, f.sigma_at_dive_m, f.final_m, f.gps_accepted, f.gps_rejected, f.gps_recovered,
-				f.reinitializations, f.wall_s);
+	std::printf(
+	    "%-16s error at the dive %7.2f m (1 sigma %.2f m), final %7.2f m; GPS %zu accepted, %zu rejected, "
+	    "%zu recovered; position re-initialisations %zu (%.1f s)\n",
+	    what, f.at_dive_m, f.sigma_at_dive_m, f.final_m, f.gps_accepted, f.gps_rejected, f.gps_recovered,
+	    f.reinitializations, f.wall_s);
 }
 
 Figures wild(const std::string& tag, const FixEdit& edit,
-			 const std::vector<std::pair<std::string, std::string>>& overrides = {})
+             const std::vector<std::pair<std::string, std::string>>& overrides = {})
 {
 	const ScratchDir dir("wild_" + tag);  // removed also when run() throws
 	const Figures f = run(editedSample(dir, edit), overrides);
@@ -144,7 +147,8 @@ TEST(WildFixes, CleanSampleNeedsNoReinitialisation)
 
 TEST(WildFixes, FirstFixOneKilometreOffIsOutvoted)
 {
-	const Figures f = wild("first_fix_1km", [](int i, double) { return i == 0 ? Eigen::Vector2d(1000, 0) : Eigen::Vector2d::Zero(); });
+	const Figures f = wild("first_fix_1km", [](int i, double)
+	                       { return i == 0 ? Eigen::Vector2d(1000, 0) : Eigen::Vector2d::Zero(); });
 	EXPECT_LE(f.final_m, 2 * clean().final_m);
 	EXPECT_LE(f.at_dive_m, 2 * clean().at_dive_m);
 }
@@ -156,9 +160,9 @@ TEST(WildFixes, EveryFifthFixOneKilometreOff)
 	// fixes it skips between them do not: no re-initialisation at any phase.
 	for (int phase = 0; phase < 5; ++phase)
 	{
-		const Figures f = wild("every_5th_1km_phase" + std::to_string(phase), [phase](int i, double) {
-			return i % 5 == phase ? Eigen::Vector2d(0, 1000) : Eigen::Vector2d::Zero();
-		});
+		const Figures f =
+		    wild("every_5th_1km_phase" + std::to_string(phase), [phase](int i, double)
+		         { return i % 5 == phase ? Eigen::Vector2d(0, 1000) : Eigen::Vector2d::Zero(); });
 		EXPECT_LE(f.final_m, 2 * clean().final_m) << "phase " << phase;
 		EXPECT_EQ(f.reinitializations, 0u) << "phase " << phase;
 	}
@@ -166,7 +170,8 @@ TEST(WildFixes, EveryFifthFixOneKilometreOff)
 
 TEST(WildFixes, FirstFixFiftyFiveMetresOff)
 {
-	const Figures f = wild("first_fix_55m", [](int i, double) { return i == 0 ? Eigen::Vector2d(-39, 39) : Eigen::Vector2d::Zero(); });
+	const Figures f = wild("first_fix_55m", [](int i, double)
+	                       { return i == 0 ? Eigen::Vector2d(-39, 39) : Eigen::Vector2d::Zero(); });
 	EXPECT_LE(f.at_dive_m, 2 * clean().at_dive_m);
 	EXPECT_LE(f.final_m, 2 * clean().final_m);
 }
@@ -175,9 +180,8 @@ TEST(WildFixes, AllFixesTwentyMetresOffForThirtySecondsAreReinitialisedAway)
 {
 	// The first 30 s agree with each other (a consensus cannot tell): the
 	// filter starts 20 m off, and the good fixes after them re-initialise it.
-	const Figures f = wild("plus_20m_30s", [](int, double t) {
-		return t < 30 ? Eigen::Vector2d(20, 0) : Eigen::Vector2d::Zero();
-	});
+	const Figures f = wild("plus_20m_30s", [](int, double t)
+	                       { return t < 30 ? Eigen::Vector2d(20, 0) : Eigen::Vector2d::Zero(); });
 	EXPECT_LE(f.at_dive_m, 2 * clean().at_dive_m);
 	EXPECT_GE(f.reinitializations, 1u);
 }
@@ -186,9 +190,10 @@ TEST(WildFixes, ReinitialisationAloneRepairsATrustedWildFirstFix)
 {
 	// min_fixes 1 trusts the first fix (the old start): 1 km off, with σ 3 m.
 	// The good fixes after it fail the gate and agree: the position is reset.
-	const Figures f = wild("trusted_first_fix_1km",
-						   [](int i, double) { return i == 0 ? Eigen::Vector2d(1000, 0) : Eigen::Vector2d::Zero(); },
-						   {{"filter.initial.fix_consensus.min_fixes", "1"}});
+	const Figures f =
+	    wild("trusted_first_fix_1km",
+	         [](int i, double) { return i == 0 ? Eigen::Vector2d(1000, 0) : Eigen::Vector2d::Zero(); },
+	         {{"filter.initial.fix_consensus.min_fixes", "1"}});
 	EXPECT_EQ(f.reinitializations, 1u);
 	EXPECT_LE(f.final_m, 2 * clean().final_m);
 	EXPECT_LE(f.at_dive_m, 2 * clean().at_dive_m);
@@ -200,7 +205,8 @@ TEST(WildFixes, AUsblReinitialisesAStartHundredMetresOff)
 	// all along and the start given 100 m north of the truth (σ 3 m).
 	const auto dir = simulate("config/missions/usbl_sample.yaml", 1);
 	const auto truth = readTruth(dir / "ground_truth.csv");
-	auto final_error = [&](const std::string& north_m, std::size_t& usbl_reinits, std::size_t& total) {
+	auto final_error = [&](const std::string& north_m, std::size_t& usbl_reinits, std::size_t& total)
+	{
 		auto cfg = config::Node::load(kConfig);
 		cfg.set("filter.initial.position", "config");
 		cfg.set("filter.initial.north_m", north_m);
@@ -216,8 +222,10 @@ TEST(WildFixes, AUsblReinitialisesAStartHundredMetresOff)
 	std::size_t usbl_clean = 0, usbl_off = 0, total_clean = 0, total_off = 0;
 	const double clean_m = final_error("0", usbl_clean, total_clean);
 	const double off_m = final_error("100", usbl_off, total_off);
-	std::printf("USBL, start at the truth: final %.3f m, %zu re-initialisations; start 100 m off: final %.3f m, %zu\n",
-				clean_m, total_clean, off_m, total_off);
+	std::printf(
+	    "USBL, start at the truth: final %.3f m, %zu re-initialisations; start 100 m off: final %.3f m, "
+	    "%zu\n",
+	    clean_m, total_clean, off_m, total_off);
 	EXPECT_EQ(total_clean, 0u);
 	EXPECT_EQ(usbl_off, 1u);
 	EXPECT_EQ(total_off, 1u);

@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <charconv>
-#include <cstdio>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -40,8 +40,9 @@ int mismatches(const std::vector<double>& values, const std::vector<int>& precis
 			for (const auto& [got, want, what] :
 			     {std::tuple{fixed, want_fixed, "f"}, std::tuple{general, want_general, "g"}})
 				if (got != want && ++bad <= 10)
-					ADD_FAILURE() << "%." << p << what << " of " << oracle(v, std::chars_format::scientific, 17)
-					              << ": got '" << got << "', want '" << want << "'";
+					ADD_FAILURE() << "%." << p << what << " of "
+					              << oracle(v, std::chars_format::scientific, 17) << ": got '" << got
+					              << "', want '" << want << "'";
 		}
 	return bad;
 }
@@ -101,8 +102,9 @@ TEST(Decimal, HalfwayCasesCarriesAndPowersOfTenMatchToChars)
 	for (int e = -320; e <= 308; ++e)
 	{
 		const double p = std::pow(10.0, e);
-		for (double x : {p, std::nextafter(p, 0.0), std::nextafter(p, std::numeric_limits<double>::infinity()), 9.5 * p, 9.95 * p, 9.9999999995 * p,
-		                 9.99999999995 * p, 0.5 * p, 2.5 * p, 1.25 * p, 1.5 * p})
+		for (double x :
+		     {p, std::nextafter(p, 0.0), std::nextafter(p, std::numeric_limits<double>::infinity()), 9.5 * p,
+		      9.95 * p, 9.9999999995 * p, 9.99999999995 * p, 0.5 * p, 2.5 * p, 1.25 * p, 1.5 * p})
 		{
 			values.push_back(x);
 			values.push_back(-x);
@@ -149,13 +151,14 @@ TEST(Decimal, AppendsToWhatTheStringHolds)
 // significant digits, against printf.
 TEST(Decimal, LargePrecisionsMatchPrintf)
 {
-	auto printed = [](const char* format, int precision, double v) {
+	auto printed = [](const char* format, int precision, double v)
+	{
 		std::vector<char> buf(2000);
 		const int n = std::snprintf(buf.data(), buf.size(), format, precision, v);
 		return std::string(buf.data(), static_cast<std::size_t>(n));
 	};
 	for (const double v : {std::numeric_limits<double>::max(), -std::numeric_limits<double>::max(), 1.0 / 3.0,
-						   std::numeric_limits<double>::denorm_min(), -2.5})
+	                       std::numeric_limits<double>::denorm_min(), -2.5})
 		for (const int precision : {18, 80, 100, 400, 760})
 		{
 			std::string fixed, general;

@@ -4,11 +4,11 @@
 #include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using auvnav::io::Json;
@@ -29,8 +29,9 @@ TEST(Json, EscapesStringsAndReplacesInvalidUtf8)
 	Json j;
 	j["s"] = std::string("quote \" backslash \\ newline \n bell \x07 latin1 \xe9");
 	const std::string text = auvnav::io::jsonText(j);
-	EXPECT_NE(text.find(R"(quote \" backslash \\ newline \n bell \u0007 latin1 )"), std::string::npos) << text;
-	const Json back = Json::parse(text);	// valid JSON again
+	EXPECT_NE(text.find(R"(quote \" backslash \\ newline \n bell \u0007 latin1 )"), std::string::npos)
+	    << text;
+	const Json back = Json::parse(text);  // valid JSON again
 	EXPECT_EQ(back["s"].get<std::string>().substr(0, 6), "quote ");
 }
 

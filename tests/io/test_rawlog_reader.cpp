@@ -134,10 +134,10 @@ std::vector<CObservation::Ptr> mixedRecording(int steps)
 /** A scratch folder named after the running test (scratch_dir.h). */
 class TempDir : public auvnav::testing::ScratchDir
 {
-   public:
+ public:
 	TempDir()
-		: ScratchDir(std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) + "_" +
-					 ::testing::UnitTest::GetInstance()->current_test_info()->name())
+	    : ScratchDir(std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) +
+	                 "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name())
 	{
 	}
 	std::string file(const std::string& name) const { return (*this / name).string(); }

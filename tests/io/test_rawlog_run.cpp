@@ -2,10 +2,10 @@
 // default configuration: callbacks, early stop, and a bad file reported
 // (not thrown) with the navigator finished.
 #include <auvnav/config.h>
-#include <auvnav/testing/scratch_dir.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/obs/register.h>
 #include <auvnav/rawlog_run.h>
+#include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
 #include <string>
@@ -15,7 +15,10 @@ using namespace auvnav;
 namespace
 {
 const std::string kRepo = AUVNAV_SOURCE_DIR;
-config::Node defaultConfig() { return config::Node::load(kRepo + "/config/flatfish.yaml"); }
+config::Node defaultConfig()
+{
+	return config::Node::load(kRepo + "/config/flatfish.yaml");
+}
 }  // namespace
 
 TEST(RawlogRun, CallsBackAndStopsWhenAsked)
@@ -56,7 +59,7 @@ TEST(RawlogRun, ABadFileEndsTheRunWithTheErrorAndAFinishedNavigator)
 	EXPECT_FALSE(run.interrupted);
 	EXPECT_NE(run.error.find("not_a_rawlog.txt"), std::string::npos) << run.error;
 	EXPECT_THROW(run.rethrow(), io::RawlogError);
-	EXPECT_EQ(nav.health().status(), NavStatus::NotInitialized);	// finish() ran
+	EXPECT_EQ(nav.health().status(), NavStatus::NotInitialized);  // finish() ran
 	EXPECT_EQ(run.data_s, 0.0);
 }
 
@@ -90,10 +93,10 @@ TEST(RawlogRun, ALogWithoutTheImuIsAnErrorListingItsLabels)
 	cb.on_observation = [&](const Navigator&) { ++seen; };
 	const RunSummary run = runRawlog(nav, kRepo + "/share/sample/sample.rawlog", cb);
 	EXPECT_FALSE(run.completed());
-	EXPECT_NE(run.error.find("no IMU observation with label 'IMU2' (imu.label) among " + std::to_string(seen) +
-							 " observations (ADCP "),
-			  std::string::npos)
-		<< run.error;
+	EXPECT_NE(run.error.find("no IMU observation with label 'IMU2' (imu.label) among " +
+	                         std::to_string(seen) + " observations (ADCP "),
+	          std::string::npos)
+	    << run.error;
 	EXPECT_NE(run.error.find(", IMU 82672, "), std::string::npos) << run.error;
 	EXPECT_EQ(run.labels.at("IMU"), 82672u);
 }

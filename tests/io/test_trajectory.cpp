@@ -5,11 +5,11 @@
 #include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 namespace fs = std::filesystem;
 using namespace auvnav;
@@ -18,7 +18,10 @@ namespace
 {
 /** A file path `name` in a folder of its own (emptied here: the file is
  *  new), removed at exit (scratch_dir.h). */
-fs::path scratch(const std::string& name) { return auvnav::testing::scratchFolder("trajectory", name) / name; }
+fs::path scratch(const std::string& name)
+{
+	return auvnav::testing::scratchFolder("trajectory", name) / name;
+}
 
 double yawOf(const Eigen::Quaterniond& q)
 {
@@ -34,13 +37,14 @@ fs::path writeTruth()
 	const fs::path p = scratch("truth.csv");
 	std::ofstream f(p);
 	f.precision(17);
-	f << "time_s,unix_time_s,qw,qx,qy,qz,north_m,east_m,down_m,current_n_mps,current_e_mps,distance_m,submerged\n";
+	f << "time_s,unix_time_s,qw,qx,qy,qz,north_m,east_m,down_m,current_n_mps,current_e_mps,distance_m,"
+	     "submerged\n";
 	for (int k = 0; k <= 50; ++k)
 	{
 		if (k > 20 && k < 40) continue;
-		const double t = 1000 + 0.1 * k, h = 0.1 * (t - 1000);	// half the yaw
-		f << t - 1000 << "," << t << "," << std::cos(h) << ",0,0," << std::sin(h) << "," << t - 1000 << ",0,5,0.1,"
-		  << 0.01 * k << "," << t - 1000 << "," << (k >= 10 ? 1 : 0) << "\n";
+		const double t = 1000 + 0.1 * k, h = 0.1 * (t - 1000);  // half the yaw
+		f << t - 1000 << "," << t << "," << std::cos(h) << ",0,0," << std::sin(h) << "," << t - 1000
+		  << ",0,5,0.1," << 0.01 * k << "," << t - 1000 << "," << (k >= 10 ? 1 : 0) << "\n";
 	}
 	return p;
 }
@@ -70,7 +74,7 @@ TEST(Trajectory, GroundTruthIsInterpolatedLinearlyAndAlongTheGeodesic)
 TEST(Trajectory, NoInterpolationAcrossAGapOrOutsideTheSpan)
 {
 	const io::Trajectory tr = io::readGroundTruth(writeTruth());
-	EXPECT_FALSE(io::interpolate(tr, 1003.0, 0.5));	 // in the 2 s hole
+	EXPECT_FALSE(io::interpolate(tr, 1003.0, 0.5));  // in the 2 s hole
 	EXPECT_TRUE(io::interpolate(tr, 1003.0, 5.0));
 	EXPECT_FALSE(io::interpolate(tr, 999.9, 0.5));
 	EXPECT_FALSE(io::interpolate(tr, 1005.1, 0.5));
@@ -90,7 +94,7 @@ TEST(Trajectory, TumFileSkipsCommentsAndRepeatedStamps)
 		std::ofstream f(p);
 		f << "# timestamp north east down qx qy qz qw\n\n"
 		  << "10.0 0 0 0 0 0 0 1\n"
-		  << "10.0 9 9 9 0 0 0 1\n"	// repeated stamp: dropped
+		  << "10.0 9 9 9 0 0 0 1\n"  // repeated stamp: dropped
 		  << "11.0 2 0 0 0 0 0.7071067811865476 0.7071067811865476\n";
 	}
 	const io::Trajectory tr = io::readTum(p);
@@ -98,12 +102,13 @@ TEST(Trajectory, TumFileSkipsCommentsAndRepeatedStamps)
 	const auto mid = io::interpolate(tr, 10.5, 2.0);
 	ASSERT_TRUE(mid);
 	EXPECT_NEAR(mid->p_n.x(), 1.0, 1e-12);
-	EXPECT_NEAR(yawOf(mid->q_nb), M_PI / 4, 1e-12);	 // half of the 90 deg turn
+	EXPECT_NEAR(yawOf(mid->q_nb), M_PI / 4, 1e-12);  // half of the 90 deg turn
 }
 
 TEST(Trajectory, RefusalsNameTheFileAndLine)
 {
-	auto message = [](auto&& read) {
+	auto message = [](auto&& read)
+	{
 		try
 		{
 			read();
@@ -116,15 +121,17 @@ TEST(Trajectory, RefusalsNameTheFileAndLine)
 	};
 	const fs::path tum = scratch("bad.tum");
 	std::ofstream(tum) << "1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 2\n";
-	EXPECT_NE(message([&] { io::readTum(tum); }).find(tum.string() + ":2: non-finite value or non-unit quaternion"),
-			  std::string::npos);
+	EXPECT_NE(
+	    message([&] { io::readTum(tum); }).find(tum.string() + ":2: non-finite value or non-unit quaternion"),
+	    std::string::npos);
 	const fs::path csv = scratch("bad.csv");
 	std::ofstream(csv) << "unix_time_s,north_m\n1,2\n";
 	EXPECT_NE(message([&] { io::readGroundTruth(csv); }).find("no column 'east_m'"), std::string::npos);
 	const fs::path back = scratch("backwards.csv");
-	std::ofstream(back) << "unix_time_s,north_m,east_m,down_m,qw,qx,qy,qz,current_n_mps,current_e_mps,distance_m\n"
-						<< "2,0,0,0,1,0,0,0,0,0,0\n1,0,0,0,1,0,0,0,0,0,0\n";
+	std::ofstream(back)
+	    << "unix_time_s,north_m,east_m,down_m,qw,qx,qy,qz,current_n_mps,current_e_mps,distance_m\n"
+	    << "2,0,0,0,1,0,0,0,0,0,0\n1,0,0,0,1,0,0,0,0,0,0\n";
 	EXPECT_NE(message([&] { io::readGroundTruth(back); }).find(back.string() + ":3: time does not increase"),
-			  std::string::npos);
+	          std::string::npos);
 	EXPECT_NE(message([&] { io::readTum(scratch("missing.tum")); }).find("cannot read"), std::string::npos);
 }

@@ -21,7 +21,7 @@ constexpr double kDeg = M_PI / 180;
 inline Eigen::Matrix3d rpy(double roll, double pitch, double yaw)
 {
 	return so3::Exp(Eigen::Vector3d(0, 0, yaw)) * so3::Exp(Eigen::Vector3d(0, pitch, 0)) *
-		   so3::Exp(Eigen::Vector3d(roll, 0, 0));
+	       so3::Exp(Eigen::Vector3d(roll, 0, 0));
 }
 
 inline NavState makeState(double yaw_rad)
@@ -112,7 +112,8 @@ inline ProcessModel makeProcessModel()
 inline TangentVector appendTestPluginStates(ProcessModel& m)
 {
 	StateBlockSpec scale{"scale", {""}, {0.01}, {0.02}, StateProcess::RandomConstant, 0, 0};
-	StateBlockSpec mis{"misalignment", {"x", "y", "z"}, {0.01, -0.02, 0.03}, {0.02}, StateProcess::RandomWalk, 1e-3, 0};
+	StateBlockSpec mis{
+	    "misalignment", {"x", "y", "z"}, {0.01, -0.02, 0.03}, {0.02}, StateProcess::RandomWalk, 1e-3, 0};
 	StateBlockSpec bias{"bias", {"n", "e"}, {0.5, -0.2}, {0.3, 0.2}, StateProcess::GaussMarkov, 0.4, 50};
 	for (const auto& b : {scale, mis, bias}) m.appendBlock(b);
 	return m.prior_mean.tail(m.dim() - idx::core_dim);

@@ -34,7 +34,8 @@ std::vector<double> spreadScales(const Covariance& P, double gamma, double max_r
 	return s;
 }
 
-std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma, const std::vector<double>& scale)
+std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma,
+                                  const std::vector<double>& scale)
 {
 	const Eigen::LLT<Covariance> llt(P);
 	if (llt.info() != Eigen::Success) throw std::runtime_error("reference UKF: P is not positive definite");
@@ -65,9 +66,9 @@ NavState manifoldMean(const std::vector<NavState>& X, const std::vector<double>&
 }
 
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
-					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
-					  const SigmaWeights& w, NavState& x_out, Covariance& P_out, double max_spread_rad,
-					  Covariance* P_cross)
+                      const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
+                      const SigmaWeights& w, NavState& x_out, Covariance& P_out, double max_spread_rad,
+                      Covariance* P_cross)
 {
 	const std::vector<double> scale = spreadScales(P, w.gamma, max_spread_rad);
 	const std::vector<NavState> X = sigmaPoints(x, P, w.gamma, scale);
@@ -85,7 +86,8 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 			D[1 + 2 * j] = m + a;
 			D[2 + 2 * j] = m - a;
 		}
-	auto deviation = [&](std::size_t i, const NavState& mean) -> TangentVector {
+	auto deviation = [&](std::size_t i, const NavState& mean) -> TangentVector
+	{
 		const bool scaled = i > 0 && scale[(i - 1) / 2] < 1.0;
 		return scaled ? TangentVector(D[i] - mean.boxminus(Y[0])) : Y[i].boxminus(mean);
 	};
@@ -111,8 +113,8 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 		for (std::size_t i = 1; i < Y.size(); ++i)
 		{
 			const int j = static_cast<int>(i - 1) / 2;
-			const TangentVector dx = scale[j] < 1.0 ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col(j))
-													: X[i].boxminus(x);
+			const TangentVector dx =
+			    scale[j] < 1.0 ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col(j)) : X[i].boxminus(x);
 			*P_cross += w.wc[i] * dx * deviation(i, mean).transpose();
 		}
 	}
@@ -122,8 +124,9 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 	P_out = 0.5 * (Pn + Pn.transpose());
 }
 
-bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h, const Measurement& m,
-						const FilterContext& ctx, const SigmaWeights& w, UtResult& out, double max_spread_rad)
+bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
+                        const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
+                        double max_spread_rad)
 {
 	const int dim_z = static_cast<int>(m.z.size());
 	const std::vector<double> scale = spreadScales(P, w.gamma, max_spread_rad);
@@ -148,7 +151,8 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 		}
 	// Mean in the measurement space (the residual is its ⊟): iterate.
 	Eigen::VectorXd z_mean = Z.col(0);
-	auto zdev = [&](int i, const Eigen::VectorXd& about, Eigen::VectorXd& out_r) {
+	auto zdev = [&](int i, const Eigen::VectorXd& about, Eigen::VectorXd& out_r)
+	{
 		if (scaled(i))
 		{
 			Eigen::VectorXd shift(dim_z);
@@ -178,18 +182,19 @@ bool unscentedTransform(const NavState& x, const Covariance& P, const Measuremen
 		zdev(i, z_mean, r);
 		out.Pzz += w.wc[i] * r * r.transpose();
 		const TangentVector dx = i == 0 ? TangentVector::Zero(P.rows()).eval()
-							   : scaled(i) ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col((i - 1) / 2))
-										   : X[i].boxminus(x);
+		                         : scaled(i)
+		                             ? TangentVector(((i % 2) ? w.gamma : -w.gamma) * L.col((i - 1) / 2))
+		                             : X[i].boxminus(x);
 		out.Pxz += w.wc[i] * dx * r.transpose();
 	}
 	return true;
 }
 
 ReferenceUkf::ReferenceUkf(const ProcessModel& model, const UtParams& ut)
-	: model_(model),
-	  ut_(ut),
-	  w_(SigmaWeights::fromUt(UtWeights::make(model.dim(), ut), model.dim())),
-	  max_spread_rad_(ut.max_attitude_spread_rad)
+    : model_(model),
+      ut_(ut),
+      w_(SigmaWeights::fromUt(UtWeights::make(model.dim(), ut), model.dim())),
+      max_spread_rad_(ut.max_attitude_spread_rad)
 {
 }
 
@@ -203,7 +208,7 @@ void ReferenceUkf::initialize(const NavState& x0, const Covariance& P0)
 }
 
 void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt,
-						   Covariance* P_cross)
+                           Covariance* P_cross)
 {
 	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_, max_spread_rad_, P_cross);
 }
@@ -217,7 +222,7 @@ bool ReferenceUkf::update(const MeasurementModel& model, const Measurement& m, c
 	if (llt.info() != Eigen::Success) return false;
 	Eigen::VectorXd nu(m.z.size());
 	model.residual(m.z, ut.z_mean, nu);
-	const Eigen::MatrixXd K = llt.solve(ut.Pxz.transpose()).transpose();	// K = Pxz S⁻¹
+	const Eigen::MatrixXd K = llt.solve(ut.Pxz.transpose()).transpose();  // K = Pxz S⁻¹
 	x_ = x_.boxplus(K * nu);
 	const Covariance Pn = P_ - K * S * K.transpose();
 	P_ = 0.5 * (Pn + Pn.transpose());

@@ -23,7 +23,7 @@ namespace auvnav::reference
 struct SigmaWeights
 {
 	double gamma = 0;
-	std::vector<double> wm, wc;	 // 2n+1 each; point 0 is the centre
+	std::vector<double> wm, wc;  // 2n+1 each; point 0 is the centre
 	static SigmaWeights fromUt(const UtWeights& w, int n);
 	/** A deliberately WRONG weighting for the "the test can fail" checks:
 	 *  the same sigma points, all weights 1/(2n+1). */
@@ -33,7 +33,7 @@ struct SigmaWeights
 /** X_0 = x, X_{2j+1} = x ⊞ γ s_j L_j, X_{2j+2} = x ⊞ −γ s_j L_j, L = chol(P)
  *  (lower), s_j = 1 or the attitude-spread scale of ukf.h (`scale`, empty: 1). */
 std::vector<NavState> sigmaPoints(const NavState& x, const Covariance& P, double gamma,
-								  const std::vector<double>& scale = {});
+                                  const std::vector<double>& scale = {});
 /** s_j of every column (ukf.h: attitudeSpreadScale of γ L_j). */
 std::vector<double> spreadScales(const Covariance& P, double gamma, double max_rad);
 
@@ -48,18 +48,19 @@ struct UtResult
 	Eigen::MatrixXd Pxz;  // Σ Wc (X_i ⊟ x)(z_i ⊟ z̄)ᵀ
 };
 bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
-						const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
-						double max_spread_rad = UtParams{}.max_attitude_spread_rad);
+                        const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
+                        double max_spread_rad = UtParams{}.max_attitude_spread_rad);
 
 /** Unscented prediction: mean and covariance of propagate(X_i) plus Q. */
 void unscentedPredict(const ProcessModel& model, const NavState& x, const Covariance& P,
-					  const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
-					  const SigmaWeights& w, NavState& x_out, Covariance& P_out,
-					  double max_spread_rad = UtParams{}.max_attitude_spread_rad, Covariance* P_cross = nullptr);
+                      const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
+                      const SigmaWeights& w, NavState& x_out, Covariance& P_out,
+                      double max_spread_rad = UtParams{}.max_attitude_spread_rad,
+                      Covariance* P_cross = nullptr);
 
 class ReferenceUkf
 {
-   public:
+ public:
 	ReferenceUkf(const ProcessModel& model, const UtParams& ut);
 	void initialize(const NavState& x0, const Covariance& P0);
 	const NavState& state() const { return x_; }
@@ -68,11 +69,11 @@ class ReferenceUkf
 	/** P_cross, if given: Cov(x_k, x_k+1) over all 2n+1 sigma points (the
 	 *  smoother's oracle, smoother.h). */
 	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
-				 Covariance* P_cross = nullptr);
+	             Covariance* P_cross = nullptr);
 	/** Ungated update; false if h could not be evaluated or S is not PD. */
 	bool update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx);
 
-   private:
+ private:
 	ProcessModel model_;
 	UtParams ut_;
 	SigmaWeights w_;

@@ -15,8 +15,8 @@ namespace
 {
 struct Case
 {
-	Eigen::MatrixXd X;	// rows × (K + 2): the product touches only the first K columns
-	Eigen::MatrixXd F;	// K × K
+	Eigen::MatrixXd X;  // rows × (K + 2): the product touches only the first K columns
+	Eigen::MatrixXd F;  // K × K
 };
 
 Case makeCase(int rows, int K, unsigned seed)
@@ -36,7 +36,7 @@ Eigen::MatrixXd byColumnAxpys(const Case& c, int K)
 	Eigen::MatrixXd Y(c.X.rows(), K);
 	for (int j = 0; j < K; ++j)
 		subtractAllColumns<false, true>(Y.col(j).data(), 0, c.X.rows(), c.X.data(), c.X.outerStride(), K,
-										[&](Eigen::Index l) { return -c.F(j, l); });
+		                                [&](Eigen::Index l) { return -c.F(j, l); });
 	return Y;
 }
 
@@ -47,11 +47,13 @@ void checkShape(int rows)
 	const Case c = makeCase(rows, K, static_cast<unsigned>(97 * K + rows));
 	const Eigen::MatrixXd expected = byColumnAxpys(c, K);
 	const Eigen::MatrixXd oracle = c.X.leftCols(K) * c.F.transpose();
-	auto check = [&](const Eigen::MatrixXd& X, const char* path) {
+	auto check = [&](const Eigen::MatrixXd& X, const char* path)
+	{
 		SCOPED_TRACE(path);
 		EXPECT_TRUE((X.leftCols(K).array() == expected.array()).all())
-			<< "largest difference " << (X.leftCols(K) - expected).cwiseAbs().maxCoeff();
-		EXPECT_TRUE((X.rightCols(2).array() == c.X.rightCols(2).array()).all()) << "columns past K were touched";
+		    << "largest difference " << (X.leftCols(K) - expected).cwiseAbs().maxCoeff();
+		EXPECT_TRUE((X.rightCols(2).array() == c.X.rightCols(2).array()).all())
+		    << "columns past K were touched";
 		EXPECT_LT((X.leftCols(K) - oracle).cwiseAbs().maxCoeff(), 1e-12 * (1 + oracle.cwiseAbs().maxCoeff()));
 	};
 	Eigen::MatrixXd base = c.X;
@@ -132,12 +134,14 @@ TEST(FilterKernels, TriangularSolvesAgreeWithEigen)
 			Eigen::MatrixXd B = B0;
 			solveLeftLower(B.data(), k, B.outerStride(), m, Lf.data(), Lf.outerStride());
 			const Eigen::MatrixXd fwd = Ll.solve(B0.topRows(k));
-			EXPECT_LT((B.topRows(k) - fwd).cwiseAbs().maxCoeff(), 1e-12 * (1 + fwd.cwiseAbs().maxCoeff())) << where;
+			EXPECT_LT((B.topRows(k) - fwd).cwiseAbs().maxCoeff(), 1e-12 * (1 + fwd.cwiseAbs().maxCoeff()))
+			    << where;
 			EXPECT_TRUE(B.bottomRows(2) == B0.bottomRows(2)) << where << ": rows past k written";
 			B = B0;
 			solveLeftLowerTransposed(B.data(), k, B.outerStride(), m, Lf.data(), Lf.outerStride());
 			const Eigen::MatrixXd back = Ll.transpose().solve(B0.topRows(k));
-			EXPECT_LT((B.topRows(k) - back).cwiseAbs().maxCoeff(), 1e-12 * (1 + back.cwiseAbs().maxCoeff())) << where;
+			EXPECT_LT((B.topRows(k) - back).cwiseAbs().maxCoeff(), 1e-12 * (1 + back.cwiseAbs().maxCoeff()))
+			    << where;
 			EXPECT_TRUE(B.bottomRows(2) == B0.bottomRows(2)) << where << ": rows past k written";
 
 			// Right solves: X is rows × k (stride rows + 1), rows past an
@@ -147,12 +151,14 @@ TEST(FilterKernels, TriangularSolvesAgreeWithEigen)
 			Eigen::MatrixXd X = X0;
 			solveRightLowerTransposed(X.data(), rows, X.outerStride(), k, at);
 			const Eigen::MatrixXd xlt = Ll.transpose().solve<Eigen::OnTheRight>(X0.topRows(rows));
-			EXPECT_LT((X.topRows(rows) - xlt).cwiseAbs().maxCoeff(), 1e-12 * (1 + xlt.cwiseAbs().maxCoeff())) << where;
+			EXPECT_LT((X.topRows(rows) - xlt).cwiseAbs().maxCoeff(), 1e-12 * (1 + xlt.cwiseAbs().maxCoeff()))
+			    << where;
 			EXPECT_TRUE(X.bottomRows(1) == X0.bottomRows(1)) << where << ": rows past `rows` written";
 			X = X0;
 			solveRightLower(X.data(), rows, X.outerStride(), k, at);
 			const Eigen::MatrixXd xl = Ll.solve<Eigen::OnTheRight>(X0.topRows(rows));
-			EXPECT_LT((X.topRows(rows) - xl).cwiseAbs().maxCoeff(), 1e-12 * (1 + xl.cwiseAbs().maxCoeff())) << where;
+			EXPECT_LT((X.topRows(rows) - xl).cwiseAbs().maxCoeff(), 1e-12 * (1 + xl.cwiseAbs().maxCoeff()))
+			    << where;
 			EXPECT_TRUE(X.bottomRows(1) == X0.bottomRows(1)) << where << ": rows past `rows` written";
 		}
 }
@@ -166,9 +172,8 @@ TEST(FilterKernels, TriangularSolvesCanFail)
 	Eigen::MatrixXd Lp = Lf;
 	Lp(k - 1, 3) *= 1 + 1e-8;
 	const auto Ll = Lf.topRows(k).triangularView<Eigen::Lower>();
-	auto beyond = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-		return (a - b).cwiseAbs().maxCoeff() > 1e-12 * (1 + b.cwiseAbs().maxCoeff());
-	};
+	auto beyond = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b)
+	{ return (a - b).cwiseAbs().maxCoeff() > 1e-12 * (1 + b.cwiseAbs().maxCoeff()); };
 	const Eigen::MatrixXd B0 = randomMatrix(k, m, 8);
 	Eigen::MatrixXd B = B0;
 	solveLeftLower(B.data(), k, B.outerStride(), m, Lp.data(), Lp.outerStride());
@@ -215,26 +220,29 @@ TEST(FilterKernels, PacketCholeskyEqualsTheColumnPassesBitForBit)
 		for (int k : {n, std::max(1, n / 2 + 1)})
 			for (int whole : {0, std::min(k, 3), k})
 			{
-				SCOPED_TRACE(testing::Message() << "n = " << n << ", k = " << k << ", whole columns " << whole);
+				SCOPED_TRACE(testing::Message()
+				             << "n = " << n << ", k = " << k << ", whole columns " << whole);
 				Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(n, n, 7.0), got = expected;
 				ASSERT_TRUE(columnPassCholesky(P, 0, whole, expected, n));
 				ASSERT_TRUE(columnPassCholesky(P, whole, k, expected, k));
-				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), 0, whole, got.data(), got.outerStride(), n));
-				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), whole, k, got.data(), got.outerStride(), k));
+				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), 0, whole, got.data(),
+				                               got.outerStride(), n));
+				ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), whole, k, got.data(),
+				                               got.outerStride(), k));
 				// Every entry, the untouched ones (7) included: nothing is written past the rows asked for.
 				EXPECT_TRUE((got.array() == expected.array()).all())
-					<< "largest difference " << (got - expected).cwiseAbs().maxCoeff();
+				    << "largest difference " << (got - expected).cwiseAbs().maxCoeff();
 				// And it is the factor: L11 L11ᵀ = P11 over the first k.
 				const Eigen::MatrixXd L11 = got.topLeftCorner(k, k).triangularView<Eigen::Lower>();
 				EXPECT_LT((L11 * L11.transpose() - P.topLeftCorner(k, k)).cwiseAbs().maxCoeff(),
-						  1e-12 * P.cwiseAbs().maxCoeff());
+				          1e-12 * P.cwiseAbs().maxCoeff());
 				// The rest of a full factor, started past column 0.
 				if (k < n && whole == k)
 				{
 					Eigen::MatrixXd rest_expected = expected, rest_got = got;
 					ASSERT_TRUE(columnPassCholesky(P, k, n, rest_expected, n));
 					ASSERT_TRUE(choleskyColumnsAvx(P.data(), P.outerStride(), k, n, rest_got.data(),
-												   rest_got.outerStride(), n));
+					                               rest_got.outerStride(), n));
 					EXPECT_TRUE((rest_got.array() == rest_expected.array()).all());
 				}
 			}
@@ -253,11 +261,14 @@ TEST(FilterKernels, TransposedTilesEqualTheEntryCopyBitForBit)
 			SCOPED_TRACE(testing::Message() << rows << " rows, " << cols << " columns");
 			const Eigen::MatrixXd src = randomMatrix(rows + 3, cols + 1, 13u + rows * 31 + cols);
 			Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(cols + 2, rows + 2, 7.0), got = expected;
-			copyTransposedByEntries(src.data(), src.outerStride(), rows, cols, expected.data(), expected.outerStride());
+			copyTransposedByEntries(src.data(), src.outerStride(), rows, cols, expected.data(),
+			                        expected.outerStride());
 			copyTransposedAvx(src.data(), src.outerStride(), rows, cols, got.data(), got.outerStride());
 			EXPECT_TRUE((got.array() == expected.array()).all());
 			// And it is the transpose.
-			EXPECT_TRUE((got.topLeftCorner(cols, rows).array() == src.topLeftCorner(rows, cols).transpose().array()).all());
+			EXPECT_TRUE(
+			    (got.topLeftCorner(cols, rows).array() == src.topLeftCorner(rows, cols).transpose().array())
+			        .all());
 		}
 }
 #endif
@@ -292,22 +303,26 @@ TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 		{
 			SCOPED_TRACE(testing::Message() << rows << " rows, " << cols << " columns");
 			const int J = 6;
-			const Eigen::MatrixXd Y0 = randomMatrix(rows, cols, 5u + rows), X = randomMatrix(rows, J, 7u + rows);
-			const Eigen::MatrixXd coef = randomMatrix(cols + 3, J, 11u + cols);	 // coef(c, j), stride cols + 3
+			const Eigen::MatrixXd Y0 = randomMatrix(rows, cols, 5u + rows),
+			                      X = randomMatrix(rows, J, 7u + rows);
+			const Eigen::MatrixXd coef =
+			    randomMatrix(cols + 3, J, 11u + cols);  // coef(c, j), stride cols + 3
 			const Eigen::VectorXd scale = Eigen::VectorXd::Random(cols);
 			Eigen::MatrixXd expected = Y0, got = Y0;
 			addColumnCombinationsByColumns(expected.data(), rows, expected.outerStride(), cols, X.data(),
-										   X.outerStride(), J, coef.data(), coef.outerStride(), scale.data());
+			                               X.outerStride(), J, coef.data(), coef.outerStride(), scale.data());
 			addColumnCombinationsAvx(got.data(), rows, got.outerStride(), cols, X.data(), X.outerStride(), J,
-									 coef.data(), coef.outerStride(), scale.data());
+			                         coef.data(), coef.outerStride(), scale.data());
 			EXPECT_TRUE((got.array() == expected.array()).all());
 
 			const int n = rows;
-			Eigen::MatrixXd B = randomMatrix(n + 2, n, 13u + n), B_loop = B;	// an n × n block of a taller matrix
+			Eigen::MatrixXd B = randomMatrix(n + 2, n, 13u + n),
+			                B_loop = B;  // an n × n block of a taller matrix
 			const Eigen::VectorXd a = Eigen::VectorXd::Random(n);
 			scaleByOuterProductByEntries(B_loop.data(), B_loop.outerStride(), n, a.data());
 			scaleByOuterProductAvx(B.data(), B.outerStride(), n, a.data());
-			EXPECT_TRUE((B.array() == B_loop.array()).all()) << "rows past the block must stay as they were too";
+			EXPECT_TRUE((B.array() == B_loop.array()).all())
+			    << "rows past the block must stay as they were too";
 		}
 }
 
@@ -319,8 +334,8 @@ TEST(FilterKernels, PredictionBlockKernelsEqualTheirLoopsBitForBit)
 template <int kp, int R>
 void checkGram(int zero_from, int zero_to)
 {
-	SCOPED_TRACE(testing::Message() << "kp " << kp << ", R " << R << ", zeros in columns " << zero_from << ".."
-									<< zero_to);
+	SCOPED_TRACE(testing::Message() << "kp " << kp << ", R " << R << ", zeros in columns " << zero_from
+	                                << ".." << zero_to);
 	Eigen::MatrixXd X = randomMatrix(kp, R, 3u + kp), Y = randomMatrix(kp, R, 5u + R);
 	Y.block(0, zero_from, 4, zero_to - zero_from).setZero();
 	const int half = (zero_from + zero_to) / 2;
@@ -328,13 +343,13 @@ void checkGram(int zero_from, int zero_to)
 	if (kp >= 12 && zero_to > zero_from)
 	{
 		Y.block(8, zero_from, 4, zero_to - zero_from).setZero();
-		Y(9, half) = std::nan("");	// not zero: the skip stops there, and the NaN reaches the sums
+		Y(9, half) = std::nan("");  // not zero: the skip stops there, and the NaN reaches the sums
 	}
 	Eigen::MatrixXd expected = Eigen::MatrixXd::Constant(kp, kp, 3.0), got = expected;
 	lowerBlockGram<kp, R>(X.data(), Y.data(), expected.data());
 	lowerBlockGramAvx<kp, R>(X.data(), Y.data(), got.data(), zero_from, zero_to);
 	EXPECT_TRUE((got.array() == expected.array() || (got.array().isNaN() && expected.array().isNaN())).all())
-		<< "largest difference " << (got - expected).cwiseAbs().maxCoeff();
+	    << "largest difference " << (got - expected).cwiseAbs().maxCoeff();
 	const Eigen::MatrixXd G = X * Y.transpose();
 	for (int j = 0; j < kp; ++j)
 		for (int i = j / 4 * 4; i < kp; ++i)
@@ -347,11 +362,11 @@ void checkGram(int zero_from, int zero_to)
 TEST(FilterKernels, GramBlocksEqualTheBaselineBitForBit)
 {
 	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
-	checkGram<24, 32>(13, 31);	// the prediction's shape and zeros
+	checkGram<24, 32>(13, 31);  // the prediction's shape and zeros
 	checkGram<24, 32>(0, 0);
-	checkGram<4, 5>(0, 0);		// one row block
-	checkGram<8, 7>(2, 5);		// one pair
-	checkGram<12, 9>(0, 9);		// a pair and a single block
+	checkGram<4, 5>(0, 0);   // one row block
+	checkGram<8, 7>(2, 5);   // one pair
+	checkGram<12, 9>(0, 9);  // a pair and a single block
 	checkGram<20, 3>(1, 2);
 }
 
@@ -359,7 +374,7 @@ TEST(FilterKernels, PacketCholeskyFailsWhereNotPositiveDefinite)
 {
 	if (!detail::cpuHasAvx()) GTEST_SKIP() << "this CPU has no AVX";
 	Eigen::MatrixXd P = Eigen::MatrixXd::Identity(9, 9);
-	P(6, 5) = P(5, 6) = 1.0;	 // columns 5 and 6 equal there: singular at column 6
+	P(6, 5) = P(5, 6) = 1.0;  // columns 5 and 6 equal there: singular at column 6
 	Eigen::MatrixXd L = Eigen::MatrixXd::Zero(9, 9);
 	EXPECT_TRUE(choleskyColumnsAvx(P.data(), 9, 0, 6, L.data(), 9, 9));
 	EXPECT_FALSE(choleskyColumnsAvx(P.data(), 9, 6, 9, L.data(), 9, 9));

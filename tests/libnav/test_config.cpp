@@ -23,8 +23,8 @@ std::string errorOf(const std::function<void()>& f)
 
 TEST(Config, ReadsTypedValuesAndNestedSections)
 {
-	const Node n = Node::fromText(
-		"a: 1.5\nb: {c: [1, 2, 3], d: true, e: hello}\nlist: [{x: 1}, {x: 2}]\n", "t.yaml");
+	const Node n =
+	    Node::fromText("a: 1.5\nb: {c: [1, 2, 3], d: true, e: hello}\nlist: [{x: 1}, {x: 2}]\n", "t.yaml");
 	EXPECT_DOUBLE_EQ(n.number("a"), 1.5);
 	EXPECT_DOUBLE_EQ(n.positive("a"), 1.5);
 	EXPECT_EQ(n.child("b").vector3("c"), Eigen::Vector3d(1, 2, 3));
@@ -38,24 +38,28 @@ TEST(Config, ReadsTypedValuesAndNestedSections)
 
 TEST(Config, ErrorsNameFileKeyPathAndValue)
 {
-	const Node n = Node::fromText("a: -2\nb: {c: [1, 2]}\nbad: .nan\ntext: abc\nlist: [{x: 1.5}]\n", "cfg.yaml");
+	const Node n =
+	    Node::fromText("a: -2\nb: {c: [1, 2]}\nbad: .nan\ntext: abc\nlist: [{x: 1.5}]\n", "cfg.yaml");
 	EXPECT_EQ(errorOf([&] { n.positive("a"); }), "cfg.yaml: a: expected a positive number, got '-2'");
-	EXPECT_EQ(errorOf([&] { n.child("b").vector3("c"); }), "cfg.yaml: b.c: expected exactly 3 numbers, got 2");
-	EXPECT_NE(errorOf([&] { n.number("bad"); }).find("cfg.yaml: bad: expected a finite number"), std::string::npos);
+	EXPECT_EQ(errorOf([&] { n.child("b").vector3("c"); }),
+	          "cfg.yaml: b.c: expected exactly 3 numbers, got 2");
+	EXPECT_NE(errorOf([&] { n.number("bad"); }).find("cfg.yaml: bad: expected a finite number"),
+	          std::string::npos);
 	EXPECT_NE(errorOf([&] { n.number("text"); }).find("got 'abc'"), std::string::npos);
 	EXPECT_EQ(errorOf([&] { n.number("nope"); }), "cfg.yaml: nope: missing required value");
 	EXPECT_EQ(errorOf([&] { n.sequence("list")[0].integer("x"); }),
-			  "cfg.yaml: list[0].x: expected an integer, got '1.5'");
+	          "cfg.yaml: list[0].x: expected an integer, got '1.5'");
 	EXPECT_NE(errorOf([&] { n.inRange("a", 0, 1); }).find("expected a number in [0, 1]"), std::string::npos);
 }
 
 TEST(Config, MissingOrMalformedFilesAreRefused)
 {
 	EXPECT_NE(errorOf([] { Node::load("/nonexistent/x.yaml"); }).find("/nonexistent/x.yaml: cannot open"),
-			  std::string::npos);
-	EXPECT_NE(errorOf([] { Node::fromText("a: [1, 2\n", "broken.yaml"); }).find("broken.yaml"), std::string::npos);
+	          std::string::npos);
+	EXPECT_NE(errorOf([] { Node::fromText("a: [1, 2\n", "broken.yaml"); }).find("broken.yaml"),
+	          std::string::npos);
 	EXPECT_NE(errorOf([] { Node::fromText("- 1\n- 2\n", "seq.yaml"); }).find("top level must be a YAML map"),
-			  std::string::npos);
+	          std::string::npos);
 }
 
 // What MRPT's YAML reader takes silently (the last duplicate wins, a second
@@ -66,13 +70,13 @@ TEST(Config, YamlMrptWouldMisreadIsRefusedInOneLine)
 	const std::string dup = errorOf([] { Node::fromText("a: 1\nb:\n  c: 2\n  d: 3\n  c: 4\n", "dup.yaml"); });
 	EXPECT_EQ(dup, "dup.yaml:5:3: b.c: duplicate key (first at line 3)");
 	EXPECT_EQ(errorOf([] { Node::fromText("l: [{x: 1}, {x: 2, x: 3}]\n", "f.yaml"); }),
-			  "f.yaml:1:20: l[1].x: duplicate key (first at line 1)");
+	          "f.yaml:1:20: l[1].x: duplicate key (first at line 1)");
 	EXPECT_EQ(errorOf([] { Node::fromText("a: 1\n---\nb: 2\n", "docs.yaml"); }),
-			  "docs.yaml:2:1: a second YAML document ('---' or '...'): one document per file");
+	          "docs.yaml:2:1: a second YAML document ('---' or '...'): one document per file");
 	EXPECT_EQ(errorOf([] { Node::fromText("a: &x 1\nb: *x\n", "alias.yaml"); }),
-			  "alias.yaml:2:4: b: aliases (*x) are not supported");
+	          "alias.yaml:2:4: b: aliases (*x) are not supported");
 	EXPECT_EQ(errorOf([] { Node::fromText("? [a, b]\n: 1\n", "key.yaml"); }),
-			  "key.yaml:1:3: a key must be a plain name, not a list or a map");
+	          "key.yaml:1:3: a key must be a plain name, not a list or a map");
 	// The same key in sibling maps is no duplicate.
 	EXPECT_EQ(errorOf([] { Node::fromText("a: {x: 1}\nb: {x: 2}\nl: [{x: 1}, {x: 2}]\n", "ok.yaml"); }), "");
 	for (const std::string& e : {dup, errorOf([] { Node::fromText("a: \"\\q\"\n", "esc.yaml"); })})
@@ -82,8 +86,9 @@ TEST(Config, YamlMrptWouldMisreadIsRefusedInOneLine)
 TEST(Config, OverridesEnterListsByLabelOrIndex)
 {
 	auto n = Node::fromText(
-		"sensors:\n  - {label: DVL, plugin: dvl}\n  - {label: SONAR, plugin: sonar_heading, config: {mode: validate}}\n",
-		"nav.yaml");
+	    "sensors:\n  - {label: DVL, plugin: dvl}\n  - {label: SONAR, plugin: sonar_heading, config: {mode: "
+	    "validate}}\n",
+	    "nav.yaml");
 	n.set("sensors.SONAR.config.mode", "update");
 	n.set("sensors.0.plugin", "dvl2");
 	const auto s = n.sequence("sensors");
@@ -114,24 +119,26 @@ TEST(ConfigUnknownKeys, AllReadKeysPass)
 
 TEST(ConfigUnknownKeys, NestedMisspellingNamesFilePathAndNearestKey)
 {
-	const Node n = Node::fromText(
-		"filter:\n  initial:\n    heading_dg: 25\n    heading_sigma_deg: 30\n", "config/x.yaml");
+	const Node n = Node::fromText("filter:\n  initial:\n    heading_dg: 25\n    heading_sigma_deg: 30\n",
+	                              "config/x.yaml");
 	const auto in = n.child("filter").child("initial");
 	EXPECT_DOUBLE_EQ(in.number("heading_deg", 0.0), 0.0);  // the misspelling falls back to the default...
 	in.positive("heading_sigma_deg");
 	// ...which is why the check must refuse it.
 	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
-			  "config/x.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)");
+	          "config/x.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?)");
 }
 
 TEST(ConfigUnknownKeys, TranspositionsAndMissingSuffixesAreSuggested)
 {
 	const Node n = Node::fromText("use_dpeth: true\n", "p.yaml");
 	n.boolean("use_depth", false);
-	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "p.yaml: use_dpeth: unknown key (did you mean 'use_depth'?)");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+	          "p.yaml: use_dpeth: unknown key (did you mean 'use_depth'?)");
 	const Node m = Node::fromText("max_gap: 0.5\n", "i.yaml");
 	m.number("max_gap_s", 1.0);
-	EXPECT_EQ(errorOf([&] { m.checkAllKeysUsed(); }), "i.yaml: max_gap: unknown key (did you mean 'max_gap_s'?)");
+	EXPECT_EQ(errorOf([&] { m.checkAllKeysUsed(); }),
+	          "i.yaml: max_gap: unknown key (did you mean 'max_gap_s'?)");
 }
 
 TEST(ConfigUnknownKeys, FarKeyListsTheValidOnes)
@@ -139,7 +146,8 @@ TEST(ConfigUnknownKeys, FarKeyListsTheValidOnes)
 	const Node n = Node::fromText("a: 1\ncompletely_else: 2\n", "t.yaml");
 	n.number("a");
 	n.number("bee", 0.0);
-	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: completely_else: unknown key (valid here: a, bee)");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+	          "t.yaml: completely_else: unknown key (valid here: a, bee)");
 }
 
 TEST(ConfigUnknownKeys, MisspelledSectionIsRefusedAtTheTop)
@@ -153,13 +161,14 @@ TEST(ConfigUnknownKeys, MisspelledSectionIsRefusedAtTheTop)
 TEST(ConfigUnknownKeys, ListElementsAreCheckedWithTheirIndex)
 {
 	const Node n = Node::fromText(
-		"sensors:\n  - {label: A, plugin: dvl}\n  - {label: B, plugn: gps, plugin: gps}\n", "nav.yaml");
+	    "sensors:\n  - {label: A, plugin: dvl}\n  - {label: B, plugn: gps, plugin: gps}\n", "nav.yaml");
 	for (const auto& s : n.sequence("sensors"))
 	{
 		s.string("label");
 		s.string("plugin");
 	}
-	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "nav.yaml: sensors[1].plugn: unknown key (did you mean 'plugin'?)");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+	          "nav.yaml: sensors[1].plugn: unknown key (did you mean 'plugin'?)");
 }
 
 TEST(ConfigUnknownKeys, KeyOfAnotherLevelIsNotSuggested)
@@ -185,7 +194,8 @@ TEST(ConfigUnknownKeys, FreeFormSubtreesAndExceptionsAreSkipped)
 	EXPECT_NE(errorOf([&] { n.checkAllKeysUsed(); }), "");
 	EXPECT_NO_THROW(n.checkAllKeysUsed({"metadata", "run_only"}));
 	n.markFreeForm("metadata");
-	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }), "t.yaml: run_only: unknown key (valid here: metadata, v)");
+	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
+	          "t.yaml: run_only: unknown key (valid here: metadata, v)");
 }
 
 TEST(ConfigUnknownKeys, ChecksOnlyTheSubtreeOfAChild)
@@ -204,13 +214,17 @@ TEST(ConfigUnknownKeys, AllowOnlyCountsAsReadAndSuggests)
 	n.string("mode");
 	EXPECT_NO_THROW(n.checkAllKeysUsed());
 	const Node m = Node::fromText("mdoe: x\n", "t.yaml");
-	EXPECT_EQ(errorOf([&] { m.allowOnly({"mode", "gain"}); }),
-			  "t.yaml: mdoe: unknown key (did you mean 'mode'? expected one of: mode, gain)");
+	EXPECT_EQ(errorOf(
+	              [&] {
+		              m.allowOnly({"mode", "gain"});
+	              }),
+	          "t.yaml: mdoe: unknown key (did you mean 'mode'? expected one of: mode, gain)");
 }
 
 TEST(ConfigUnknownKeys, MisspelledOverrideIsRefusedAsAnOverride)
 {
-	Node n = Node::fromText("filter: {initial: {heading_deg: 30}}\nsensors:\n  - {label: DVL, plugin: dvl}\n", "nav.yaml");
+	Node n = Node::fromText("filter: {initial: {heading_deg: 30}}\nsensors:\n  - {label: DVL, plugin: dvl}\n",
+	                        "nav.yaml");
 	n.set("filter.initial.heading_dg", "25");
 	n.child("filter").child("initial").number("heading_deg");
 	for (const auto& s : n.sequence("sensors"))
@@ -219,7 +233,8 @@ TEST(ConfigUnknownKeys, MisspelledOverrideIsRefusedAsAnOverride)
 		s.string("plugin");
 	}
 	EXPECT_EQ(errorOf([&] { n.checkAllKeysUsed(); }),
-			  "nav.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?) [given as an override]");
+	          "nav.yaml: filter.initial.heading_dg: unknown key (did you mean 'heading_deg'?) [given as an "
+	          "override]");
 	Node m = Node::fromText("sensors:\n  - {label: DVL, plugin: dvl}\n", "nav.yaml");
 	m.set("sensors.DVL.plugn", "gps");  // entered by label, reported by index
 	for (const auto& s : m.sequence("sensors"))
@@ -228,5 +243,5 @@ TEST(ConfigUnknownKeys, MisspelledOverrideIsRefusedAsAnOverride)
 		s.string("plugin");
 	}
 	EXPECT_EQ(errorOf([&] { m.checkAllKeysUsed(); }),
-			  "nav.yaml: sensors[0].plugn: unknown key (did you mean 'plugin'?) [given as an override]");
+	          "nav.yaml: sensors[0].plugn: unknown key (did you mean 'plugin'?) [given as an override]");
 }

@@ -101,15 +101,15 @@ TEST(SigmaLimits, MoveOnlyTheStatesOutsideTheirBoundsAndKeepCorrelations)
 	for (int i = 0; i < n; ++i)
 		for (int j = 0; j < n; ++j) A(i, j) = N(rng);
 	TangentVector sigma(n);
-	for (int i = 0; i < n; ++i) sigma[i] = std::pow(10.0, 1.0 - 6.0 * i / (n - 1));	// 10 … 1e-5
+	for (int i = 0; i < n; ++i) sigma[i] = std::pow(10.0, 1.0 - 6.0 * i / (n - 1));  // 10 … 1e-5
 	Covariance P = A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n);
 	const TangentVector d = P.diagonal().cwiseSqrt().cwiseInverse();
 	P = (sigma.cwiseProduct(d)).asDiagonal() * P * (sigma.cwiseProduct(d)).asDiagonal();
 	const Covariance before = P;
 	TangentVector lo = TangentVector::Zero(n), hi = TangentVector::Constant(n, INFINITY);
 	lo[idx::gyro_bias + 2] = 10 * sigma[idx::gyro_bias + 2];  // a floor above: raised
-	hi[idx::pos] = 0.5 * sigma[idx::pos];					  // a ceiling below: lowered
-	lo[idx::vel] = 0.5 * sigma[idx::vel];					  // bounds it already meets: untouched
+	hi[idx::pos] = 0.5 * sigma[idx::pos];                     // a ceiling below: lowered
+	lo[idx::vel] = 0.5 * sigma[idx::vel];                     // bounds it already meets: untouched
 	hi[idx::vel] = 2 * sigma[idx::vel];
 	EXPECT_EQ(limitSigmas(P, lo, hi), 2);
 	EXPECT_DOUBLE_EQ(std::sqrt(P(idx::gyro_bias + 2, idx::gyro_bias + 2)), lo[idx::gyro_bias + 2]);

@@ -33,7 +33,7 @@ TEST(Earth, EarthRateInNedHasNorthAndUpComponents)
 	EXPECT_NEAR(w.norm(), 7.292115e-5, 1e-12);
 	EXPECT_NEAR(w.x(), 7.292115e-5 * std::cos(lat), 1e-12);
 	EXPECT_DOUBLE_EQ(w.y(), 0.0);
-	EXPECT_GT(w.z(), 0.0);	// southern hemisphere: −Ω sin(lat) > 0, the vertical part points down
+	EXPECT_GT(w.z(), 0.0);  // southern hemisphere: −Ω sin(lat) > 0, the vertical part points down
 }
 
 TEST(Earth, TangentFrameRoundTripsAndTiltsGravityAwayFromTheOrigin)

@@ -13,11 +13,11 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <cmath>
-#include <cstdio>
 #include <memory>
 #include <random>
 #include <string>
@@ -36,11 +36,11 @@ constexpr double kTol = 1e-9;
 // ------------------------------------------------------------ test models
 class TestModel : public MeasurementModel
 {
-   public:
+ public:
 	explicit TestModel(uint32_t mask) : mask_(mask) {}
 	uint32_t uses() const noexcept override { return mask_; }
 	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-						  std::string& why) noexcept override
+	                      std::string& why) noexcept override
 	{
 		out.clear();
 		why = "test model";
@@ -50,7 +50,7 @@ class TestModel : public MeasurementModel
 	virtual std::string name() const = 0;
 	virtual Eigen::MatrixXd noise() const = 0;
 
-   private:
+ private:
 	uint32_t mask_;
 };
 
@@ -58,10 +58,10 @@ class TestModel : public MeasurementModel
  *  R_nbᵀ v_n + (ω_ib_b − b_w) × r. */
 class DvlModel : public TestModel
 {
-   public:
+ public:
 	explicit DvlModel(uint32_t mask = kAttitude | kGyroBias | kVelocity) : TestModel(mask) {}
 	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
 		z = x.R_nb.transpose() * x.v_n + (ctx.omega_ib_b - x.b_w).cross(r);
@@ -74,10 +74,10 @@ class DvlModel : public TestModel
 /** Position only: range to a beacon at aux[0..2], and depth. */
 class RangeDepthModel : public TestModel
 {
-   public:
+ public:
 	RangeDepthModel() : TestModel(kPosition) {}
 	bool predict(const NavState& x, const Measurement& m, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		const Eigen::Vector3d b(m.aux[0], m.aux[1], m.aux[2]);
 		z << (x.p_n - b).norm(), x.p_n.z();
@@ -90,10 +90,10 @@ class RangeDepthModel : public TestModel
 /** Accelerometer: specific force R_nbᵀ (a_n − g e_D) + b_a. */
 class AccelModel : public TestModel
 {
-   public:
+ public:
 	AccelModel() : TestModel(kAttitude | kAcceleration | kGravity | kAccelBias) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z = x.R_nb.transpose() * (x.a_n - Eigen::Vector3d(0, 0, x.g)) + x.b_a;
 		return true;
@@ -106,21 +106,21 @@ class AccelModel : public TestModel
  *  hydrodynamic parameters, currents, biases and motion. */
 class HydroModel : public TestModel
 {
-   public:
+ public:
 	HydroModel() : TestModel(kAllBlocks) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		Eigen::Vector3d rel = x.v_n;
 		rel.head<2>() -= x.current_vehicle_ne;
-		const Eigen::Vector3d u = x.R_nb.transpose() * rel;	// velocity through water, body
+		const Eigen::Vector3d u = x.R_nb.transpose() * rel;  // velocity through water, body
 		z[0] = x.Dl_sub(0, 0) * u.x() + x.Dq_sub(0, 0) * u.x() * std::abs(u.x()) + x.M_sub(0, 2) * x.b_w.z() +
-			   x.M_sub(0, 0) * x.a_n.x();
+		       x.M_sub(0, 0) * x.a_n.x();
 		z[1] = x.Dl_sub(1, 1) * u.y() + x.Dq_sub(1, 1) * u.y() * std::abs(u.y()) +
-			   x.Dq_sub(1, 2) * std::sin(x.b_adcp.x()) + x.current_far_ne.y() * x.M_sub(1, 0) +
-			   x.Dl_sub(1, 2) * x.Dq_sub(0, 1);
+		       x.Dq_sub(1, 2) * std::sin(x.b_adcp.x()) + x.current_far_ne.y() * x.M_sub(1, 0) +
+		       x.Dl_sub(1, 2) * x.Dq_sub(0, 1);
 		z[2] = (x.current_far_ne - x.current_vehicle_ne).squaredNorm() + x.g * x.b_a.z() +
-			   x.a_n.x() * x.Dl_sub(1, 2) + 1e-3 * x.p_n.y() + x.M_sub(1, 1) * x.b_adcp.y();
+		       x.a_n.x() * x.Dl_sub(1, 2) + 1e-3 * x.p_n.y() + x.M_sub(1, 1) * x.b_adcp.y();
 		return true;
 	}
 	std::string name() const override { return "hydro_all_blocks"; }
@@ -131,10 +131,10 @@ class HydroModel : public TestModel
  *  (extra 0) and misalignment δ (extra 1..3): (1 + s) Exp(δ)ᵀ (R_nbᵀ v_n + …). */
 class PluginStateDvlModel : public TestModel
 {
-   public:
+ public:
 	PluginStateDvlModel() : TestModel(kAttitude | kGyroBias | kVelocity | kPluginStates) {}
 	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		if (x.extra.size() < 6) return false;
 		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
@@ -149,10 +149,10 @@ class PluginStateDvlModel : public TestModel
 /** A position fix with a plugin-owned bias (extra 4..5): p_ne + b. */
 class BiasedFixModel : public TestModel
 {
-   public:
+ public:
 	BiasedFixModel() : TestModel(kPosition | kPluginStates) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		if (x.extra.size() < 6) return false;
 		z = x.p_n.head<2>() + x.extra.segment<2>(4);
@@ -168,12 +168,12 @@ class BiasedFixModel : public TestModel
 template <class Base>
 class DeclaredAffine : public Base
 {
-   public:
+ public:
 	explicit DeclaredAffine(uint32_t affine) : affine_(affine) {}
 	uint32_t affineIn() const noexcept override { return affine_; }
 	std::string name() const override { return Base::name() + "_affine"; }
 
-   private:
+ private:
 	uint32_t affine_;
 };
 
@@ -182,11 +182,11 @@ class DeclaredAffine : public Base
  *  its updates take applyWideUpdate. */
 class WideVelocityModel : public TestModel
 {
-   public:
+ public:
 	static constexpr int kPoints = 6;
 	WideVelocityModel() : TestModel(kAttitude | kGyroBias | kVelocity) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext& ctx,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		const Eigen::Vector3d v_b = x.R_nb.transpose() * x.v_n, w = ctx.omega_ib_b - x.b_w;
 		for (int i = 0; i < kPoints; ++i)
@@ -206,21 +206,24 @@ class WideVelocityModel : public TestModel
 /** Scalar heading angle with a wrapped residual. */
 class HeadingModel : public TestModel
 {
-   public:
+ public:
 	HeadingModel() : TestModel(kAttitude) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
 		return true;
 	}
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
 		r[0] = std::remainder(z[0] - zp[0], 2 * M_PI);
 	}
 	std::string name() const override { return "heading_wrapped"; }
-	Eigen::MatrixXd noise() const override { return Eigen::Matrix<double, 1, 1>::Constant(std::pow(2 * kDeg, 2)); }
+	Eigen::MatrixXd noise() const override
+	{
+		return Eigen::Matrix<double, 1, 1>::Constant(std::pow(2 * kDeg, 2));
+	}
 };
 
 Eigen::Vector3d gyroAt(double t)
@@ -243,8 +246,8 @@ struct Case
 	int steps = 200, update_every = 5;
 	int updates_per_step = 1;  //!< at an update step, this many updates (models in turn)
 	double gyro_bias_sigma = 0.01, rate_scale = 1;
-	bool plugin_states = false;	 //!< append test::appendTestPluginStates
-	bool current_transport = true;	//!< false: the currents do not follow the profile with depth
+	bool plugin_states = false;     //!< append test::appendTestPluginStates
+	bool current_transport = true;  //!< false: the currents do not follow the profile with depth
 };
 
 struct MaxDiffs
@@ -256,7 +259,7 @@ struct MaxDiffs
 };
 
 Measurement makeMeasurement(const TestModel& model, const NavState& truth, const FilterContext& ctx,
-							std::mt19937& rng)
+                            std::mt19937& rng)
 {
 	Measurement m;
 	m.R = model.noise();
@@ -291,7 +294,7 @@ struct Recorded
 /** `steps` predictions (default 200 at 100 Hz), an update every `update_every`
  *  steps (models in turn). With `rec`, both filters record their steps. */
 MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestModel>>& models,
-					   UtParams ut_fast = {}, UtParams ut_ref = {}, Recorded* rec = nullptr)
+                       UtParams ut_fast = {}, UtParams ut_ref = {}, Recorded* rec = nullptr)
 {
 	ProcessModel pm = test::makeProcessModel();
 	if (!c.current_transport) pm.current_far_distance_m = 0;
@@ -310,7 +313,7 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 	reference::ReferenceUkf ref(pm, ut_ref);
 	fast.initialize(x0, P0);
 	ref.initialize(x0, P0);
-	ManifoldUkf stretched(pm, ut_fast);	// rec->keep_every > 0: the stretch recorder's filter
+	ManifoldUkf stretched(pm, ut_fast);  // rec->keep_every > 0: the stretch recorder's filter
 	stretched.initialize(x0, P0);
 	RtsStretchRecorder recorder;
 	const bool stretches = rec && rec->keep_every > 0;
@@ -362,7 +365,8 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 		truth = pm.propagate(truth, w, ctx.omega_ie_n, dt);
 		++md.predictions;
 		// P leaves every step exactly symmetric (no symmetrize pass is run).
-		EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0) << "after predict";
+		EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0)
+		    << "after predict";
 		md.pred_mean = std::max(md.pred_mean, test::meanDiff(fast.state(), ref.state(), ref.covariance()));
 		md.pred_cov = std::max(md.pred_cov, test::covDiff(fast.covariance(), ref.covariance()));
 		if (step % c.update_every != 0) continue;
@@ -377,9 +381,11 @@ MaxDiffs runSideBySide(const Case& c, const std::vector<std::unique_ptr<TestMode
 			const UpdateResult r = fast.update(model, m, ctx);
 			EXPECT_EQ(r.status, UpdateStatus::Accepted) << model.name() << ": " << r.why;
 			EXPECT_TRUE(ref.update(model, m, ctx)) << model.name();
-			EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0) << model.name();
+			EXPECT_EQ((fast.covariance() - fast.covariance().transpose()).cwiseAbs().maxCoeff(), 0.0)
+			    << model.name();
 			++md.updates;
-			md.upd_mean[k] = std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
+			md.upd_mean[k] =
+			    std::max(md.upd_mean[k], test::meanDiff(fast.state(), ref.state(), ref.covariance()));
 			md.upd_cov[k] = std::max(md.upd_cov[k], test::covDiff(fast.covariance(), ref.covariance()));
 		}
 	}
@@ -432,7 +438,7 @@ std::vector<std::unique_ptr<TestModel>> allModelsWithPluginStates()
 void report(const char* title, const MaxDiffs& md)
 {
 	std::printf("[%s] max |fast - reference| over %d predictions and %d updates\n", title, md.predictions,
-				md.updates);
+	            md.updates);
 	std::printf("  %-18s mean %.2e sd   cov %.2e\n", "predict", md.pred_mean, md.pred_cov);
 	for (std::size_t i = 0; i < md.names.size(); ++i)
 		std::printf("  %-18s mean %.2e sd   cov %.2e\n", md.names[i].c_str(), md.upd_mean[i], md.upd_cov[i]);
@@ -530,7 +536,8 @@ std::vector<std::unique_ptr<TestModel>> affineModels(bool plugin_states)
 TEST(FilterVsReference, DeclaredAffineBlocksAgreeWithDenseUkf)
 {
 	{
-		const MaxDiffs md = runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, affineModels(false));
+		const MaxDiffs md =
+		    runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, affineModels(false));
 		report("affine blocks declared, attitude sigma 4/3/6 deg", md);
 		expectAgreement(md);
 	}
@@ -542,7 +549,8 @@ TEST(FilterVsReference, DeclaredAffineBlocksAgreeWithDenseUkf)
 	{
 		// Heading σ 180°: the attitude pairs are scaled (ukf.h) while the
 		// affine pairs come from P.
-		const MaxDiffs md = runSideBySide({Eigen::Vector3d(3, 3, 180) * kDeg, 100 * kDeg, 29}, affineModels(false));
+		const MaxDiffs md =
+		    runSideBySide({Eigen::Vector3d(3, 3, 180) * kDeg, 100 * kDeg, 29}, affineModels(false));
 		report("affine blocks declared, heading sigma 180 deg", md);
 		expectAgreement(md);
 	}
@@ -572,7 +580,7 @@ TEST(FilterVsReference, PluginStateWithAWrongMaskDisagrees)
 	// is evaluated on too few sigma points: the comparison must see it.
 	class Undeclared : public PluginStateDvlModel
 	{
-	   public:
+	 public:
 		uint32_t uses() const noexcept override { return kAttitude | kGyroBias | kVelocity; }
 	};
 	Case c{Eigen::Vector3d(4, 3, 20) * kDeg, 60 * kDeg, 37};
@@ -601,7 +609,7 @@ TEST(FilterVsReference, TheComparisonCanFail)
 		UtParams other;
 		other.alpha = 0.301;
 		const MaxDiffs md =
-			runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), UtParams{}, other);
+		    runSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, 11}, allModels(), UtParams{}, other);
 		report("alpha 0.300 vs 0.301 (sanity: must disagree)", md);
 		EXPECT_GT(md.pred_cov, 1e3 * kTol);
 		EXPECT_GT(md.upd_mean[0], 1e3 * kTol);
@@ -615,7 +623,7 @@ namespace
  *  reference's recorded steps (every cross covariance from all 2n+1 sigma
  *  points). */
 std::vector<SmoothedEstimate> denseRts(const std::vector<RtsStep>& steps, const NavState& x_end,
-									   const Covariance& P_end)
+                                       const Covariance& P_end)
 {
 	std::vector<SmoothedEstimate> out(steps.size() + 1);
 	out.back().x = x_end;
@@ -632,9 +640,9 @@ std::vector<SmoothedEstimate> denseRts(const std::vector<RtsStep>& steps, const 
 
 struct SmootherCheck
 {
-	double mean = 0, cov = 0;	   // fast vs dense, scale-free as above
-	double worst_psd = 0;		   // most negative eigenvalue of the correlation-scaled P_filtered − P_smoothed
-	double pos_sigma_ratio_0 = 1;  // smoothed / filtered position σ (north) at the first step
+	double mean = 0, cov = 0;  // fast vs dense, scale-free as above
+	double worst_psd = 0;      // most negative eigenvalue of the correlation-scaled P_filtered − P_smoothed
+	double pos_sigma_ratio_0 = 1;                 // smoothed / filtered position σ (north) at the first step
 	double nees_filtered = 0, nees_smoothed = 0;  // mean over steps, position block
 	std::size_t failed = 0, steps = 0;
 };
@@ -657,18 +665,22 @@ SmootherCheck smoothSideBySide(const Case& c, const std::vector<std::unique_ptr<
 		const Covariance& Pf = rec.fast[k].P_filtered;
 		const TangentVector d = Pf.diagonal().cwiseSqrt().cwiseInverse();
 		const Covariance Dd = d.asDiagonal() * (Pf - fast[k].P) * d.asDiagonal();
-		out.worst_psd = std::min(out.worst_psd, Eigen::SelfAdjointEigenSolver<Covariance>(Dd).eigenvalues().minCoeff());
+		out.worst_psd =
+		    std::min(out.worst_psd, Eigen::SelfAdjointEigenSolver<Covariance>(Dd).eigenvalues().minCoeff());
 		const Eigen::Vector3d ef = rec.fast[k].x_filtered.boxminus(rec.truth[k]).segment<3>(idx::pos),
-							  es = fast[k].x.boxminus(rec.truth[k]).segment<3>(idx::pos);
+		                      es = fast[k].x.boxminus(rec.truth[k]).segment<3>(idx::pos);
 		out.nees_filtered += ef.dot(Pf.block<3, 3>(idx::pos, idx::pos).ldlt().solve(ef)) / double(out.steps);
-		out.nees_smoothed += es.dot(fast[k].P.block<3, 3>(idx::pos, idx::pos).ldlt().solve(es)) / double(out.steps);
+		out.nees_smoothed +=
+		    es.dot(fast[k].P.block<3, 3>(idx::pos, idx::pos).ldlt().solve(es)) / double(out.steps);
 	}
-	out.pos_sigma_ratio_0 = std::sqrt(fast[0].P(idx::pos, idx::pos) / rec.fast[0].P_filtered(idx::pos, idx::pos));
-	std::printf("smoother over %zu steps: fast vs dense mean %.2e sd, cov %.2e; worst eigenvalue of "
-				"corr(P_filtered - P_smoothed) %.2e; position sigma at the start smoothed/filtered %.3f; "
-				"position NEES mean filtered %.2f smoothed %.2f; failed steps %zu\n",
-				out.steps, out.mean, out.cov, out.worst_psd, out.pos_sigma_ratio_0, out.nees_filtered,
-				out.nees_smoothed, out.failed);
+	out.pos_sigma_ratio_0 =
+	    std::sqrt(fast[0].P(idx::pos, idx::pos) / rec.fast[0].P_filtered(idx::pos, idx::pos));
+	std::printf(
+	    "smoother over %zu steps: fast vs dense mean %.2e sd, cov %.2e; worst eigenvalue of "
+	    "corr(P_filtered - P_smoothed) %.2e; position sigma at the start smoothed/filtered %.3f; "
+	    "position NEES mean filtered %.2f smoothed %.2f; failed steps %zu\n",
+	    out.steps, out.mean, out.cov, out.worst_psd, out.pos_sigma_ratio_0, out.nees_filtered,
+	    out.nees_smoothed, out.failed);
 	return out;
 }
 
@@ -717,7 +729,8 @@ TEST(SmootherVsReference, AWrongCrossCovarianceIsSeen)
 	const auto bad = smoothRts(wrong, rec.fast_end, rec.fast_end_P, rec.t_end);
 	const auto dense = denseRts(rec.ref, rec.ref_end, rec.ref_end_P);
 	double worst = 0;
-	for (std::size_t k = 0; k < bad.size(); ++k) worst = std::max(worst, test::meanDiff(bad[k].x, dense[k].x, dense[k].P));
+	for (std::size_t k = 0; k < bad.size(); ++k)
+		worst = std::max(worst, test::meanDiff(bad[k].x, dense[k].x, dense[k].P));
 	EXPECT_GT(worst, 1e3 * kTol);
 }
 
@@ -746,7 +759,8 @@ TEST(SmootherVsReference, SmoothedPositionIsConsistentOverTwentySeeds)
 	double filtered = 0, smoothed = 0;
 	for (unsigned seed = 1; seed <= 20; ++seed)
 	{
-		const SmootherCheck s = smoothSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, seed}, allModels());
+		const SmootherCheck s =
+		    smoothSideBySide({Eigen::Vector3d(4, 3, 6) * kDeg, 40 * kDeg, seed}, allModels());
 		EXPECT_LT(s.pos_sigma_ratio_0, 0.6) << "seed " << seed;
 		filtered += s.nees_filtered / 20;
 		smoothed += s.nees_smoothed / 20;
@@ -760,7 +774,7 @@ namespace
 {
 struct StretchComparison
 {
-	double mean = 0, pos_mean = 0, cov = 0;	 // stretch-smoothed vs per-tick, at the kept ticks
+	double mean = 0, pos_mean = 0, cov = 0;  // stretch-smoothed vs per-tick, at the kept ticks
 	double nees_filtered = 0, nees_per_tick = 0, nees_stretches = 0;  // attitude + velocity, 6 DOF, mean
 	std::size_t kept = 0;
 	int worst_state = -1;  //!< the tangent coordinate of `mean`
@@ -783,9 +797,11 @@ StretchComparison compareStretches(unsigned seed, int update_every = 5, int upda
 	const auto per_tick = smoothRts(rec.fast, rec.fast_end, rec.fast_end_P, rec.t_end);
 	EXPECT_EQ(rec.stretches.size(), 20u);
 	StretchComparison out;
-	auto nees = [](const NavState& x, const Covariance& P, const NavState& truth) {
+	auto nees = [](const NavState& x, const Covariance& P, const NavState& truth)
+	{
 		const TangentVector e = x.boxminus(truth);
-		const std::array<int, 6> at{idx::att, idx::att + 1, idx::att + 2, idx::vel, idx::vel + 1, idx::vel + 2};
+		const std::array<int, 6> at{idx::att, idx::att + 1, idx::att + 2,
+		                            idx::vel, idx::vel + 1, idx::vel + 2};
 		Eigen::Matrix<double, 6, 1> d;
 		Eigen::Matrix<double, 6, 6> S;
 		for (int a = 0; a < 6; ++a)
@@ -837,8 +853,8 @@ TEST(SmootherStretches, TelescopedStretchesGiveThePerTickCovariance)
 	// small smoothed velocity σ; 1.0e-3 σ in position) with a 4–6° attitude σ.
 	// Without the transport it was 3.97 σ (1.7e-2 σ in position).
 	const StretchComparison c = compareStretches(11);
-	std::printf("stretches of 10 ticks vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n", c.cov,
-				c.mean, c.pos_mean);
+	std::printf("stretches of 10 ticks vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
+	            c.cov, c.mean, c.pos_mean);
 	EXPECT_LT(c.cov, kTol);
 	EXPECT_LT(c.mean, 0.5);
 	EXPECT_LT(c.pos_mean, 5e-3);
@@ -862,9 +878,11 @@ TEST(SmootherStretches, ManyUpdatesATickGiveThePerTickCovariance)
 	const StretchComparison c = compareStretches(11, 1, 7);
 	const double n = static_cast<double>(c.kept);
 	std::printf(
-		"7 updates a tick, stretches vs per tick: cov %.2e (corr.), mean %.2e sd at coordinate %d (position %.2e "
-		"sd); attitude + velocity NEES filtered %.2f, per tick %.2f, stretches %.2f\n",
-		c.cov, c.mean, c.worst_state, c.pos_mean, c.nees_filtered / n, c.nees_per_tick / n, c.nees_stretches / n);
+	    "7 updates a tick, stretches vs per tick: cov %.2e (corr.), mean %.2e sd at coordinate %d (position "
+	    "%.2e "
+	    "sd); attitude + velocity NEES filtered %.2f, per tick %.2f, stretches %.2f\n",
+	    c.cov, c.mean, c.worst_state, c.pos_mean, c.nees_filtered / n, c.nees_per_tick / n,
+	    c.nees_stretches / n);
 	EXPECT_LT(c.cov, kTol);
 	EXPECT_LT(c.pos_mean, 5e-2);
 }
@@ -880,8 +898,9 @@ TEST(SmootherStretches, AnUpdateWiderThanTheDeferredOnesGivesThePerTickCovarianc
 	std::vector<std::unique_ptr<TestModel>> models = allModels();
 	models.emplace_back(std::make_unique<WideVelocityModel>());
 	const StretchComparison c = compareStretches(11, 5, 2, std::move(models));
-	std::printf("with an 18-row update, stretches vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
-				c.cov, c.mean, c.pos_mean);
+	std::printf(
+	    "with an 18-row update, stretches vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
+	    c.cov, c.mean, c.pos_mean);
 	EXPECT_EQ(c.kept, 20u);
 	EXPECT_LT(c.cov, kTol);
 	EXPECT_LT(c.pos_mean, 5e-3);
@@ -897,8 +916,9 @@ TEST(SmootherStretches, DeclaredAffineUpdatesGiveThePerTickCovariance)
 	for (const bool plugin_states : {false, true})
 	{
 		const StretchComparison c = compareStretches(11, 5, 2, affineModels(plugin_states), plugin_states);
-		std::printf("declared affine%s, stretches vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
-					plugin_states ? " with plugin states" : "", c.cov, c.mean, c.pos_mean);
+		std::printf(
+		    "declared affine%s, stretches vs per tick: cov %.2e (corr.), mean %.2e sd (position %.2e sd)\n",
+		    plugin_states ? " with plugin states" : "", c.cov, c.mean, c.pos_mean);
 		EXPECT_EQ(c.kept, 20u);
 		EXPECT_LT(c.cov, kTol) << (plugin_states ? "with plugin states" : "");
 		EXPECT_LT(c.pos_mean, 5e-3) << (plugin_states ? "with plugin states" : "");
@@ -920,8 +940,10 @@ TEST(SmootherStretches, StretchesAreConsistentOverTwentySeeds)
 		sum.nees_stretches += c.nees_stretches;
 	}
 	const double n = static_cast<double>(sum.kept);
-	std::printf("attitude + velocity NEES over %zu kept ticks (6 DOF): filtered %.2f, per tick %.2f, stretches %.2f\n",
-				sum.kept, sum.nees_filtered / n, sum.nees_per_tick / n, sum.nees_stretches / n);
+	std::printf(
+	    "attitude + velocity NEES over %zu kept ticks (6 DOF): filtered %.2f, per tick %.2f, stretches "
+	    "%.2f\n",
+	    sum.kept, sum.nees_filtered / n, sum.nees_per_tick / n, sum.nees_stretches / n);
 	EXPECT_LT(sum.nees_stretches / n, 6.0);
 	EXPECT_LT(sum.nees_per_tick / n, 6.0);
 	EXPECT_GT(sum.nees_stretches / n, 2.0);
@@ -976,9 +998,10 @@ struct FileRow
 std::vector<FileRow> smoothFile(const std::string& path, BackwardPassSummary* sum = nullptr)
 {
 	std::vector<FileRow> rows;
-	const auto s = smoothStretchFile(path, [&](double t, const NavState& x, const Covariance& P, SmoothedKind k) {
-		rows.push_back({t, x, P, k});
-	});
+	const auto s = smoothStretchFile(path,
+	                                 [&](double t, const NavState& x, const Covariance& P, SmoothedKind k) {
+		                                 rows.push_back({t, x, P, k});
+	                                 });
 	if (sum) *sum = s;
 	std::reverse(rows.begin(), rows.end());
 	return rows;
@@ -1079,8 +1102,10 @@ TEST(SmootherStream, RefusesWhatIsNotAStretchFile)
 TEST(SmootherStream, AWriteFailureClosesTheFile)
 {
 	if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
-	auto open_files = [] {
-		return std::distance(std::filesystem::directory_iterator("/proc/self/fd"), std::filesystem::directory_iterator{});
+	auto open_files = []
+	{
+		return std::distance(std::filesystem::directory_iterator("/proc/self/fd"),
+		                     std::filesystem::directory_iterator{});
 	};
 	StretchFileHeader h;
 	h.n = idx::core_dim;
@@ -1103,7 +1128,8 @@ TEST(SmootherStream, RefusesADamagedRecordNamingIt)
 	const std::size_t records = StretchReader(path).records();
 	ASSERT_GE(records, 4u);
 	const auto data_offset = std::filesystem::file_size(path) - records * record_bytes;
-	auto damaged = [&](std::size_t record, std::size_t field, double value) {
+	auto damaged = [&](std::size_t record, std::size_t field, double value)
+	{
 		const std::string copy = path + ".damaged";
 		std::filesystem::copy_file(path, copy, std::filesystem::copy_options::overwrite_existing);
 		std::fstream f(copy, std::ios::in | std::ios::out | std::ios::binary);
@@ -1111,7 +1137,8 @@ TEST(SmootherStream, RefusesADamagedRecordNamingIt)
 		f.write(reinterpret_cast<const char*>(&value), sizeof value);
 		return copy;
 	};
-	auto refusal = [&](const std::string& file) {
+	auto refusal = [&](const std::string& file)
+	{
 		try
 		{
 			smoothStretchFile(file, [](double, const NavState&, const Covariance&, SmoothedKind) {});
@@ -1123,7 +1150,7 @@ TEST(SmootherStream, RefusesADamagedRecordNamingIt)
 		return std::string("(accepted)");
 	};
 	EXPECT_EQ(refusal(path), "(accepted)");
-	const std::string flags = refusal(damaged(2, 2, 1e300));	// field 2: the flags
+	const std::string flags = refusal(damaged(2, 2, 1e300));  // field 2: the flags
 	EXPECT_NE(flags.find("record 2: bad flags"), std::string::npos) << flags;
 	const std::string ticks = refusal(damaged(1, 1, -3.5));  // field 1: the tick count
 	EXPECT_NE(ticks.find("record 1: bad tick count"), std::string::npos) << ticks;
@@ -1161,7 +1188,7 @@ TEST(SmootherStretches, AChangeReportedWholeEqualsTheFactoredUpdate)
 	Eigen::MatrixXd Bk(k, m);
 	for (int i = 0; i < k; ++i)
 		for (int j = 0; j < m; ++j) Bk(i, j) = 0.3 * N01(rng);
-	const Eigen::MatrixXd W = P.leftCols(k) * Bk;	// P⁻¹ W = [Bk; 0]
+	const Eigen::MatrixXd W = P.leftCols(k) * Bk;  // P⁻¹ W = [Bk; 0]
 	Eigen::VectorXd u(m);
 	u << 0.5, -1.0, 0.2;
 	const TangentVector dx = W * u;
@@ -1178,7 +1205,7 @@ TEST(SmootherStretches, AChangeReportedWholeEqualsTheFactoredUpdate)
 	EXPECT_LT((a.M_mean - b.M_mean).cwiseAbs().maxCoeff(), 1e-9 * a.M_mean.cwiseAbs().maxCoeff());
 	EXPECT_LT((a.sum_dx - b.sum_dx).norm(), 1e-9 * a.sum_dx.norm());
 	EXPECT_LT((a.sum_dP - b.sum_dP).cwiseAbs().maxCoeff(), 1e-9 * a.sum_dP.cwiseAbs().maxCoeff());
-	EXPECT_GT(a.sum_dP.diagonal().maxCoeff(), 0.0);	 // the update is there at all
+	EXPECT_GT(a.sum_dP.diagonal().maxCoeff(), 0.0);  // the update is there at all
 	(void)n;
 }
 
@@ -1194,7 +1221,8 @@ TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
 		~Restore() { setWideKernels(true); }
 	} restore;
 	const NavState x0 = test::makeState(0.7);
-	const Covariance P0 = test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
+	const Covariance P0 =
+	    test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
 	const DvlModel dvl;
 	const HydroModel hydro;
 	const RangeDepthModel range;
@@ -1202,7 +1230,8 @@ TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
 	ctx.omega_ie_n = earthRate();
 	ctx.omega_ib_b << 0.02, -0.01, 0.05;
 	const NavState truth = x0.boxplus(0.5 * P0.diagonal().cwiseSqrt());
-	auto run = [&](bool wide) {
+	auto run = [&](bool wide)
+	{
 		EXPECT_EQ(setWideKernels(wide), wide);
 		ManifoldUkf ukf(test::makeProcessModel(), UtParams{});
 		ukf.initialize(x0, P0);
@@ -1210,8 +1239,9 @@ TEST(FilterKernels, AvxAndBaselinePathsAgreeBitForBit)
 		for (int step = 0; step < 60; ++step)
 		{
 			ukf.predict(ctx.omega_ib_b, ctx.omega_ie_n, 0.01);
-			for (const TestModel* model : {static_cast<const TestModel*>(&dvl), static_cast<const TestModel*>(&hydro),
-										   static_cast<const TestModel*>(&range)})
+			for (const TestModel* model :
+			     {static_cast<const TestModel*>(&dvl), static_cast<const TestModel*>(&hydro),
+			      static_cast<const TestModel*>(&range)})
 			{
 				if (model == &hydro && step % 3 != 0) continue;
 				const Measurement m = makeMeasurement(*model, truth, ctx, rng);
@@ -1246,11 +1276,11 @@ TEST(SigmaLimitsObserved, AHitIsReportedWholeAndNoHitIsNot)
 		int updates = 0, whole = 0;
 		double vel_before = 0, vel_after = 0;  // the last whole change's P(vel, vel)
 		void onPredict(const Covariance&, bool, const Eigen::Ref<const Eigen::MatrixXd>&, const ProcessModel&,
-					   const StepDecay&) override
+		               const StepDecay&) override
 		{
 		}
 		void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
-					  const Eigen::Ref<const Eigen::MatrixXd>&) override
+		              const Eigen::Ref<const Eigen::MatrixXd>&) override
 		{
 			++updates;
 		}
@@ -1262,13 +1292,15 @@ TEST(SigmaLimitsObserved, AHitIsReportedWholeAndNoHitIsNot)
 		}
 	};
 	const NavState x0 = test::makeState(0.7);
-	const Covariance P0 = test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
+	const Covariance P0 =
+	    test::correlatedCovariance(test::makeSigmas({4 * test::kDeg, 3 * test::kDeg, 6 * test::kDeg}), 3);
 	const DvlModel dvl;
 	FilterContext ctx;
 	ctx.omega_ie_n = earthRate();
 	ctx.omega_ib_b << 0.02, -0.01, 0.05;
 	const NavState truth = x0.boxplus(0.5 * P0.diagonal().cwiseSqrt());
-	auto run = [&](double vel_floor, Calls& calls) {
+	auto run = [&](double vel_floor, Calls& calls)
+	{
 		ManifoldUkf ukf(test::makeProcessModel(), UtParams{});
 		ukf.initialize(x0, P0);
 		const int n = x0.dim();
@@ -1280,7 +1312,8 @@ TEST(SigmaLimitsObserved, AHitIsReportedWholeAndNoHitIsNot)
 		for (int step = 0; step < 20; ++step)
 		{
 			ukf.predict(ctx.omega_ib_b, ctx.omega_ie_n, 0.01);
-			EXPECT_NE(ukf.update(dvl, makeMeasurement(dvl, truth, ctx, rng), ctx).status, UpdateStatus::Invalid);
+			EXPECT_NE(ukf.update(dvl, makeMeasurement(dvl, truth, ctx, rng), ctx).status,
+			          UpdateStatus::Invalid);
 		}
 		return ukf.sigmaLimitHits();
 	};

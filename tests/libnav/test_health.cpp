@@ -28,7 +28,7 @@ Covariance alignedCovariance()
 
 /** `seconds` of 5 Hz 3-D updates with χ²(3) NIS scaled by `nis_scale`. */
 void feed(HealthMonitor& h, const std::string& label, double from_s, double seconds, double nis_scale,
-		  UpdateStatus status = UpdateStatus::Accepted, unsigned seed = 1)
+          UpdateStatus status = UpdateStatus::Accepted, unsigned seed = 1)
 {
 	std::mt19937 rng(seed);
 	std::chi_squared_distribution<double> chi2(3);
@@ -142,7 +142,7 @@ TEST(Health, ConfigKeysAreChecked)
 		EXPECT_NE(std::string(e.what()).find("max_heading_sigma_dg"), std::string::npos) << e.what();
 	}
 	EXPECT_THROW(HealthLimits::fromConfig(config::Node::fromText("{rejected_fraction: 1.5}", "test")),
-				 config::ConfigError);
+	             config::ConfigError);
 }
 
 }  // namespace auvnav

@@ -64,16 +64,16 @@ long allocationsIn(F&& f)
 /** Accelerometer-like: R_nbᵀ (a_n − g e_D) + b_a, affine in all but the attitude. */
 class Accel final : public MeasurementModel
 {
-   public:
+ public:
 	uint32_t uses() const noexcept override { return kAttitude | kAcceleration | kGravity | kAccelBias; }
 	uint32_t affineIn() const noexcept override { return kAcceleration | kGravity | kAccelBias; }
 	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>&,
-						  std::string&) noexcept override
+	                      std::string&) noexcept override
 	{
 		return PrepareStatus::Skip;
 	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z = x.R_nb.transpose() * (x.a_n - Eigen::Vector3d(0, 0, x.g)) + x.b_a;
 		return true;
@@ -83,15 +83,15 @@ class Accel final : public MeasurementModel
 /** Body velocity and a heading-free nonlinear read of every block. */
 class Velocity final : public MeasurementModel
 {
-   public:
+ public:
 	uint32_t uses() const noexcept override { return kAllBlocks & ~kPluginStates; }
 	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>&,
-						  std::string&) noexcept override
+	                      std::string&) noexcept override
 	{
 		return PrepareStatus::Skip;
 	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z.head<3>() = x.R_nb.transpose() * x.v_n;
 		z[3] = x.Dl_sub(0, 0) * z[0] + x.current_vehicle_ne.squaredNorm() + 1e-3 * x.p_n.z() + x.b_adcp.x();
@@ -139,7 +139,8 @@ Counts hotPathAllocations(double heading_sigma_deg, int steps, int warm)
 		fv.z += Eigen::Vector4d(0.02, 0.01, -0.01, 0.1);
 		long u = 0;
 		int updates = 0;
-		auto apply = [&](const MeasurementModel& model, const Measurement& m) {
+		auto apply = [&](const MeasurementModel& model, const Measurement& m)
+		{
 			UpdateStatus status = UpdateStatus::Invalid;
 			u += allocationsIn([&] { status = ukf.update(model, m, ctx).status; });
 			c.all_accepted &= status == UpdateStatus::Accepted;
@@ -159,12 +160,14 @@ Counts hotPathAllocations(double heading_sigma_deg, int steps, int warm)
 TEST(HotPathAllocations, TheCounterSeesAnAllocation)
 {
 	// The test below can fail: a vector's growth is counted.
-	EXPECT_GE(allocationsIn([] {
-		Eigen::VectorXd v(100);
-		v.setZero();
-		EXPECT_EQ(v.sum(), 0.0);
-	}),
-			  1);
+	EXPECT_GE(allocationsIn(
+	              []
+	              {
+		              Eigen::VectorXd v(100);
+		              v.setZero();
+		              EXPECT_EQ(v.sum(), 0.0);
+	              }),
+	          1);
 }
 
 TEST(HotPathAllocations, PredictAllocatesNothingAndUpdateOnlyItsResult)

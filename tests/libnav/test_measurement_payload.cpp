@@ -31,7 +31,7 @@ TEST(MeasurementPayload, WhatIsSetIsReadBack)
 	EXPECT_EQ(cm.payload<LeverArm>().y_m, -0.1);
 	EXPECT_EQ(cm.payload<LeverArm>().z_m, 0.3);
 	EXPECT_EQ(cm.payload<LeverArm>().beam, 2);
-	m.payload<LeverArm>().beam = 3;	 // written in place
+	m.payload<LeverArm>().beam = 3;  // written in place
 	EXPECT_EQ(cm.payload<LeverArm>().beam, 3);
 }
 
@@ -57,7 +57,8 @@ TEST(MeasurementPayload, FixedStorageInsideTheMeasurement)
 	for (std::size_t i = 0; i < std::size(big.v); ++i) big.v[i] = double(i);
 	m.setPayload(big);
 	EXPECT_EQ(m.payload<Largest>().v[std::size(big.v) - 1], double(std::size(big.v) - 1));
-	EXPECT_EQ(reinterpret_cast<std::uintptr_t>(&m.payload<Largest>()) % auvnav::MeasurementPayload::kAlignment, 0u);
+	EXPECT_EQ(
+	    reinterpret_cast<std::uintptr_t>(&m.payload<Largest>()) % auvnav::MeasurementPayload::kAlignment, 0u);
 	static_assert(sizeof(auvnav::MeasurementPayload) == auvnav::MeasurementPayload::kCapacity);
 	static_assert(std::is_trivially_copyable_v<auvnav::MeasurementPayload>);
 	// A default Measurement reads zeros (value-initialised storage).

@@ -17,11 +17,14 @@ using auvnav::test::kDeg;
 
 namespace
 {
-double maxAbs(const Eigen::Matrix3d& A) { return A.cwiseAbs().maxCoeff(); }
+double maxAbs(const Eigen::Matrix3d& A)
+{
+	return A.cwiseAbs().maxCoeff();
+}
 
 /** Propagates `steps` times by T/steps with constant inputs. */
 NavState propagateFor(const ProcessModel& pm, NavState x, const Eigen::Vector3d& w_ib_b,
-					  const Eigen::Vector3d& w_ie_n, double T, int steps)
+                      const Eigen::Vector3d& w_ie_n, double T, int steps)
 {
 	const double dt = T / steps;
 	for (int i = 0; i < steps; ++i) x = pm.propagate(x, w_ib_b, w_ie_n, dt);
@@ -70,7 +73,7 @@ TEST(ProcessModel, ConstantBodyRateAboutATiltedAxis)
 	ProcessModel pm = test::makeProcessModel();
 	NavState x = test::makeState(35 * kDeg);
 	x.b_w.setZero();
-	pm.prior_mean.segment<3>(idx::gyro_bias).setZero();	// zero bias stays zero
+	pm.prior_mean.segment<3>(idx::gyro_bias).setZero();  // zero bias stays zero
 	const Eigen::Vector3d w = 0.4 * Eigen::Vector3d(1, 2, -1.5).normalized();
 	const double T = 10;  // 4 rad about the axis
 	const NavState y = propagateFor(pm, x, w, Eigen::Vector3d::Zero(), T, 1000);
@@ -96,7 +99,7 @@ TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
 	x.b_w.setZero();
 	const double lat = -33 * kDeg, omega = 7.292115e-5;
 	const Eigen::Vector3d w_ie_n(omega * std::cos(lat), 0, -omega * std::sin(lat));
-	const Eigen::Vector3d w_ib_b = x.R_nb.transpose() * w_ie_n;	 // the gyro sees only the Earth turning
+	const Eigen::Vector3d w_ib_b = x.R_nb.transpose() * w_ie_n;  // the gyro sees only the Earth turning
 
 	// 1 h at 100 Hz, re-orthonormalised every step as the filter does with its mean.
 	NavState y = x, raw = x;
@@ -106,9 +109,10 @@ TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
 		y.R_nb = so3::normalized(y.R_nb);
 		raw = pm.propagate(raw, w_ib_b, w_ie_n, 0.01);
 	}
-	std::printf("Earth rate only, 1 h at 100 Hz: |R(T) - R0| = %.2e normalised each step, %.2e raw "
-				"(%.2e after one final normalisation)\n",
-				maxAbs(y.R_nb - x.R_nb), maxAbs(raw.R_nb - x.R_nb), maxAbs(so3::normalized(raw.R_nb) - x.R_nb));
+	std::printf(
+	    "Earth rate only, 1 h at 100 Hz: |R(T) - R0| = %.2e normalised each step, %.2e raw "
+	    "(%.2e after one final normalisation)\n",
+	    maxAbs(y.R_nb - x.R_nb), maxAbs(raw.R_nb - x.R_nb), maxAbs(so3::normalized(raw.R_nb) - x.R_nb));
 	// Rounding only: about 0.1 ulp a step, accumulated over 360 000 steps, in
 	// a direction that depends on the configuration's rounding pattern
 	// (Rodrigues with the library's sin and cos drifted 6e-16 here and 2.2e-11
@@ -128,7 +132,8 @@ TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
 			y2 = pm.propagate(y2, w_ib_b2, w_ie_n2, 0.01);
 			y2.R_nb = so3::normalized(y2.R_nb);
 		}
-		std::printf("  at latitude -60 deg, yaw 95 deg: %.2e normalised each step\n", maxAbs(y2.R_nb - x2.R_nb));
+		std::printf("  at latitude -60 deg, yaw 95 deg: %.2e normalised each step\n",
+		            maxAbs(y2.R_nb - x2.R_nb));
 		EXPECT_LT(maxAbs(y2.R_nb - x2.R_nb), 5e-11);
 	}
 	// Without normalisation the 360000 products accumulate rounding
@@ -148,7 +153,7 @@ TEST(ProcessModel, VehicleFixedToTheEarthKeepsItsAttitudeForAnHour)
 	ukf.initialize(x, P0);
 	for (int i = 0; i < 36000; ++i) ukf.predict(w_ib_b, w_ie_n, 0.1);
 	std::printf("Earth rate only, 1 h of ManifoldUkf::predict at 10 Hz: |R(T) - R0| = %.2e\n",
-				maxAbs(ukf.state().R_nb - x.R_nb));
+	            maxAbs(ukf.state().R_nb - x.R_nb));
 	EXPECT_LT(maxAbs(ukf.state().R_nb - x.R_nb), 1e-12);
 }
 
@@ -209,10 +214,11 @@ TEST(ProcessModel, GaussMarkovVarianceIsExactForAnyStepThroughTheUkf)
 		const double expected = phi * phi * p0 + c.sigma * c.sigma * (1 - phi * phi);
 		ASSERT_GT(expected, 100 * p0);
 		EXPECT_NEAR(one.covariance()(c.index, c.index), expected, 1e-9 * expected) << tangentNames()[c.index];
-		EXPECT_NEAR(many.covariance()(c.index, c.index), expected, 1e-9 * expected) << tangentNames()[c.index];
+		EXPECT_NEAR(many.covariance()(c.index, c.index), expected, 1e-9 * expected)
+		    << tangentNames()[c.index];
 		// And the means agree between the two step sizes.
 		EXPECT_NEAR(one.state().euclidean()[c.index], many.state().euclidean()[c.index],
-					1e-12 * (std::abs(x.euclidean()[c.index]) + 1e-3));
+		            1e-12 * (std::abs(x.euclidean()[c.index]) + 1e-3));
 	}
 	EXPECT_EQ(one.choleskyRepairs() + many.choleskyRepairs(), 0u);
 }
@@ -232,14 +238,14 @@ TEST(ProcessModel, ProcessNoiseScalesLinearlyWithDt)
 	// Gauss–Markov increments: σ²(1 − e^{−2dt/τ}).
 	for (const GmCoord& c : gaussMarkovCoordinates(pm))
 		EXPECT_NEAR(Q1(c.index, c.index), c.sigma * c.sigma * (1 - std::exp(-2 * dt / c.tau)),
-					1e-12 * c.sigma * c.sigma)
-			<< tangentNames()[c.index];
+		            1e-12 * c.sigma * c.sigma)
+		    << tangentNames()[c.index];
 	// Spatial current variance: per metre moved through the water.
 	const Covariance Qs = pm.noiseCovariance(dt, 1.5);
 	for (int i = 0; i < 4; ++i)
 		EXPECT_NEAR(Qs(idx::current_vehicle + i, idx::current_vehicle + i) -
-						Q1(idx::current_vehicle + i, idx::current_vehicle + i),
-					pm.noise.current_spatial_var_per_m * 1.5 * dt, 1e-18);
+		                Q1(idx::current_vehicle + i, idx::current_vehicle + i),
+		            pm.noise.current_spatial_var_per_m * 1.5 * dt, 1e-18);
 	// Symmetric positive semi-definite.
 	EXPECT_EQ(Q1, Q1.transpose());
 	EXPECT_GE(Eigen::SelfAdjointEigenSolver<Covariance>(Q1).eigenvalues().minCoeff(), -1e-18);
@@ -248,7 +254,7 @@ TEST(ProcessModel, ProcessNoiseScalesLinearlyWithDt)
 TEST(ProcessModel, CurrentsFollowTheProfileWhenTheDepthChanges)
 {
 	ProcessModel pm = test::makeProcessModel();
-	pm.noise.current.tau_s = 1e15;	// isolate the transport from the decay
+	pm.noise.current.tau_s = 1e15;  // isolate the transport from the decay
 	pm.current_far_distance_m = 8;
 	NavState x = test::makeState(0.3);
 	x.v_n = Eigen::Vector3d(0.5, -0.2, 0.2);  // diving at 0.2 m/s
@@ -263,12 +269,14 @@ TEST(ProcessModel, CurrentsFollowTheProfileWhenTheDepthChanges)
 		const double dz = y.p_n.z() - x.p_n.z();
 		ASSERT_NEAR(dz, 2.0, 1e-10);
 		// c(2 m below the old depth) on the old profile, and the gradient kept.
-		EXPECT_LT((y.current_vehicle_ne - (x.current_vehicle_ne + dz * gradient_per_m)).norm(), 1e-12) << steps;
+		EXPECT_LT((y.current_vehicle_ne - (x.current_vehicle_ne + dz * gradient_per_m)).norm(), 1e-12)
+		    << steps;
 		EXPECT_LT((y.current_far_ne - (x.current_far_ne + dz * gradient_per_m)).norm(), 1e-12) << steps;
 		// Climbing back restores both.
 		NavState up = y;
 		up.v_n.z() = -0.2;
-		const NavState back = propagateFor(pm, up, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, steps);
+		const NavState back =
+		    propagateFor(pm, up, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T, steps);
 		EXPECT_LT((back.current_vehicle_ne - x.current_vehicle_ne).norm(), 1e-12) << steps;
 		EXPECT_LT((back.current_far_ne - x.current_far_ne).norm(), 1e-12) << steps;
 	}
@@ -276,14 +284,14 @@ TEST(ProcessModel, CurrentsFollowTheProfileWhenTheDepthChanges)
 	NavState level = x;
 	level.v_n.z() = 0;
 	EXPECT_LT((pm.propagate(level, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T).current_vehicle_ne -
-			   x.current_vehicle_ne)
-				  .norm(),
-			  1e-12);
+	           x.current_vehicle_ne)
+	              .norm(),
+	          1e-12);
 	pm.current_far_distance_m = 0;
-	EXPECT_LT(
-		(pm.propagate(x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T).current_vehicle_ne - x.current_vehicle_ne)
-			.norm(),
-		1e-12);
+	EXPECT_LT((pm.propagate(x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), T).current_vehicle_ne -
+	           x.current_vehicle_ne)
+	              .norm(),
+	          1e-12);
 }
 
 TEST(ProcessModel, CurrentNoiseGrowsWithDepthChange)
@@ -293,8 +301,8 @@ TEST(ProcessModel, CurrentNoiseGrowsWithDepthChange)
 	const Covariance Q0 = pm.noiseCovariance(dt, 0.4, 0.0), Qd = pm.noiseCovariance(dt, 0.4, -0.3);
 	for (int i = 0; i < 4; ++i)
 		EXPECT_NEAR(Qd(idx::current_vehicle + i, idx::current_vehicle + i) -
-						Q0(idx::current_vehicle + i, idx::current_vehicle + i),
-					pm.noise.current_vertical_var_per_m * 0.3 * dt, 1e-18);
+		                Q0(idx::current_vehicle + i, idx::current_vehicle + i),
+		            pm.noise.current_vertical_var_per_m * 0.3 * dt, 1e-18);
 	Covariance diff = Qd - Q0;
 	diff.block<4, 4>(idx::current_vehicle, idx::current_vehicle).setZero();
 	EXPECT_EQ(diff.cwiseAbs().maxCoeff(), 0.0);
@@ -374,7 +382,8 @@ TEST(ProcessModel, TailRowsOfTheLinearMapAreTheDiagonalFactors)
 	ASSERT_EQ(a.size(), n - idx::adcp_bias);
 	const int tail = n - idx::adcp_bias;
 	const Eigen::MatrixXd expected = a.asDiagonal();
-	EXPECT_EQ(Eigen::MatrixXd(A.bottomRows(tail).leftCols(idx::adcp_bias)), Eigen::MatrixXd::Zero(tail, idx::adcp_bias));
+	EXPECT_EQ(Eigen::MatrixXd(A.bottomRows(tail).leftCols(idx::adcp_bias)),
+	          Eigen::MatrixXd::Zero(tail, idx::adcp_bias));
 	EXPECT_EQ(Eigen::MatrixXd(A.bottomRightCorner(tail, tail)), expected);
 	// The factors decay (τ finite) and the random walk keeps 1.
 	EXPECT_LT(a[0], 1.0);

@@ -57,7 +57,7 @@ TEST(RejectionStreak, NeedsEnoughRejectionsOfOneDimension)
 	EXPECT_FALSE(s.consistentBias(5, 0.99));
 	s.add(0.8, Eigen::Vector3d(0.3, 0, 0), kR);
 	EXPECT_TRUE(s.consistentBias(5, 0.99));
-	s.add(1.0, Eigen::Vector2d(0.3, 0), Eigen::MatrixXd::Identity(2, 2) * 1e-4);	 // another measurement type
+	s.add(1.0, Eigen::Vector2d(0.3, 0), Eigen::MatrixXd::Identity(2, 2) * 1e-4);  // another measurement type
 	EXPECT_EQ(s.size(), 1);
 	EXPECT_FALSE(s.consistentBias(5, 0.99));
 	s.add(1.2, Eigen::Vector2d(NAN, 0), Eigen::MatrixXd::Identity(2, 2) * 1e-4);

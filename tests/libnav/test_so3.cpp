@@ -37,7 +37,8 @@ void expectRoundTrip(const Eigen::Vector3d& v, double tol, const std::string& wh
 	EXPECT_LT(orthonormalityError(R), 1e-15 * 8) << what;
 	EXPECT_NEAR(R.determinant(), 1.0, 1e-14) << what;
 	const Eigen::Vector3d l = so3::Log(R);
-	EXPECT_LT((l - v).norm(), tol) << what << ": v = " << v.transpose() << ", Log(Exp(v)) = " << l.transpose();
+	EXPECT_LT((l - v).norm(), tol) << what << ": v = " << v.transpose()
+	                               << ", Log(Exp(v)) = " << l.transpose();
 	EXPECT_LT((so3::Exp(l) - R).cwiseAbs().maxCoeff(), tol) << what;
 }
 
@@ -73,7 +74,8 @@ TEST(So3, RoundTripNearIdentityIsRelativelyAccurate)
 {
 	std::mt19937 rng(1);
 	// Both sides of the series switches (Exp: |v| < 1e-8, Log: θ < 1e-6).
-	for (double angle : {1e-12, 1e-9, 1e-8 * 0.999, 1e-8 * 1.001, 1e-7, 1e-6 * 0.999, 1e-6, 1e-6 * 1.001, 1e-5})
+	for (double angle :
+	     {1e-12, 1e-9, 1e-8 * 0.999, 1e-8 * 1.001, 1e-7, 1e-6 * 0.999, 1e-6, 1e-6 * 1.001, 1e-5})
 		for (int k = 0; k < 20; ++k)
 		{
 			const Eigen::Vector3d v = angle * randomAxis(rng);
@@ -81,7 +83,8 @@ TEST(So3, RoundTripNearIdentityIsRelativelyAccurate)
 			EXPECT_LT((l - v).norm(), 1e-14 * angle) << "angle " << angle;
 			// First order: Exp(v) a ≈ a + v × a.
 			const Eigen::Vector3d a(0.3, -1.2, 0.7);
-			EXPECT_LT((so3::Exp(v) * a - a - v.cross(a)).norm(), angle * angle * a.squaredNorm() + 1e-15) << angle;
+			EXPECT_LT((so3::Exp(v) * a - a - v.cross(a)).norm(), angle * angle * a.squaredNorm() + 1e-15)
+			    << angle;
 		}
 }
 
@@ -100,18 +103,24 @@ TEST(So3, SeriesBranchesEqualTheClosedFormsInLongDouble)
 			const long double a = std::sin(th) / th, b = (1 - std::cos(th)) / (th * th);
 			Eigen::Matrix<long double, 3, 3> K;
 			K << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-			const Eigen::Matrix<long double, 3, 3> R_ld = Eigen::Matrix<long double, 3, 3>::Identity() + a * K + b * K * K;
+			const Eigen::Matrix<long double, 3, 3> R_ld =
+			    Eigen::Matrix<long double, 3, 3>::Identity() + a * K + b * K * K;
 			const Eigen::Matrix3d R = so3::Exp(v);
-			worst_exp = std::max(worst_exp, static_cast<double>((R.cast<long double>() - R_ld).cwiseAbs().maxCoeff()));
+			worst_exp = std::max(worst_exp,
+			                     static_cast<double>((R.cast<long double>() - R_ld).cwiseAbs().maxCoeff()));
 			// Log of that rotation (rounded to double) against θ / (2 sin θ) w in long double.
 			const Eigen::Matrix<long double, 3, 3> Rd = R.cast<long double>();
-			const Eigen::Matrix<long double, 3, 1> w(Rd(2, 1) - Rd(1, 2), Rd(0, 2) - Rd(2, 0), Rd(1, 0) - Rd(0, 1));
+			const Eigen::Matrix<long double, 3, 1> w(Rd(2, 1) - Rd(1, 2), Rd(0, 2) - Rd(2, 0),
+			                                         Rd(1, 0) - Rd(0, 1));
 			const long double s = 0.5L * w.norm(), c = 0.5L * (Rd.trace() - 1);
 			const long double t = std::atan2(s, c);
 			const Eigen::Matrix<long double, 3, 1> l_ld = (t / (2 * s)) * w;
-			worst_log = std::max(worst_log, static_cast<double>(((so3::Log(R).cast<long double>() - l_ld).norm() / l_ld.norm())));
+			worst_log = std::max(
+			    worst_log,
+			    static_cast<double>(((so3::Log(R).cast<long double>() - l_ld).norm() / l_ld.norm())));
 		}
-	std::printf("Exp: worst entry difference %.2e; Log: worst relative difference %.2e\n", worst_exp, worst_log);
+	std::printf("Exp: worst entry difference %.2e; Log: worst relative difference %.2e\n", worst_exp,
+	            worst_log);
 	EXPECT_LT(worst_exp, 4e-16);
 	EXPECT_LT(worst_log, 4e-16);
 }
@@ -136,8 +145,8 @@ TEST(So3, ExactlyPiGivesPlusOrMinusTheVector)
 {
 	std::mt19937 rng(4);
 	std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-										 Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 1, 0).normalized(),
-										 Eigen::Vector3d(-1, 1, 1).normalized()};
+	                                     Eigen::Vector3d::UnitZ(), Eigen::Vector3d(1, 1, 0).normalized(),
+	                                     Eigen::Vector3d(-1, 1, 1).normalized()};
 	for (int k = 0; k < 100; ++k) axes.push_back(randomAxis(rng));
 	for (const auto& a : axes)
 	{
@@ -176,7 +185,8 @@ TEST(So3, GroupProperties)
 		EXPECT_LT((so3::Log(R.transpose()) + v).norm(), 1e-12);
 		const Eigen::Matrix3d Q = so3::Exp(ang(rng) * randomAxis(rng));
 		EXPECT_LT((so3::Exp(Q * v) - Q * R * Q.transpose()).cwiseAbs().maxCoeff(), 1e-14);
-		EXPECT_LT((so3::skew(v) * Eigen::Vector3d(1, 2, 3) - v.cross(Eigen::Vector3d(1, 2, 3))).norm(), 1e-15);
+		EXPECT_LT((so3::skew(v) * Eigen::Vector3d(1, 2, 3) - v.cross(Eigen::Vector3d(1, 2, 3))).norm(),
+		          1e-15);
 	}
 	// Convention: a positive third component is a heading (yaw) turn N → E.
 	const Eigen::Matrix3d Rz = so3::Exp(Eigen::Vector3d(0, 0, 0.5));
@@ -243,7 +253,8 @@ TEST(So3, ExpOfTheOppositeVectorIsTheTransposeBitForBit)
 		const Eigen::Vector3d phi = std::exp(log_angle(rng)) * randomAxis(rng);
 		const Eigen::Matrix3d plus = so3::Exp(phi), minus = so3::Exp(-phi);
 		ASSERT_TRUE((minus.array() == plus.transpose().array()).all()) << "phi = " << phi.transpose();
-		EXPECT_LT(orthonormalityError(plus), 4e-15);  // the product form reached 1.7e-15 here, this one 1.2e-15
+		EXPECT_LT(orthonormalityError(plus),
+		          4e-15);  // the product form reached 1.7e-15 here, this one 1.2e-15
 	}
 }
 
@@ -255,11 +266,11 @@ TEST(NavStateManifold, BoxplusPairIsTwoBoxplusCallsBitForBit)
 	for (int k = 0; k < 200; ++k)
 	{
 		NavState x = randomState(rng, 3.0 * randomAxis(rng));
-		x.extra.resize(k % 3);	// plugin states too
+		x.extra.resize(k % 3);  // plugin states too
 		for (int i = 0; i < x.extra.size(); ++i) x.extra[i] = nd(rng);
 		TangentVector d(x.dim());
 		for (int i = 0; i < d.size(); ++i) d[i] = (k % 2 ? 0.01 : 0.4) * nd(rng);
-		if (k % 4 == 0) d.head<3>().setZero();	// the branch without a turn
+		if (k % 4 == 0) d.head<3>().setZero();  // the branch without a turn
 		x.boxplusPair(d, plus, minus);
 		const NavState a = x.boxplus(d), b = x.boxplus(-d);
 		EXPECT_EQ(plus.R_nb, a.R_nb) << k;
@@ -267,7 +278,8 @@ TEST(NavStateManifold, BoxplusPairIsTwoBoxplusCallsBitForBit)
 		EXPECT_EQ(minus.R_nb, b.R_nb) << k;
 		EXPECT_EQ(minus.euclidean(), b.euclidean()) << k;
 	}
-	EXPECT_THROW(NavState().boxplusPair(TangentVector::Zero(idx::core_dim + 1), plus, minus), std::invalid_argument);
+	EXPECT_THROW(NavState().boxplusPair(TangentVector::Zero(idx::core_dim + 1), plus, minus),
+	             std::invalid_argument);
 	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), plus, minus), std::invalid_argument);
 	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), minus, minus), std::invalid_argument);
 }
@@ -285,7 +297,7 @@ TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksBitForBitAndN
 		for (int i = 0; i < x.extra.size(); ++i) x.extra[i] = nd(rng);
 		TangentVector d(x.dim());
 		for (int i = 0; i < d.size(); ++i) d[i] = (k % 2 ? 0.01 : 0.4) * nd(rng);
-		if (k % 4 == 0) d.head<3>().setZero();	// the branch without a turn
+		if (k % 4 == 0) d.head<3>().setZero();  // the branch without a turn
 		const uint32_t blocks = k < 2 ? (k ? kAllBlocks : 0u) : masks(rng);
 		// Both points start as another state: what is not asked for must stay.
 		NavState before = randomState(rng, randomAxis(rng));
@@ -298,10 +310,11 @@ TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksBitForBitAndN
 		x.boxplusPairBlocks(d, step, blocks, plus, minus);
 		const TangentVector delta = step * d;
 		x.boxplusPair(delta, full_plus, full_minus);
-		EXPECT_EQ(plus.R_nb, full_plus.R_nb) << k;	// the attitude always
+		EXPECT_EQ(plus.R_nb, full_plus.R_nb) << k;  // the attitude always
 		EXPECT_EQ(minus.R_nb, full_minus.R_nb) << k;
-		const TangentVector e_plus = plus.euclidean(), e_minus = minus.euclidean(), e_before = before.euclidean(),
-							e_full_plus = full_plus.euclidean(), e_full_minus = full_minus.euclidean();
+		const TangentVector e_plus = plus.euclidean(), e_minus = minus.euclidean(),
+		                    e_before = before.euclidean(), e_full_plus = full_plus.euclidean(),
+		                    e_full_minus = full_minus.euclidean();
 		int asked = 0, kept = 0;
 		for (int i = idx::gyro_bias; i < x.dim(); ++i)
 			if (blocks & blockOfCoordinate(i, x.dim()))
@@ -333,11 +346,12 @@ TEST(NavStateManifold, BoxminusHeadIsTheHeadOfBoxminus)
 	std::mt19937 rng(10);
 	for (int k = 0; k < 20; ++k)
 	{
-		const NavState x = randomState(rng, 3.0 * randomAxis(rng)), y = randomState(rng, 2.0 * randomAxis(rng));
+		const NavState x = randomState(rng, 3.0 * randomAxis(rng)),
+		               y = randomState(rng, 2.0 * randomAxis(rng));
 		const TangentVector d = x.boxminus(y);
 		// Bit for bit: the prediction's mean iteration uses the head alone.
 		EXPECT_EQ(x.boxminusHead(y), d.head<idx::adcp_bias>()) << k;
-		EXPECT_GT(d.head<idx::adcp_bias>().cwiseAbs().minCoeff(), 0.0) << k;	// every head entry moved
+		EXPECT_GT(d.head<idx::adcp_bias>().cwiseAbs().minCoeff(), 0.0) << k;  // every head entry moved
 	}
 }
 
@@ -349,7 +363,7 @@ TEST(NavStateManifold, BoxplusThenBoxminusRecoversDelta)
 		for (int k = 0; k < 50; ++k)
 		{
 			const double a = att_norm < 0 ? ang(rng) : att_norm;
-			const NavState x = randomState(rng, (M_PI - 1e-4) * randomAxis(rng));	 // base attitude near π too
+			const NavState x = randomState(rng, (M_PI - 1e-4) * randomAxis(rng));  // base attitude near π too
 			const TangentVector d = randomDelta(rng, a * randomAxis(rng));
 			const TangentVector back = x.boxplus(d).boxminus(x);
 			EXPECT_LT((back - d).head<3>().norm(), 1e-12) << "|δ_att| = " << a;
@@ -366,7 +380,7 @@ TEST(NavStateManifold, BoxplusOfBoxminusReachesTheOtherState)
 		{
 			const NavState x = randomState(rng, 2.5 * randomAxis(rng));
 			NavState y = randomState(rng, Eigen::Vector3d::Zero());
-			y.R_nb = so3::Exp(rel * randomAxis(rng)) * x.R_nb;	// y at angle `rel` from x
+			y.R_nb = so3::Exp(rel * randomAxis(rng)) * x.R_nb;  // y at angle `rel` from x
 			const NavState z = x.boxplus(y.boxminus(x));
 			EXPECT_LT((z.R_nb - y.R_nb).cwiseAbs().maxCoeff(), 1e-12) << rel;
 			// 1e-11: velocity, acceleration and the accelerometer bias are turned and back.
@@ -379,10 +393,11 @@ TEST(NavStateManifold, AttitudeErrorIsALeftPerturbationInTheNavigationFrame)
 {
 	NavState x = test::makeState(0.7);
 	TangentVector d = TangentVector::Zero(idx::core_dim);
-	d[idx::att + 2] = 0.1;	// heading error
+	d[idx::att + 2] = 0.1;  // heading error
 	const NavState y = x.boxplus(d);
 	EXPECT_LT((y.R_nb - so3::Exp(Eigen::Vector3d(0, 0, 0.1)) * x.R_nb).cwiseAbs().maxCoeff(), 1e-15);
-	const double yaw_x = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0)), yaw_y = std::atan2(y.R_nb(1, 0), y.R_nb(0, 0));
+	const double yaw_x = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0)),
+	             yaw_y = std::atan2(y.R_nb(1, 0), y.R_nb(0, 0));
 	EXPECT_NEAR(yaw_y - yaw_x, 0.1, 1e-12);
 }
 

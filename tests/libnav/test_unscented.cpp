@@ -29,16 +29,16 @@ constexpr int kSamples = 200000;
 /** h(x) = R_nbᵀ v_n: body-frame velocity, nonlinear in the attitude. */
 class BodyVelocity : public MeasurementModel
 {
-   public:
+ public:
 	uint32_t uses() const noexcept override { return kAttitude | kVelocity; }
 	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-						  std::string&) noexcept override
+	                      std::string&) noexcept override
 	{
 		out.clear();
 		return PrepareStatus::Skip;
 	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z = x.R_nb.transpose() * x.v_n;
 		return true;
@@ -83,14 +83,14 @@ MonteCarloMoments monteCarloMeasurement(const NavState& x, const Covariance& P, 
 }
 
 /** Monte Carlo of one prediction step: manifold mean and covariance (+ Q). */
-void monteCarloPredict(const ProcessModel& pm, const NavState& x, const Covariance& P, const Eigen::Vector3d& w,
-					   double dt, unsigned seed, NavState& mean, Covariance& cov)
+void monteCarloPredict(const ProcessModel& pm, const NavState& x, const Covariance& P,
+                       const Eigen::Vector3d& w, double dt, unsigned seed, NavState& mean, Covariance& cov)
 {
 	const Covariance L = P.llt().matrixL();
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> nd;
 	const NavState centre = pm.propagate(x, w, Eigen::Vector3d::Zero(), dt);
-	Eigen::MatrixXd D(idx::core_dim, kSamples);	// deviations from the propagated centre
+	Eigen::MatrixXd D(idx::core_dim, kSamples);  // deviations from the propagated centre
 	TangentVector xi(idx::core_dim);
 	for (int s = 0; s < kSamples; ++s)
 	{
@@ -125,7 +125,7 @@ double zCovDiff(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B)
 }
 /** Cross-covariance difference, in correlation units. */
 double xzCovDiff(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, const Covariance& P,
-				 const Eigen::MatrixXd& Pzz)
+                 const Eigen::MatrixXd& Pzz)
 {
 	const Eigen::VectorXd sx = P.diagonal().cwiseSqrt(), sz = Pzz.diagonal().cwiseSqrt();
 	return ((A - B).array() / (sx * sz.transpose()).array()).abs().maxCoeff();
@@ -135,14 +135,16 @@ double xzCovDiff(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, const Covar
 
 TEST(UtWeights, SumsAndSpread)
 {
-	for (const UtParams p : {UtParams{}, UtParams{1.0, 0.0, 0.0}, UtParams{1e-3, 2.0, 0.0}, UtParams{0.5, 2.0, 1.0}})
+	for (const UtParams p :
+	     {UtParams{}, UtParams{1.0, 0.0, 0.0}, UtParams{1e-3, 2.0, 0.0}, UtParams{0.5, 2.0, 1.0}})
 		for (int n : {1, 3, 6, 43})
 		{
 			const UtWeights w = UtWeights::make(n, p);
 			const double lambda = p.alpha * p.alpha * (n + p.kappa) - n;
 			EXPECT_NEAR(w.wm0 + 2 * n * w.wi, 1.0, 1e-12 * std::abs(w.wm0) + 1e-12) << n;
-			EXPECT_NEAR(w.wc0 + 2 * n * w.wi, 1.0 + (1 - p.alpha * p.alpha + p.beta), 1e-12 * std::abs(w.wc0) + 1e-12)
-				<< n;
+			EXPECT_NEAR(w.wc0 + 2 * n * w.wi, 1.0 + (1 - p.alpha * p.alpha + p.beta),
+			            1e-12 * std::abs(w.wc0) + 1e-12)
+			    << n;
 			EXPECT_NEAR(w.gamma * w.gamma, n + lambda, 1e-12 * (n + lambda)) << n;
 			EXPECT_NEAR(2 * w.wi * w.gamma * w.gamma, 1.0, 1e-12) << n;  // reproduces P exactly
 			EXPECT_NEAR(w.wm0, lambda / (n + lambda), 1e-12 * std::abs(w.wm0));
@@ -172,15 +174,16 @@ namespace
 {
 struct UtVsMc
 {
-	double shift, mean, pzz, pxz;			   // correct weights vs Monte Carlo
-	double bad_mean, bad_pzz, bad_pxz;	   // uniform weights vs Monte Carlo
+	double shift, mean, pzz, pxz;       // correct weights vs Monte Carlo
+	double bad_mean, bad_pzz, bad_pxz;  // uniform weights vs Monte Carlo
 };
 
 /** h = R_nbᵀ v_n with attitude σ `att_deg` (all axes), everything correlated. */
 UtVsMc bodyVelocityUtVsMonteCarlo(double att_deg)
 {
 	const NavState x = test::makeState(60 * kDeg);
-	const Covariance P = test::correlatedCovariance(test::makeSigmas(Eigen::Vector3d::Constant(att_deg * kDeg)), 17);
+	const Covariance P =
+	    test::correlatedCovariance(test::makeSigmas(Eigen::Vector3d::Constant(att_deg * kDeg)), 17);
 	const MonteCarloMoments mc = monteCarloMeasurement(x, P, 99);
 
 	BodyVelocity h;
@@ -189,8 +192,10 @@ UtVsMc bodyVelocityUtVsMonteCarlo(double att_deg)
 	FilterContext ctx;
 	reference::UtResult ut, bad;
 	const UtWeights uw = UtWeights::make(idx::core_dim, UtParams{});
-	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::fromUt(uw, idx::core_dim), ut));
-	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx, reference::SigmaWeights::uniform(uw.gamma, idx::core_dim), bad));
+	EXPECT_TRUE(reference::unscentedTransform(x, P, h, m, ctx,
+	                                          reference::SigmaWeights::fromUt(uw, idx::core_dim), ut));
+	EXPECT_TRUE(reference::unscentedTransform(
+	    x, P, h, m, ctx, reference::SigmaWeights::uniform(uw.gamma, idx::core_dim), bad));
 	Eigen::VectorXd z0(3);
 	h.predict(x, m, ctx, z0);
 
@@ -202,9 +207,10 @@ UtVsMc bodyVelocityUtVsMonteCarlo(double att_deg)
 	r.bad_mean = zMeanDiff(bad.z_mean, mc.z_mean, mc.Pzz);
 	r.bad_pzz = zCovDiff(bad.Pzz, mc.Pzz);
 	r.bad_pxz = xzCovDiff(bad.Pxz, mc.Pxz, P, mc.Pzz);
-	std::printf("h = R'v, attitude sigma %g deg: mean of h moves %.3f sd from h(x); UT vs MC: mean %.2e sd, "
-				"Pzz %.2e, Pxz %.2e; uniform weights: mean %.2e sd, Pzz %.2e, Pxz %.2e\n",
-				att_deg, r.shift, r.mean, r.pzz, r.pxz, r.bad_mean, r.bad_pzz, r.bad_pxz);
+	std::printf(
+	    "h = R'v, attitude sigma %g deg: mean of h moves %.3f sd from h(x); UT vs MC: mean %.2e sd, "
+	    "Pzz %.2e, Pxz %.2e; uniform weights: mean %.2e sd, Pzz %.2e, Pxz %.2e\n",
+	    att_deg, r.shift, r.mean, r.pzz, r.pxz, r.bad_mean, r.bad_pzz, r.bad_pxz);
 	return r;
 }
 }  // namespace
@@ -265,28 +271,31 @@ TEST(Unscented, PredictionStepMatchesMonteCarlo)
 	Covariance mc_cov, bad_cov;
 	monteCarloPredict(pm, x, P, w, dt, 7, mc_mean, mc_cov);
 	const double gamma = UtWeights::make(idx::core_dim, UtParams{}).gamma;
-	reference::unscentedPredict(pm, x, P, w, Eigen::Vector3d::Zero(), dt, reference::SigmaWeights::uniform(gamma, idx::core_dim),
-								bad_mean, bad_cov);
+	reference::unscentedPredict(pm, x, P, w, Eigen::Vector3d::Zero(), dt,
+	                            reference::SigmaWeights::uniform(gamma, idx::core_dim), bad_mean, bad_cov);
 
 	const NavState centre = pm.propagate(x, w, Eigen::Vector3d::Zero(), dt);
 	const double shift = test::meanDiff(centre, mc_mean, mc_cov);
-	const double dm = test::meanDiff(ukf.state(), mc_mean, mc_cov), dc = test::covDiff(ukf.covariance(), mc_cov);
+	const double dm = test::meanDiff(ukf.state(), mc_mean, mc_cov),
+	             dc = test::covDiff(ukf.covariance(), mc_cov);
 	const double bm = test::meanDiff(bad_mean, mc_mean, mc_cov), bc = test::covDiff(bad_cov, mc_cov);
 	{
 		const TangentVector sd = mc_cov.diagonal().cwiseSqrt();
-		const Covariance rel = ((ukf.covariance() - mc_cov).array() / (sd * sd.transpose()).array()).abs().matrix();
+		const Covariance rel =
+		    ((ukf.covariance() - mc_cov).array() / (sd * sd.transpose()).array()).abs().matrix();
 		Eigen::Index r = 0, c = 0;
 		rel.maxCoeff(&r, &c);
 		const TangentVector mrel = (ukf.state().boxminus(mc_mean).array().abs() / sd.array()).matrix();
 		Eigen::Index mi = 0;
 		mrel.maxCoeff(&mi);
 		std::printf("worst covariance entry (%s, %s), worst mean entry %s\n", tangentNames()[r].c_str(),
-					tangentNames()[c].c_str(), tangentNames()[mi].c_str());
+		            tangentNames()[c].c_str(), tangentNames()[mi].c_str());
 	}
-	std::printf("predict 1 s at 2 rad/s: mean shift of f(x) %.3f sd; UKF vs MC: mean %.2e sd, cov %.2e; "
-				"uniform weights: mean %.2e sd, cov %.2e\n",
-				shift, dm, dc, bm, bc);
-	EXPECT_GT(shift, 0.05);	 // ≫ the Monte Carlo error of ~2e-3 sd
+	std::printf(
+	    "predict 1 s at 2 rad/s: mean shift of f(x) %.3f sd; UKF vs MC: mean %.2e sd, cov %.2e; "
+	    "uniform weights: mean %.2e sd, cov %.2e\n",
+	    shift, dm, dc, bm, bc);
+	EXPECT_GT(shift, 0.05);  // ≫ the Monte Carlo error of ~2e-3 sd
 	// The accelerometer-bias coordinates are NED (state.h): a bias fixed in
 	// the body turns in them with the body's uncertain turn (here 0.1 rad/s of
 	// gyro-bias σ over 1 s), another such higher-order term: 0.059 of the
@@ -304,9 +313,9 @@ TEST(ChiSquareGate, Quantiles)
 	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(1, 0.95), 3.841458820694124, 1e-9);
 	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(2, 0.95), 5.991464547107979, 1e-9);
 	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(3, 0.999), 16.26623619623813, 1e-9);
-	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(3, 0.999), 16.26623619623813, 1e-9);	// cached
+	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(3, 0.999), 16.26623619623813, 1e-9);   // cached
 	EXPECT_NEAR(ManifoldUkf::chiSquareQuantile(2, 0.99), -2 * std::log(0.01), 1e-9);  // closed form for 2 dof
-	EXPECT_TRUE(std::isinf(ManifoldUkf::chiSquareQuantile(4, 1.0)));  // gate disabled
+	EXPECT_TRUE(std::isinf(ManifoldUkf::chiSquareQuantile(4, 1.0)));                  // gate disabled
 }
 
 // A heading the filter does not know must stay unknown through a prediction:
@@ -319,20 +328,22 @@ TEST(Unscented, UnknownHeadingKeepsItsSigmaThroughPrediction)
 	Covariance P = Covariance::Zero(idx::core_dim, idx::core_dim);
 	const TangentVector sig = test::makeSigmas(Eigen::Vector3d(0.5, 0.5, 180) * test::kDeg);
 	P.diagonal() = sig.cwiseProduct(sig);
-	auto headingSigmaAfter = [&](const UtParams& ut) {
+	auto headingSigmaAfter = [&](const UtParams& ut)
+	{
 		ManifoldUkf f(pm, ut);
 		f.initialize(x, P);
-		for (int i = 0; i < 100; ++i) f.predict(Eigen::Vector3d(0.01, -0.02, 0.05), Eigen::Vector3d::Zero(), 0.01);
+		for (int i = 0; i < 100; ++i)
+			f.predict(Eigen::Vector3d(0.01, -0.02, 0.05), Eigen::Vector3d::Zero(), 0.01);
 		return std::sqrt(f.covariance()(2, 2)) / test::kDeg;
 	};
 	UtParams limited;  // default: 90°
 	UtParams unlimited;
 	unlimited.max_attitude_spread_rad = 100;  // the old behaviour
 	const double kept = headingSigmaAfter(limited), collapsed = headingSigmaAfter(unlimited);
-	std::printf("heading sigma after 1 s from 180 deg: %.2f deg with the spread limit, %.2f deg without\n", kept,
-				collapsed);
+	std::printf("heading sigma after 1 s from 180 deg: %.2f deg with the spread limit, %.2f deg without\n",
+	            kept, collapsed);
 	EXPECT_NEAR(kept, 180.0, 1.0);
-	EXPECT_LT(collapsed, 20.0);	 // the failure the limit removes (the test can fail)
+	EXPECT_LT(collapsed, 20.0);  // the failure the limit removes (the test can fail)
 }
 
 namespace
@@ -340,22 +351,22 @@ namespace
 /** h(x) = the azimuth of the body x axis [rad], wrapped residual. */
 class Heading : public MeasurementModel
 {
-   public:
+ public:
 	uint32_t uses() const noexcept override { return kAttitude; }
 	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-						  std::string&) noexcept override
+	                      std::string&) noexcept override
 	{
 		out.clear();
 		return PrepareStatus::Skip;
 	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
-				 Eigen::Ref<Eigen::VectorXd> z) const noexcept override
+	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
 		return true;
 	}
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
 		r[0] = std::remainder(a[0] - b[0], 2 * M_PI);
 	}
@@ -393,11 +404,12 @@ RecoveryOutcome recoverOnce(Recovery how)
 TEST(Recovery, StateBlamedPullsAnOverconfidentHeadingToTheGate)
 {
 	const RecoveryOutcome none = recoverOnce(Recovery::None), noise = recoverOnce(Recovery::Noise),
-						  state = recoverOnce(Recovery::State);
-	std::printf("10 deg off, sigma 0.1 deg, aid 2 deg: noise recovery moves %.3f deg (sigma %.3f), state recovery "
-				"%.3f deg (sigma %.3f, NIS after %.2f)\n",
-				noise.moved_rad / test::kDeg, noise.sigma_rad / test::kDeg, state.moved_rad / test::kDeg,
-				state.sigma_rad / test::kDeg, state.nis_after);
+	                      state = recoverOnce(Recovery::State);
+	std::printf(
+	    "10 deg off, sigma 0.1 deg, aid 2 deg: noise recovery moves %.3f deg (sigma %.3f), state recovery "
+	    "%.3f deg (sigma %.3f, NIS after %.2f)\n",
+	    noise.moved_rad / test::kDeg, noise.sigma_rad / test::kDeg, state.moved_rad / test::kDeg,
+	    state.sigma_rad / test::kDeg, state.nis_after);
 	EXPECT_EQ(none.status, UpdateStatus::Rejected);
 	EXPECT_EQ(noise.status, UpdateStatus::Recovered);
 	EXPECT_EQ(state.status, UpdateStatus::Recovered);

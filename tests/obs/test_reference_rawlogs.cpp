@@ -83,7 +83,8 @@ void expectReferenceDvlV1(const CObservationDVL& d)
 	EXPECT_EQ(kT0Ticks, ticks(d.timestamp));
 	expectPose(d.sensorPose, 0.75, -0.05, 0.32, 0.7853981633974483, 0.0, 0.0);
 	EXPECT_EQ((std::array<double, 3>{1.25, -0.375, 0.0625}), d.velocity_s_mps);
-	EXPECT_EQ((std::array<double, 9>{1e-4, 1e-5, -2e-6, 1e-5, 2e-4, 3e-6, -2e-6, 3e-6, 4e-4}), d.velocity_cov);
+	EXPECT_EQ((std::array<double, 9>{1e-4, 1e-5, -2e-6, 1e-5, 2e-4, 3e-6, -2e-6, 3e-6, 4e-4}),
+	          d.velocity_cov);
 	EXPECT_TRUE(d.bottom_lock);
 	EXPECT_EQ(12.75, d.altitude_m);
 	EXPECT_EQ(0.5235987755982988, d.beam_inclination_rad);
@@ -94,7 +95,8 @@ void expectReferenceDvlV1(const CObservationDVL& d)
 	const double range[4] = {14.5, 14.25, 15.125, 0.0};
 	const bool valid[4] = {true, true, true, false};
 	const double velocity[4] = {0.625, -0.5, 0.125, 0.0};
-	const double azimuth[4] = {0.7853981633974483, 2.356194490192345, -2.356194490192345, -0.7853981633974483};
+	const double azimuth[4] = {0.7853981633974483, 2.356194490192345, -2.356194490192345,
+	                           -0.7853981633974483};
 	for (std::size_t i = 0; i < 4; ++i)
 	{
 		EXPECT_EQ(range[i], d.beams[i].range_m) << i;

@@ -6,7 +6,10 @@ using auvnav_test::CObservationTestTag;
 
 IMPLEMENTS_SERIALIZABLE(CObservationTestTag, CObservation, auvnav_test)
 
-uint8_t CObservationTestTag::serializeGetVersion() const { return 0; }
+uint8_t CObservationTestTag::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationTestTag::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -17,8 +20,11 @@ void CObservationTestTag::serializeFrom(mrpt::serialization::CArchive& in, uint8
 {
 	switch (version)
 	{
-		case 0: in >> timestamp >> sensorLabel >> sensorPose >> value; break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		case 0:
+			in >> timestamp >> sensorLabel >> sensorPose >> value;
+			break;
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
 }
 

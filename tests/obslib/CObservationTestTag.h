@@ -14,7 +14,7 @@ class CObservationTestTag : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationTestTag, auvnav_test)
 
-   public:
+ public:
 	double value = 0;  //!< any number (the tests write the sample index)
 	mrpt::poses::CPose3D sensorPose;
 

@@ -27,7 +27,7 @@ int main(int argc, char** argv)
 			imu->timestamp = stamp;
 			using namespace mrpt::obs;
 			for (const auto idx : {IMU_WX, IMU_WY, IMU_WZ, IMU_X_ACC, IMU_Y_ACC}) imu->set(idx, 0.0);
-			imu->set(IMU_Z_ACC, -9.78);	 // at rest, level
+			imu->set(IMU_Z_ACC, -9.78);  // at rest, level
 			writer.write(*imu);
 			if (k % 10 == 5)
 			{

@@ -42,7 +42,8 @@ const std::string kConfig = kRepo + "/config/flatfish.yaml";
 fs::path workDir()
 {
 	const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-	const fs::path dir = fs::path(AUVNAV_TEST_WORK_DIR) / "exit" / (std::string(info->test_suite_name()) + "." + info->name());
+	const fs::path dir =
+	    fs::path(AUVNAV_TEST_WORK_DIR) / "exit" / (std::string(info->test_suite_name()) + "." + info->name());
 	fs::remove_all(dir);
 	fs::create_directories(dir);
 	return dir;
@@ -50,9 +51,9 @@ fs::path workDir()
 
 struct Outcome
 {
-	int exit_code = -1;	 //!< when it exited
-	int signal = 0;		 //!< when a signal ended it
-	std::string output;	 //!< stdout and stderr
+	int exit_code = -1;  //!< when it exited
+	int signal = 0;      //!< when a signal ended it
+	std::string output;  //!< stdout and stderr
 	double wall_s = 0;
 	long max_rss_kb = 0;  //!< the child's peak resident set (getrusage)
 };
@@ -60,7 +61,7 @@ struct Outcome
 /** Runs `exe` with `args` (stdout+stderr to `dir`/output.txt); with
  *  `kill_after_s` > 0, sends it SIGKILL after that long if still running. */
 Outcome runProgram(const std::string& exe, const std::vector<std::string>& args, const fs::path& dir,
-				   double kill_after_s = 0)
+                   double kill_after_s = 0)
 {
 	const fs::path log = dir / "output.txt";
 	std::vector<std::string> argv_s = {exe};
@@ -113,8 +114,8 @@ Outcome runNavigator(const std::vector<std::string>& args, const fs::path& dir, 
 	return runProgram(AUVNAV_RUN_EXE, args, dir, kill_after_s);
 }
 
-std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog, std::vector<std::string> extra = {},
-								 const std::string& config = kConfig)
+std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog,
+                                 std::vector<std::string> extra = {}, const std::string& config = kConfig)
 {
 	std::vector<std::string> a = {"--config", config, "--out", (dir / "out").string(), "--quiet"};
 	a.insert(a.end(), extra.begin(), extra.end());
@@ -131,8 +132,8 @@ Outcome runKilledMidway(const std::vector<std::string>& args, const fs::path& di
 	Outcome o = runNavigator(args, dir, kill_s);
 	if (o.signal == 0 && o.exit_code >= 0)
 	{
-		std::printf("the run ended in %.2f s, before the kill at %.2f s: again, killed at %.2f s\n", o.wall_s, kill_s,
-					0.5 * o.wall_s);
+		std::printf("the run ended in %.2f s, before the kill at %.2f s: again, killed at %.2f s\n", o.wall_s,
+		            kill_s, 0.5 * o.wall_s);
 		fs::remove_all(dir / "out");
 		o = runNavigator(args, dir, 0.5 * o.wall_s);
 	}
@@ -211,7 +212,8 @@ void writeSampleRepeated(const fs::path& out, int copies)
 /** A clock jump of the whole logger: every observation from `at_s` on is stamped `jump_s` later. */
 Edit clockJump(double at_s, double jump_s)
 {
-	return [=](mrpt::obs::CObservation& o, double t) {
+	return [=](mrpt::obs::CObservation& o, double t)
+	{
 		if (t >= at_s) o.timestamp = mrpt::Clock::fromDouble(mrpt::Clock::toDouble(o.timestamp) + jump_s);
 		return true;
 	};
@@ -238,7 +240,7 @@ std::vector<std::string> errorLines(const std::string& output)
 	std::istringstream in(output);
 	for (std::string l; std::getline(in, l);)
 		if (l.find("error") != std::string::npos || l.find("MRPT") != std::string::npos ||
-			l.find("Location:") != std::string::npos || l.find("Call stack") != std::string::npos)
+		    l.find("Location:") != std::string::npos || l.find("Call stack") != std::string::npos)
 			lines.push_back(l);
 	return lines;
 }
@@ -287,9 +289,9 @@ std::string wholeLinesOf(const fs::path& file)
 	std::string text = slurp(file);
 	if (!text.empty() && text.back() != '\n')
 	{
-		const std::size_t cut = text.rfind('\n') + 1;	// npos + 1 = 0: all of it
+		const std::size_t cut = text.rfind('\n') + 1;  // npos + 1 = 0: all of it
 		std::printf("%s: a partial last line of %zu bytes (the kill cut a write) dropped\n", file.c_str(),
-					text.size() - cut);
+		            text.size() - cut);
 		text.erase(cut);
 	}
 	return text;
@@ -314,7 +316,8 @@ std::size_t expectWholeCsv(const fs::path& file, const std::vector<std::size_t>&
 		EXPECT_EQ(f.size(), n) << file << " row " << rows + 1 << ": " << l.substr(0, 200);
 		if (f.size() != n) return rows;
 		EXPECT_TRUE(isNumber(f[0])) << file << " row " << rows + 1;
-		for (std::size_t c : numeric_columns) EXPECT_TRUE(isNumber(f[c])) << file << " row " << rows + 1 << " column " << c;
+		for (std::size_t c : numeric_columns)
+			EXPECT_TRUE(isNumber(f[c])) << file << " row " << rows + 1 << " column " << c;
 	}
 	return rows;
 }
@@ -392,7 +395,8 @@ TEST(RunExit, ACorruptRawlogIsBadInputInOneLineWithoutMrptsReport)
 	writeEditedSample(plain, 20, [](auto&, double) { return true; });
 	std::string bytes = slurp(plain);
 	ASSERT_GT(bytes.size(), 200000u);
-	for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 64; ++i) bytes[i] = static_cast<char>(0xA5 ^ i);
+	for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 64; ++i)
+		bytes[i] = static_cast<char>(0xA5 ^ i);
 	std::ofstream(dir / "corrupt.rawlog", std::ios::binary) << bytes;
 	const Outcome o = runNavigator(runArgs(dir, (dir / "corrupt.rawlog").string()), dir);
 	EXPECT_EQ(o.exit_code, auvnav::cli::kExitBadInput) << o.output;
@@ -420,19 +424,23 @@ TEST(RunExit, ALogWithoutAValidGpsFixNeverInitialises)
 	const auto dir = workDir();
 	const fs::path log = dir / "no_fix.rawlog";
 	std::size_t gps = 0;
-	writeEditedSample(log, 60, [&](mrpt::obs::CObservation& o, double) {
-		if (auto* g = dynamic_cast<mrpt::obs::CObservationGPS*>(&o); g && g->has_GGA_datum())
-		{
-			g->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.fix_quality = 0;
-			++gps;
-		}
-		return true;
-	});
+	writeEditedSample(log, 60,
+	                  [&](mrpt::obs::CObservation& o, double)
+	                  {
+		                  if (auto* g = dynamic_cast<mrpt::obs::CObservationGPS*>(&o);
+		                      g && g->has_GGA_datum())
+		                  {
+			                  g->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.fix_quality = 0;
+			                  ++gps;
+		                  }
+		                  return true;
+	                  });
 	ASSERT_GT(gps, 30u);
 	const Outcome o = runNavigator(runArgs(dir, log.string()), dir);
 	EXPECT_EQ(o.exit_code, auvnav::cli::kExitNotInitialized) << o.output;
-	EXPECT_NE(o.output.find("auvnav-run: not initialised: 5 agreeing GPS fixes on label 'GPS'"), std::string::npos)
-		<< o.output;
+	EXPECT_NE(o.output.find("auvnav-run: not initialised: 5 agreeing GPS fixes on label 'GPS'"),
+	          std::string::npos)
+	    << o.output;
 	const Json s = summaryOf(dir);
 	EXPECT_TRUE(s["completed"].get<bool>());  // read to its end: complete, but no result
 	EXPECT_EQ(s["status"], "not_initialized");
@@ -450,9 +458,10 @@ TEST(RunExit, YamlErrorsStopTheRunInOneLine)
 	{
 		std::string name, append, expected;
 	};
-	for (const Case& c : {Case{"duplicate", "outputs:\n  rate_hz: 5\n", ": outputs: duplicate key (first at line "},
-						  Case{"second_document", "---\noutputs: {rate_hz: 5}\n", ": a second YAML document"},
-						  Case{"alias", "extra: *rate\n", ": extra: aliases (*rate) are not supported"}})
+	for (const Case& c :
+	     {Case{"duplicate", "outputs:\n  rate_hz: 5\n", ": outputs: duplicate key (first at line "},
+	      Case{"second_document", "---\noutputs: {rate_hz: 5}\n", ": a second YAML document"},
+	      Case{"alias", "extra: *rate\n", ": extra: aliases (*rate) are not supported"}})
 	{
 		SCOPED_TRACE(c.name);
 		const fs::path config = dir / "config" / (c.name + ".yaml");
@@ -473,15 +482,17 @@ TEST(RunExit, YamlErrorsStopTheRunInOneLine)
  *  `kill_s` and checks what it left: every text output ends in a whole line
  *  and parses to its last line, summary.json is valid JSON with completed
  *  false, rewritten during the run. */
-void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlog, double kill_s, bool check_progress)
+void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlog, double kill_s,
+                                     bool check_progress)
 {
 	SCOPED_TRACE("killed after " + std::to_string(kill_s) + " s");
 	const fs::path dir = base / ("kill_" + std::to_string(int(kill_s)));
 	fs::create_directories(dir);
 	const Outcome o = runKilledMidway(
-		runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}), dir,
-		kill_s);
-	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code << "): " << o.output;
+	    runArgs(dir, rawlog.string(), {"--set", "outputs.summary_every_s=1", "--set", "outputs.rate_hz=100"}),
+	    dir, kill_s);
+	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill (exit " << o.exit_code
+	                             << "): " << o.output;
 	const fs::path out = dir / "out";
 	const std::size_t states = expectWholeCsv(out / "states.csv", {1, 2, 3, 4, 5, 6, 7});
 	const std::size_t tum = expectWholeTum(out / "trajectory.tum");
@@ -505,9 +516,8 @@ void expectKilledRunLeftWholeOutputs(const fs::path& base, const fs::path& rawlo
 		EXPECT_GT(s["predictions"].get<double>(), 1000.0);
 	}
 	std::printf("killed at %.0f s: %zu state rows, summary at %.0f s of data\n", kill_s, states,
-				s["data_duration_s"].get<double>());
+	            s["data_duration_s"].get<double>());
 }
-
 
 // A real SIGKILL of the real process at ~2 s and ~5 s of the sample played
 // twice (sooner where the run would end first).
@@ -570,16 +580,19 @@ TEST(RunClockJump, ReinitialiseCompletesWithTheDataAfterTheJump)
 		const fs::path log = dir / "jump.rawlog";
 		std::size_t imu = 0, imu_after = 0;
 		double last_imu_s = 0;
-		writeEditedSample(log, 90, [&, jump_at = clockJump(60, jump)](mrpt::obs::CObservation& o, double t) {
-			jump_at(o, t);
-			if (o.sensorLabel != "IMU") return true;
-			++imu;
-			if (t >= 60) ++imu_after;
-			last_imu_s = mrpt::Clock::toDouble(o.timestamp);
-			return true;
-		});
+		writeEditedSample(log, 90,
+		                  [&, jump_at = clockJump(60, jump)](mrpt::obs::CObservation& o, double t)
+		                  {
+			                  jump_at(o, t);
+			                  if (o.sensorLabel != "IMU") return true;
+			                  ++imu;
+			                  if (t >= 60) ++imu_after;
+			                  last_imu_s = mrpt::Clock::toDouble(o.timestamp);
+			                  return true;
+		                  });
 		ASSERT_GT(imu_after, 2900u);
-		const Outcome o = runNavigator(runArgs(dir, log.string(), {"--set", "clock.on_jump=reinitialize"}), dir);
+		const Outcome o =
+		    runNavigator(runArgs(dir, log.string(), {"--set", "clock.on_jump=reinitialize"}), dir);
 		EXPECT_EQ(o.exit_code, auvnav::cli::kExitOk) << o.output;
 		const Json s = summaryOf(dir);
 		EXPECT_TRUE(s["completed"].get<bool>());
@@ -592,7 +605,8 @@ TEST(RunClockJump, ReinitialiseCompletesWithTheDataAfterTheJump)
 		const Json& imu_stats = s["sensors"][0];
 		ASSERT_EQ(imu_stats["plugin"], "(prediction)");
 		EXPECT_EQ(s["predictions"].get<std::size_t>(), imu_stats["accepted"].get<std::size_t>());
-		EXPECT_EQ(imu_stats["accepted"].get<std::size_t>() + imu_stats["before_init"].get<std::size_t>(), imu);
+		EXPECT_EQ(imu_stats["accepted"].get<std::size_t>() + imu_stats["before_init"].get<std::size_t>(),
+		          imu);
 		EXPECT_LT(imu_stats["before_init"].get<std::size_t>(), 2 * 800u);
 		EXPECT_GT(imu_stats["before_init"].get<std::size_t>(), 2 * 100u);  // levelled twice
 		// The 30 s after the jump are in the outputs at 10 Hz from the new start
@@ -624,18 +638,19 @@ fs::path writeLongMission(const fs::path& dir, int cycles)
 	}
 	const auto dur = text.find("max_duration_s:");
 	text.replace(dur, text.find('\n', dur) - dur, "max_duration_s: " + std::to_string(600 * cycles + 900));
-	text += "plan:\n"
-			"  - {goto: [140, 40], surface: true, speed_mps: 0.5}\n"
-			"  - repeat: " +
-			std::to_string(cycles) +
-			"\n"
-			"    steps:\n"
-			"      - {wait_s: 50, depth_m: 8}\n"
-			"      - {goto: [180, 40], depth_m: 8, speed_mps: 0.4}\n"
-			"      - {goto: [180, 80], depth_m: 8, speed_mps: 0.4}\n"
-			"      - {goto: [140, 80], depth_m: 8, speed_mps: 0.4}\n"
-			"      - {goto: [140, 40], depth_m: 8, speed_mps: 0.4}\n"
-			"      - {wait_s: 90, surface: true}\n";
+	text +=
+	    "plan:\n"
+	    "  - {goto: [140, 40], surface: true, speed_mps: 0.5}\n"
+	    "  - repeat: " +
+	    std::to_string(cycles) +
+	    "\n"
+	    "    steps:\n"
+	    "      - {wait_s: 50, depth_m: 8}\n"
+	    "      - {goto: [180, 40], depth_m: 8, speed_mps: 0.4}\n"
+	    "      - {goto: [180, 80], depth_m: 8, speed_mps: 0.4}\n"
+	    "      - {goto: [140, 80], depth_m: 8, speed_mps: 0.4}\n"
+	    "      - {goto: [140, 40], depth_m: 8, speed_mps: 0.4}\n"
+	    "      - {wait_s: 90, surface: true}\n";
 	const fs::path file = dir / "long.yaml";
 	std::ofstream(file) << text;
 	return file;
@@ -653,11 +668,13 @@ LongRun simulateAndRun(const fs::path& base, const std::string& name, int cycles
 	const fs::path dir = base / name;
 	fs::create_directories(dir);
 	const fs::path mission = writeLongMission(dir, cycles);
-	const Outcome sim = runProgram(AUVNAV_SIM_EXE, {mission.string(), "--seed", "1", "--out", (dir / "sim").string()}, dir);
+	const Outcome sim =
+	    runProgram(AUVNAV_SIM_EXE, {mission.string(), "--seed", "1", "--out", (dir / "sim").string()}, dir);
 	EXPECT_EQ(sim.exit_code, 0) << sim.output;
 	LongRun r;
 	// 1 Hz rows: a day of states.csv at 10 Hz would be ~1 GB.
-	r.run = runNavigator(runArgs(dir, (dir / "sim" / "long.rawlog").string(), {"--set", "outputs.rate_hz=1"}), dir);
+	r.run = runNavigator(runArgs(dir, (dir / "sim" / "long.rawlog").string(), {"--set", "outputs.rate_hz=1"}),
+	                     dir);
 	fs::remove(dir / "sim" / "long.rawlog");
 	fs::remove(dir / "sim" / "ground_truth.csv");
 	r.summary = summaryOf(dir);
@@ -665,7 +682,7 @@ LongRun simulateAndRun(const fs::path& base, const std::string& name, int cycles
 	// Every field a finite number: no NaN or Inf in any state or σ.
 	std::ifstream states(dir / "out" / "states.csv");
 	std::string line;
-	std::getline(states, line);	 // header
+	std::getline(states, line);  // header
 	std::size_t non_finite = 0;
 	for (std::size_t row = 1; std::getline(states, line); ++row)
 		for (const auto& f : csvFields(line))
@@ -673,7 +690,8 @@ LongRun simulateAndRun(const fs::path& base, const std::string& name, int cycles
 			char* end = nullptr;
 			const double v = std::strtod(f.c_str(), &end);
 			if (end != f.c_str() + f.size() || !std::isfinite(v))
-				if (++non_finite <= 5) ADD_FAILURE() << name << ": states.csv row " << row << ": '" << f << "'";
+				if (++non_finite <= 5)
+					ADD_FAILURE() << name << ": states.csv row " << row << ": '" << f << "'";
 		}
 	EXPECT_EQ(non_finite, 0u) << name;
 	return r;
@@ -698,9 +716,10 @@ TEST(RunLongSlow, ADayAtSeaStaysFiniteHealthyAndBoundedInMemory)
 	const double day_s = day.summary["data_duration_s"].get<double>();
 	EXPECT_GT(day_s, 24 * 3600.0);
 	EXPECT_GT(day.rows, 86000u);
-	std::printf("1 h run: %.0f s of data, max RSS %ld kB, %.0f s; 24 h run: %.0f s of data, max RSS %ld kB, %.0f s\n",
-				hour.summary["data_duration_s"].get<double>(), hour.run.max_rss_kb, hour.run.wall_s, day_s,
-				day.run.max_rss_kb, day.run.wall_s);
+	std::printf(
+	    "1 h run: %.0f s of data, max RSS %ld kB, %.0f s; 24 h run: %.0f s of data, max RSS %ld kB, %.0f s\n",
+	    hour.summary["data_duration_s"].get<double>(), hour.run.max_rss_kb, hour.run.wall_s, day_s,
+	    day.run.max_rss_kb, day.run.wall_s);
 	EXPECT_LE(day.run.max_rss_kb, 1.05 * hour.run.max_rss_kb);
 }
 
@@ -721,9 +740,11 @@ double numberAfter(const std::string& text, const std::string& key)
 	const auto at = text.find(key);
 	return at == std::string::npos ? NAN : std::strtod(text.c_str() + at + key.size(), nullptr);
 }
-Outcome evaluate(const fs::path& dir, const fs::path& run, const std::string& truth, std::vector<std::string> extra = {})
+Outcome evaluate(const fs::path& dir, const fs::path& run, const std::string& truth,
+                 std::vector<std::string> extra = {})
 {
-	std::vector<std::string> a = {"--run", run.string(), "--truth", truth, "--out", (dir / "eval").string(), "--every", "5"};
+	std::vector<std::string> a = {"--run",   run.string(), "--truth", truth, "--out", (dir / "eval").string(),
+	                              "--every", "5"};
 	a.insert(a.end(), extra.begin(), extra.end());
 	return runProgram(AUVNAV_EVAL_EXE, a, dir);
 }
@@ -744,7 +765,7 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 	const fs::path out = dir / "out";
 	EXPECT_EQ(firstLineOf(out / "smoothed_states.csv"), firstLineOf(out / "states.csv") + ",smoother");
 	const std::size_t rows = expectWholeCsv(out / "smoothed_states.csv");
-	EXPECT_GT(rows, 780u);	// ~14 min of data at one kept tick a second, and one row per segment end
+	EXPECT_GT(rows, 780u);  // ~14 min of data at one kept tick a second, and one row per segment end
 	EXPECT_LT(rows, 900u);
 	std::ifstream js(out / "smoother.json");
 	const Json j = Json::parse(js);
@@ -753,7 +774,7 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 	for (const auto& sensor : summary["sensors"]) recoveries += sensor["recovered"].get<std::size_t>();
 	EXPECT_GT(recoveries, 0u);
 	EXPECT_EQ(j["rows"].get<std::size_t>(), rows);
-	EXPECT_EQ(j["segment_ends"].get<std::size_t>(), recoveries + 1);	 // and the end of the run
+	EXPECT_EQ(j["segment_ends"].get<std::size_t>(), recoveries + 1);  // and the end of the run
 	// A segment's end shares its time with the next one's start: one row each.
 	EXPECT_EQ(j["smoothed"].get<std::size_t>(), rows - 1);
 	EXPECT_EQ(j["filtered_kept"].get<std::size_t>(), 0u);
@@ -777,7 +798,8 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 #endif
 	const fs::path across = dir / "across";
 	fs::create_directories(across);
-	const Outcome a = runNavigator(runArgs(across, kSample, {"--smooth", "--set", "smoother.across_recoveries=true"}), across);
+	const Outcome a = runNavigator(
+	    runArgs(across, kSample, {"--smooth", "--set", "smoother.across_recoveries=true"}), across);
 	ASSERT_EQ(a.exit_code, 0) << a.output;
 	std::ifstream ja(across / "out" / "smoother.json");
 	const Json jj = Json::parse(ja);
@@ -785,8 +807,8 @@ TEST(RunSmooth, TheSampleIsSmoothedInTheFiltersFormats)
 	const Outcome eva = evaluate(across, across / "out", kRepo + "/share/sample/ground_truth.csv");
 	ASSERT_EQ(eva.exit_code, 0) << eva.output;
 	const double ratio_across = numberAfter(eva.output, "Smoothed/filtered dive RMS: mean ");
-	std::printf("sample: smoothed/filtered dive RMS %.3f (segments at recoveries), %.3f (across them)\n", ratio,
-				ratio_across);
+	std::printf("sample: smoothed/filtered dive RMS %.3f (segments at recoveries), %.3f (across them)\n",
+	            ratio, ratio_across);
 	EXPECT_LT(ratio_across, 0.9) << eva.output;
 }
 
@@ -815,8 +837,8 @@ TEST(RunSmooth, NoRecordingIsAOneLineError)
 	const Outcome s = runProgram(AUVNAV_SMOOTH_EXE, {dir.string()}, dir);
 	EXPECT_EQ(s.exit_code, auvnav::cli::kExitBadInput) << s.output;
 	EXPECT_NE(s.output.find("stretches.bin: no stretch file (was the run made with auvnav-run --smooth?)"),
-			  std::string::npos)
-		<< s.output;
+	          std::string::npos)
+	    << s.output;
 	EXPECT_EQ(std::count(s.output.begin(), s.output.end(), '\n'), 1) << s.output;
 }
 
@@ -832,15 +854,17 @@ TEST(RunSmooth, ADenialIsBridgedFromBothEnds)
 	GTEST_SKIP() << "29 min of data, twice: ~12 min under AddressSanitizer; the Release pass runs it";
 #endif
 	const auto dir = workDir();
-	const Outcome sim = runProgram(AUVNAV_SIM_EXE,
-								   {kRepo + "/config/missions/adcp_square.yaml", "--seed", "1", "--out", (dir / "sim").string()}, dir);
+	const Outcome sim = runProgram(
+	    AUVNAV_SIM_EXE,
+	    {kRepo + "/config/missions/adcp_square.yaml", "--seed", "1", "--out", (dir / "sim").string()}, dir);
 	ASSERT_EQ(sim.exit_code, 0) << sim.output;
 	const std::string truth = (dir / "sim" / "ground_truth.csv").string();
 	struct Figures
 	{
 		double ratio, mid_f, mid_s;
 	};
-	auto run = [&](const fs::path& d, std::vector<std::string> extra) {
+	auto run = [&](const fs::path& d, std::vector<std::string> extra)
+	{
 		fs::create_directories(d);
 		std::vector<std::string> a = {"--smooth", "--deny", "DVL:600:1600", "--deny", "GPS:600:1600"};
 		a.insert(a.end(), extra.begin(), extra.end());
@@ -851,13 +875,15 @@ TEST(RunSmooth, ADenialIsBridgedFromBothEnds)
 		const Outcome s = evaluate(d, d / "out", truth, {"--at", "1100", "--smoothed"});
 		EXPECT_EQ(s.exit_code, 0) << s.output;
 		return Figures{numberAfter(f.output, "Smoothed/filtered dive RMS: mean "),
-					   numberAfter(f.output, "after the truth's start: "), numberAfter(s.output, "after the truth's start: ")};
+		               numberAfter(f.output, "after the truth's start: "),
+		               numberAfter(s.output, "after the truth's start: ")};
 	};
 	const Figures segmented = run(dir / "default", {});
 	const Figures across = run(dir / "across", {"--set", "smoother.across_recoveries=true"});
-	std::printf("denial: smoothed/filtered dive RMS %.3f (%.3f across recoveries); mid-denial error %.2f m filtered, "
-				"%.2f m smoothed (%.2f m across)\n",
-				segmented.ratio, across.ratio, segmented.mid_f, segmented.mid_s, across.mid_s);
+	std::printf(
+	    "denial: smoothed/filtered dive RMS %.3f (%.3f across recoveries); mid-denial error %.2f m filtered, "
+	    "%.2f m smoothed (%.2f m across)\n",
+	    segmented.ratio, across.ratio, segmented.mid_f, segmented.mid_s, across.mid_s);
 	EXPECT_LT(segmented.ratio, 0.8);
 	EXPECT_LT(segmented.mid_s, segmented.mid_f);
 	EXPECT_LT(across.ratio, 0.35);

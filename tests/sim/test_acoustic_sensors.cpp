@@ -36,7 +36,8 @@ TEST(DvlSim, BottomLockOnlyInsideTheAltitudeWindow)
 	const double seabed = 40;
 	const Environment env = Environment::fromConfig(test::flatEnvironment(seabed), 1);
 	const double sensor_below_cg = dvl_cfg.vector3("position_m").z();
-	auto lockedFraction = [&](double altitude) {
+	auto lockedFraction = [&](double altitude)
+	{
 		DvlSim dvl(dvl_cfg, 3);
 		Scene s(seabed - altitude - sensor_below_cg);
 		int locked = 0;
@@ -45,7 +46,7 @@ TEST(DvlSim, BottomLockOnlyInsideTheAltitudeWindow)
 	};
 	EXPECT_EQ(lockedFraction(0.5 * min_alt), 0.0);
 	EXPECT_EQ(lockedFraction(max_alt + 2.0), 0.0);
-	EXPECT_GT(lockedFraction(10.0), 0.99);	// a 1 % beam dropout may cost a ping now and then
+	EXPECT_GT(lockedFraction(10.0), 0.99);  // a 1 % beam dropout may cost a ping now and then
 	EXPECT_GT(lockedFraction(min_alt + 0.2), 0.99);
 }
 
@@ -55,14 +56,14 @@ TEST(DvlSim, VelocityAndAltitudeMatchTheTruthInTheSensorFrame)
 	const Environment env = Environment::fromConfig(test::flatEnvironment(30), 1);
 	DvlSim dvl(dvl_cfg, 5);
 	Scene s(10.0, {0.6, -0.1, 0.02});
-	const double yaw_mount = -22.5 * kDeg;	// nominal; the true one adds 0.15°
+	const double yaw_mount = -22.5 * kDeg;  // nominal; the true one adds 0.15°
 	Eigen::Vector3d mean = Eigen::Vector3d::Zero();
 	double alt = 0;
 	int n = 0;
 	for (int k = 0; k < 500; ++k)
 	{
 		const auto o = dvl.sample(s.t, env);
-		if (!o->bottom_lock) continue;	// two of four beams dropped (rare)
+		if (!o->bottom_lock) continue;  // two of four beams dropped (rare)
 		mean += Eigen::Vector3d(o->velocity_s_mps[0], o->velocity_s_mps[1], o->velocity_s_mps[2]);
 		alt += o->altitude_m;
 		++n;
@@ -72,8 +73,8 @@ TEST(DvlSim, VelocityAndAltitudeMatchTheTruthInTheSensorFrame)
 	mean /= n;
 	alt /= n;
 	const Eigen::Vector3d v_s_nominal =
-		Eigen::AngleAxisd(yaw_mount, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose() *
-		Eigen::Vector3d(0.6, -0.1, 0.02);
+	    Eigen::AngleAxisd(yaw_mount, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose() *
+	    Eigen::Vector3d(0.6, -0.1, 0.02);
 	// Scale factor 0.2 % and 0.15° misalignment: a few mm/s at most.
 	EXPECT_LT((mean - v_s_nominal).norm(), 0.005);
 	EXPECT_NEAR(alt, 30 - 10 - dvl_cfg.vector3("position_m").z(), 0.01);
@@ -102,8 +103,8 @@ TEST(AdcpSim, CellsBeyondTheSeabedAreInvalid)
 			valid_inside += o->cells[i].valid;
 		}
 	}
-	EXPECT_EQ(inside, 9);  // (10 − 4.206) cos 30° = 5.02 m: cells ending at 1.0 … 5.0 m
-	EXPECT_GE(valid_inside, 8);	 // correlation falls with range; near cells pass
+	EXPECT_EQ(inside, 9);        // (10 − 4.206) cos 30° = 5.02 m: cells ending at 1.0 … 5.0 m
+	EXPECT_GE(valid_inside, 8);  // correlation falls with range; near cells pass
 }
 
 TEST(AdcpSim, ValidCellsMeasureCurrentRelativeToTheSensor)
@@ -128,7 +129,8 @@ TEST(AdcpSim, ValidCellsMeasureCurrentRelativeToTheSensor)
 	}
 	ASSERT_GT(n, 1000);
 	mean /= n;
-	const Eigen::Matrix3d R_sn = Eigen::AngleAxisd(-22.5 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
+	const Eigen::Matrix3d R_sn =
+	    Eigen::AngleAxisd(-22.5 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix().transpose();
 	const Eigen::Vector3d expected = R_sn * Eigen::Vector3d(0.2 - 0.5, -0.1, 0);
 	// Within the configured bias (σ 1 cm/s per axis) plus misalignment.
 	EXPECT_LT((mean - expected).head<2>().norm(), 0.04);
@@ -167,7 +169,8 @@ TEST(GpsSim, FixesOnlyWithTheAntennaAboveWaterAfterReacquisition)
 	const auto o = gps.sample(t, frame);
 	ASSERT_TRUE(o);
 	const auto& gga = o->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>();
-	const Eigen::Vector3d p = frame.toNed({gga.fields.latitude_degrees * kDeg, gga.fields.longitude_degrees * kDeg, 0});
+	const Eigen::Vector3d p =
+	    frame.toNed({gga.fields.latitude_degrees * kDeg, gga.fields.longitude_degrees * kDeg, 0});
 	EXPECT_LT(p.head<2>().norm(), 70.0);
 }
 

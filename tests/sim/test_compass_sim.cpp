@@ -18,12 +18,16 @@ constexpr double kDeg = M_PI / 180;
 
 config::Node compassConfig(double noise_deg, double bias_deg)
 {
-	return config::Node::fromText("rate_hz: 10\nposition_m: [0.4, 0, -0.1]\nnoise_sigma_deg: " + std::to_string(noise_deg) +
-									  "\nbias_deg: " + std::to_string(bias_deg) + "\n",
-								  "<compass>");
+	return config::Node::fromText(
+	    "rate_hz: 10\nposition_m: [0.4, 0, -0.1]\nnoise_sigma_deg: " + std::to_string(noise_deg) +
+	        "\nbias_deg: " + std::to_string(bias_deg) + "\n",
+	    "<compass>");
 }
 
-double wrap(double a) { return std::remainder(a, 2 * M_PI); }
+double wrap(double a)
+{
+	return std::remainder(a, 2 * M_PI);
+}
 
 struct AtYaw
 {
@@ -32,7 +36,7 @@ struct AtYaw
 	explicit AtYaw(double yaw_deg)
 	{
 		x.q_nb = Eigen::AngleAxisd(yaw_deg * kDeg, Eigen::Vector3d::UnitZ()) *
-				 Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitY());
+		         Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitY());
 		t.x = &x;
 		t.stamp = mrpt::Clock::fromDouble(1492693200.5);
 	}
@@ -77,7 +81,8 @@ TEST(CompassSim, NoiseHasTheConfiguredSigma)
 
 TEST(CompassSim, MisspelledKeyIsRefusedWithItsName)
 {
-	const auto n = config::Node::fromText("rate_hz: 10\nposition_m: [0, 0, 0]\nnoise_sigma_deg: 1\nbias_dg: 2\n", "<c>");
+	const auto n =
+	    config::Node::fromText("rate_hz: 10\nposition_m: [0, 0, 0]\nnoise_sigma_deg: 1\nbias_dg: 2\n", "<c>");
 	CompassSim compass(n, 0, 1);
 	try
 	{

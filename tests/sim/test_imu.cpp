@@ -22,11 +22,12 @@ const earth::Geodetic kSalvador{-12.975 * kDeg, -38.43 * kDeg, 0.0};
 config::Node imuWithoutBiases()
 {
 	return config::Node::fromText(
-		"rate_hz: 100\nposition_m: [0.29424, 0, -0.02863]\n"
-		"gyro: {random_walk: 0.012, bias_instability: 0, bias_correlation_time_s: 300, turn_on_bias_sigma: 0}\n"
-		"accelerometer: {random_walk: 0.12, bias_instability: 0, bias_correlation_time_s: 300, "
-		"turn_on_bias_sigma: 0}\n",
-		"<imu without biases>");
+	    "rate_hz: 100\nposition_m: [0.29424, 0, -0.02863]\n"
+	    "gyro: {random_walk: 0.012, bias_instability: 0, bias_correlation_time_s: 300, turn_on_bias_sigma: "
+	    "0}\n"
+	    "accelerometer: {random_walk: 0.12, bias_instability: 0, bias_correlation_time_s: 300, "
+	    "turn_on_bias_sigma: 0}\n",
+	    "<imu without biases>");
 }
 
 /** Overlapping Allan deviation of `y` (sample period dt) at cluster size m. */
@@ -52,11 +53,11 @@ TEST(ImuAtRest, MeanSpecificForceIsNormalGravityAndMeanRateIsEarthRate)
 	const earth::TangentFrame frame(kSalvador);
 	ImuSim imu(imuWithoutBiases(), 7);
 	VehicleState x;
-	x.p_n = {0, 0, 10};	 // 10 m deep, at rest
+	x.p_n = {0, 0, 10};  // 10 m deep, at rest
 	const double heading = 37 * kDeg;
 	x.q_nb = Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ());
 	Truth t;
-	t.x = &x;  // at rest: ν = 0 and ν̇ = 0
+	t.x = &x;             // at rest: ν = 0 and ν̇ = 0
 	const int n = 60000;  // 10 min at 100 Hz
 	Eigen::Vector3d f_sum = Eigen::Vector3d::Zero(), w_sum = Eigen::Vector3d::Zero();
 	for (int k = 0; k < n; ++k)
@@ -64,8 +65,9 @@ TEST(ImuAtRest, MeanSpecificForceIsNormalGravityAndMeanRateIsEarthRate)
 		t.t_s = 0.01 * k;
 		const auto o = imu.sample(t, frame);
 		f_sum += Eigen::Vector3d(o->get(mrpt::obs::IMU_X_ACC), o->get(mrpt::obs::IMU_Y_ACC),
-								 o->get(mrpt::obs::IMU_Z_ACC));
-		w_sum += Eigen::Vector3d(o->get(mrpt::obs::IMU_WX), o->get(mrpt::obs::IMU_WY), o->get(mrpt::obs::IMU_WZ));
+		                         o->get(mrpt::obs::IMU_Z_ACC));
+		w_sum +=
+		    Eigen::Vector3d(o->get(mrpt::obs::IMU_WX), o->get(mrpt::obs::IMU_WY), o->get(mrpt::obs::IMU_WZ));
 	}
 	const Eigen::Vector3d f_mean = f_sum / n, w_mean = w_sum / n;
 	// White-noise σ of the mean: density / √(n dt).
@@ -110,7 +112,7 @@ TEST(ImuNoise, SimulatedGyroAllanDeviationMatchesArwAndBiasInstability)
 {
 	// Configured KVH-1750-grade figures (config/sensors/flatfish_sensors.yaml).
 	InertialAxisErrorParams p;
-	p.random_walk = 0.012 * kDeg / 60;	// rad/√s
+	p.random_walk = 0.012 * kDeg / 60;        // rad/√s
 	p.bias_instability = 0.05 * kDeg / 3600;  // rad/s
 	p.bias_tau_s = 3000;
 	p.turn_on_sigma = 0;
@@ -136,7 +138,8 @@ TEST(ImuNoise, SimulatedGyroAllanDeviationMatchesArwAndBiasInstability)
 	EXPECT_NEAR(adev_min, p.bias_instability, 0.2 * p.bias_instability);
 	RecordProperty("adev_1s_deg_per_sqrt_h", std::to_string(adev_1s / kDeg * 60));
 	RecordProperty("adev_min_deg_per_h", std::to_string(adev_min / kDeg * 3600));
-	std::printf("gyro Allan deviation: at 1 s %.5f deg/sqrt(h) (configured ARW 0.012), minimum %.4f deg/h "
-				"(configured bias instability 0.05)\n",
-				adev_1s / kDeg * 60, adev_min / kDeg * 3600);
+	std::printf(
+	    "gyro Allan deviation: at 1 s %.5f deg/sqrt(h) (configured ARW 0.012), minimum %.4f deg/h "
+	    "(configured bias instability 0.05)\n",
+	    adev_1s / kDeg * 60, adev_min / kDeg * 3600);
 }

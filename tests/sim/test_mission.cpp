@@ -99,7 +99,8 @@ TEST(Mission, BadConfigValuesAreRefusedWithFileAndKey)
 	std::string text = slurp(kMission);
 	// Point the relative includes back to the repository.
 	const std::string repo = AUVNAV_SOURCE_DIR;
-	auto replace = [&](const std::string& from, const std::string& to) {
+	auto replace = [&](const std::string& from, const std::string& to)
+	{
 		const auto pos = text.find(from);
 		ASSERT_NE(pos, std::string::npos) << from;
 		text.replace(pos, from.size(), to);
@@ -139,7 +140,8 @@ TEST(Mission, ShippedSampleIsReproducedByItsDocumentedCommand)
 	const auto spec = sim::MissionSpec::load(repo + "/config/missions/sample.yaml");
 	const fs::path d = scratch("sample");
 	const auto summary = sim::runMission(spec, 1, d.string());
-	auto lastRow = [](const fs::path& csv) {
+	auto lastRow = [](const fs::path& csv)
+	{
 		std::ifstream f(csv);
 		std::string line, last;
 		while (std::getline(f, line))
@@ -157,8 +159,9 @@ TEST(Mission, ShippedSampleIsReproducedByItsDocumentedCommand)
 	std::map<std::string, std::size_t> counts;
 	while (auto o = shipped_log.next()) ++counts[o->sensorLabel];
 	EXPECT_EQ(counts, summary.observations);
-	EXPECT_LT(fs::file_size(repo + "/share/sample/sample.rawlog") + fs::file_size(repo + "/share/sample/ground_truth.csv") +
-				  fs::file_size(repo + "/share/sample/ground_truth.tum"),
-			  15u * 1000 * 1000);
+	EXPECT_LT(fs::file_size(repo + "/share/sample/sample.rawlog") +
+	              fs::file_size(repo + "/share/sample/ground_truth.csv") +
+	              fs::file_size(repo + "/share/sample/ground_truth.tum"),
+	          15u * 1000 * 1000);
 	fs::remove_all(d);
 }

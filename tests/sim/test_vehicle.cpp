@@ -12,10 +12,10 @@ namespace
 {
 /** Runs `seconds` of dynamics at 100 Hz with constant commands, level, deep. */
 VehicleState runConstant(const Vehicle& v, const Eigen::VectorXd& cmd, double seconds,
-						 const Eigen::Vector3d& current_n = Eigen::Vector3d::Zero())
+                         const Eigen::Vector3d& current_n = Eigen::Vector3d::Zero())
 {
 	VehicleState x;
-	x.p_n = {0, 0, 50};	 // deep: fully wetted hull
+	x.p_n = {0, 0, 50};  // deep: fully wetted hull
 	x.thrust_n = Eigen::VectorXd::Zero(cmd.size());
 	for (int k = 0; k < static_cast<int>(seconds * 100); ++k) v.step(x, cmd, current_n, 0.01);
 	return x;
@@ -48,14 +48,14 @@ TEST(Vehicle, UnitModelTwoNewtonsGiveOneMetrePerSecond)
 	EXPECT_NEAR(x.nu_b[0], 1.0, 1e-6);
 	EXPECT_NEAR(x.nu_b[1], 0.0, 1e-9);
 	EXPECT_NEAR(x.nu_b[2], 0.0, 1e-9);
-	EXPECT_NEAR(x.p_n.z(), 50.0, 1e-9);	 // neutral: no sinking
+	EXPECT_NEAR(x.p_n.z(), 50.0, 1e-9);  // neutral: no sinking
 }
 
 TEST(Vehicle, FlatFishSteadySurgeMatchesDampingBalance)
 {
 	VehicleParams p = VehicleParams::fromConfig(test::repoVehicle());
 	p.tether_enabled = false;
-	p.weight_n = p.buoyancy_n;	// neutral, so no heave/pitch transients
+	p.weight_n = p.buoyancy_n;  // neutral, so no heave/pitch transients
 	for (auto& t : p.thrusters) t.efficiency_forward = t.efficiency_reverse = 1.0;
 	// Open loop, the FlatFish is directionally unstable (low sway damping, no
 	// linear yaw damping, Munk moment): any yaw or pitch moment makes it turn.

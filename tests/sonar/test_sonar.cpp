@@ -50,7 +50,7 @@ TEST(SonarGeometry, KnownPointsMapToTheirBearingAndRange)
 	// The fan image puts the sonar at the bottom centre, forward up, starboard right.
 	const double ppm = 10;
 	const cv::Point2d apex = fanPixel(g, ppm, 0, 0), ahead = fanPixel(g, ppm, 0, 10),
-					  right = fanPixel(g, ppm, 90 * kDeg, 5);
+	                  right = fanPixel(g, ppm, 90 * kDeg, 5);
 	EXPECT_NEAR(ahead.x, apex.x, 1e-9);
 	EXPECT_NEAR(apex.y - ahead.y, 100, 1e-9);
 	EXPECT_NEAR(right.x - apex.x, 50, 1e-9);
@@ -66,7 +66,8 @@ TEST(SonarGeometry, FanImageShowsABrightPolarPointWhereTheGeometrySays)
 	const PolarGeometry g = geminiGeometry();
 	cv::Mat polar = cv::Mat::zeros(g.range_bins, g.beam_count, CV_8UC1);
 	const double bearing = 30 * kDeg, range = 12;
-	const int c = static_cast<int>(std::lround(g.columnOfBearing(bearing))), r = static_cast<int>(std::lround(g.rowOfRange(range)));
+	const int c = static_cast<int>(std::lround(g.columnOfBearing(bearing))),
+	          r = static_cast<int>(std::lround(g.rowOfRange(range)));
 	cv::rectangle(polar, cv::Rect(c - 1, r - 1, 3, 3), cv::Scalar(255), cv::FILLED);
 	const double ppm = 10;
 	const cv::Mat fan = fanImage(polar, g, ppm);
@@ -103,7 +104,8 @@ TEST(SonarFrame, GeometryRoundTripsThroughCObservationImage)
 TEST(SonarDetector, FindsKnownPolesWithBearingAndRange)
 {
 	const PolarGeometry g = geminiGeometry();
-	const std::vector<SyntheticPole> poles = {{-40 * kDeg, 22.0}, {5 * kDeg, 15.0}, {47 * kDeg, 27.5}, {20 * kDeg, 4.0}};
+	const std::vector<SyntheticPole> poles = {
+	    {-40 * kDeg, 22.0}, {5 * kDeg, 15.0}, {47 * kDeg, 27.5}, {20 * kDeg, 4.0}};
 	int found = 0, spurious = 0;
 	double worst_bearing = 0, worst_range = 0;
 	for (unsigned seed = 1; seed <= 20; ++seed)
@@ -115,7 +117,8 @@ TEST(SonarDetector, FindsKnownPolesWithBearingAndRange)
 			bool matched = false;
 			for (std::size_t j = 0; j < poles.size(); ++j)
 			{
-				const double db = std::abs(d.bearing_rad - poles[j].bearing_rad), dr = std::abs(d.range_m - poles[j].range_m);
+				const double db = std::abs(d.bearing_rad - poles[j].bearing_rad),
+				             dr = std::abs(d.range_m - poles[j].range_m);
 				if (!used[j] && db < 1.5 * kDeg && dr < 0.5)
 				{
 					used[j] = matched = true;
@@ -135,7 +138,7 @@ TEST(SonarDetector, FindsKnownPolesWithBearingAndRange)
 			spurious += !matched;
 		}
 	}
-	EXPECT_GE(found, 76) << "of 80";	 // ≥ 95 % recall on clean synthetic frames
+	EXPECT_GE(found, 76) << "of 80";  // ≥ 95 % recall on clean synthetic frames
 	EXPECT_LE(spurious, 1);
 	EXPECT_LT(worst_bearing, 0.6 * kDeg);
 	EXPECT_LT(worst_range, 0.3);
@@ -145,8 +148,9 @@ TEST(SonarDetector, SeabedAndNoiseOnlyFramesGiveNoPoles)
 {
 	const PolarGeometry g = geminiGeometry();
 	int false_poles = 0;
-	for (unsigned seed = 100; seed < 300; ++seed) false_poles += static_cast<int>(detectPoles(renderPolarFrame(g, {}, seed), g).size());
-	EXPECT_LE(false_poles, 1) << "in 200 empty frames";	// < 1 per 100 frames
+	for (unsigned seed = 100; seed < 300; ++seed)
+		false_poles += static_cast<int>(detectPoles(renderPolarFrame(g, {}, seed), g).size());
+	EXPECT_LE(false_poles, 1) << "in 200 empty frames";  // < 1 per 100 frames
 }
 
 TEST(SonarDetector, BrightReturnWithoutShadowOverSeabedIsRejected)
@@ -158,7 +162,8 @@ TEST(SonarDetector, BrightReturnWithoutShadowOverSeabedIsRejected)
 	no_shadow.shadow_factor = 1.0;
 	int found = 0;
 	for (unsigned seed = 1; seed <= 10; ++seed)
-		found += static_cast<int>(detectPoles(renderPolarFrame(g, {{10 * kDeg, 18.0}}, seed, no_shadow), g).size());
+		found += static_cast<int>(
+		    detectPoles(renderPolarFrame(g, {{10 * kDeg, 18.0}}, seed, no_shadow), g).size());
 	EXPECT_EQ(found, 0);
 }
 
@@ -245,14 +250,15 @@ TEST(SonarPoleMap, RejectsDuplicatesAndEmptyMapsNamingTheKey)
 	try
 	{
 		PoleMap::fromConfig(config::Node::fromText(
-			"poles:\n  - {id: A, north_m: 1, east_m: 2}\n  - {id: A, north_m: 3, east_m: 4}\n", "map.yaml"));
+		    "poles:\n  - {id: A, north_m: 1, east_m: 2}\n  - {id: A, north_m: 3, east_m: 4}\n", "map.yaml"));
 		FAIL() << "duplicate accepted";
 	}
 	catch (const std::exception& e)
 	{
 		EXPECT_NE(std::string(e.what()).find("duplicate"), std::string::npos) << e.what();
 	}
-	const auto m = PoleMap::fromConfig(config::Node::fromText("poles:\n  - {id: A, north_m: 1, east_m: 2, radius_m: 0.2}\n"));
+	const auto m = PoleMap::fromConfig(
+	    config::Node::fromText("poles:\n  - {id: A, north_m: 1, east_m: 2, radius_m: 0.2}\n"));
 	ASSERT_EQ(m.poles.size(), 1u);
 	EXPECT_EQ(m.poles[0].ne_m, Eigen::Vector2d(1, 2));
 }

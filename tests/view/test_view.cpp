@@ -2,17 +2,17 @@
 // (what SceneViewer3D does), and an off-screen render that shows the trajectory.
 #include <auvnav/testing/scratch_dir.h>
 #include <gtest/gtest.h>
-#include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CEllipsoid3D.h>
+#include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/opengl/CSetOfLines.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
-#include "scene.h"
 #include <unistd.h>
+#include "scene.h"
 
 using namespace auvnav::view;
 namespace fs = std::filesystem;
@@ -39,8 +39,10 @@ RunData squareRun()
 			q.seabed_depth_m = 12;
 			r.truth.push_back(q);
 		}
-	r.fixes = {{0, "GPS", {0, 0}, true}, {10, "GPS", {3, 0}, false}, {200, "USBL", {40, 20}, true},
-			   {202, "USBL", {55, 20}, false}};
+	r.fixes = {{0, "GPS", {0, 0}, true},
+	           {10, "GPS", {3, 0}, false},
+	           {200, "USBL", {40, 20}, true},
+	           {202, "USBL", {55, 20}, false}};
 	return r;
 }
 
@@ -62,12 +64,13 @@ TEST(View, SceneHoldsTrajectoryTruthEllipsoidsVehicleGpsAndSeabed)
 	EXPECT_EQ(countNamed(*scene, "vehicle"), 1u);
 	EXPECT_EQ(countNamed(*scene, "fixes_GPS"), 1u);
 	EXPECT_EQ(countNamed(*scene, "fixes_USBL"), 1u);
-	const auto usbl = std::dynamic_pointer_cast<mrpt::opengl::CPointCloudColoured>(scene->getByName("fixes_USBL"));
+	const auto usbl =
+	    std::dynamic_pointer_cast<mrpt::opengl::CPointCloudColoured>(scene->getByName("fixes_USBL"));
 	ASSERT_TRUE(usbl);
 	ASSERT_EQ(usbl->size(), 2u);
 	EXPECT_FLOAT_EQ(usbl->getPoint3Df(0).x, 20.0f);  // ENU: x = east
 	EXPECT_FLOAT_EQ(usbl->getPoint3Df(0).y, 40.0f);
-	EXPECT_EQ(countNamed(*scene, "two_sigma"), 7u);	// t = 0, 60, ..., 360 of 0..399 s
+	EXPECT_EQ(countNamed(*scene, "two_sigma"), 7u);  // t = 0, 60, ..., 360 of 0..399 s
 	ASSERT_TRUE(scene->getByName("seabed"));
 }
 
@@ -99,7 +102,7 @@ TEST(View, OffscreenScreenshotShowsTheTrajectory)
 	for (unsigned y = 0; y < img.getHeight(); ++y)
 		for (unsigned x = 0; x < img.getWidth(); ++x)
 		{
-			const uint8_t* px = img(x, y);	// BGR
+			const uint8_t* px = img(x, y);  // BGR
 			const int b = px[0], g = px[1], r = px[2];
 			if (b > 180 && r < 90 && g < 140) ++blue;
 			if (std::abs(b - bg_b) + std::abs(g - bg_g) + std::abs(r - bg_r) > 30) ++drawn;
@@ -113,8 +116,9 @@ TEST(View, BadRunFolderIsRefusedNamingTheFile)
 	const auvnav::testing::ScratchDir scratch("view_bad");
 	const fs::path& dir = scratch.path();
 	EXPECT_THROW(loadRun((dir / "missing").string()), std::runtime_error);
-	std::ofstream(dir / "states.csv") << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d\n"
-									  << "1,1,0,0,0,abc,0,0,1,1,1\n";
+	std::ofstream(dir / "states.csv")
+	    << "time_s,qw,qx,qy,qz,body_n_m,body_e_m,body_d_m,sigma_pos_n,sigma_pos_e,sigma_pos_d\n"
+	    << "1,1,0,0,0,abc,0,0,1,1,1\n";
 	try
 	{
 		loadRun(dir.string());

@@ -10,8 +10,8 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 int main(int argc, char** argv)
 {
@@ -23,7 +23,8 @@ int main(int argc, char** argv)
 	Display* display = XOpenDisplay(nullptr);
 	if (!display)
 	{
-		std::fprintf(stderr, "x11_grab: cannot open display '%s'\n", std::getenv("DISPLAY") ? std::getenv("DISPLAY") : "");
+		std::fprintf(stderr, "x11_grab: cannot open display '%s'\n",
+		             std::getenv("DISPLAY") ? std::getenv("DISPLAY") : "");
 		return 2;
 	}
 	const Window root = DefaultRootWindow(display);
@@ -38,13 +39,14 @@ int main(int argc, char** argv)
 	}
 	// Channel of a pixel from its mask (8 bits per channel on Xvfb's 24-bit
 	// screens); the shifts once, not per pixel.
-	auto shiftOf = [](unsigned long mask) {
+	auto shiftOf = [](unsigned long mask)
+	{
 		int shift = 0;
 		while (mask && !(mask & 1)) mask >>= 1, ++shift;
 		return shift;
 	};
 	const int r_shift = shiftOf(image->red_mask), g_shift = shiftOf(image->green_mask),
-			  b_shift = shiftOf(image->blue_mask);
+	          b_shift = shiftOf(image->blue_mask);
 	cv::Mat bgr(attr.height, attr.width, CV_8UC3);
 	std::size_t blue = 0;
 	for (int y = 0; y < attr.height; ++y)
@@ -66,7 +68,7 @@ int main(int argc, char** argv)
 		return 2;
 	}
 	const std::size_t min_blue = std::strtoul(argv[2], nullptr, 10);
-	std::printf("x11_grab: %dx%d screen, %zu trajectory pixels (at least %zu wanted)\n", attr.width, attr.height, blue,
-				min_blue);
+	std::printf("x11_grab: %dx%d screen, %zu trajectory pixels (at least %zu wanted)\n", attr.width,
+	            attr.height, blue, min_blue);
 	return blue >= min_blue ? 0 : 1;
 }

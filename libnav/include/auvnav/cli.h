@@ -37,12 +37,12 @@ namespace auvnav::cli
 enum ExitCode : int
 {
 	kExitOk = 0,
-	kExitUsage = 1,			  //!< bad command line
-	kExitBadInput = 2,		  //!< configuration or input unusable (named on stderr)
-	kExitNoResult = 3,		  //!< valid input, no result: never initialised, fit refused
+	kExitUsage = 1,           //!< bad command line
+	kExitBadInput = 2,        //!< configuration or input unusable (named on stderr)
+	kExitNoResult = 3,        //!< valid input, no result: never initialised, fit refused
 	kExitNotInitialized = 3,  //!< auvnav-run's name for kExitNoResult
-	kExitDiverged = 4,		  //!< auvnav-run: the divergence monitor says diverged
-	kExitSignalBase = 128,	  //!< + the signal number that stopped the run
+	kExitDiverged = 4,        //!< auvnav-run: the divergence monitor says diverged
+	kExitSignalBase = 128,    //!< + the signal number that stopped the run
 };
 
 /** Prints "PROGRAM: error: REASON" on stderr, REASON being the first
@@ -59,7 +59,7 @@ namespace detail
 /** TCLAP's output with a one-line failure: "PROGRAM: error: REASON (see PROGRAM --help)". */
 class OneLineFailure : public TCLAP::StdOutput
 {
-   public:
+ public:
 	explicit OneLineFailure(std::string program) : program_(std::move(program)) {}
 	void failure(TCLAP::CmdLineInterface& cmd, TCLAP::ArgException& e) override
 	{
@@ -69,8 +69,9 @@ class OneLineFailure : public TCLAP::StdOutput
 		std::string missing;
 		for (const TCLAP::Arg* a : cmd.getArgList())
 			if (a->isRequired() && !a->isSet())
-				missing += (missing.empty() ? "" : ", ") +
-						   (a->longID().rfind('<', 0) == 0 ? a->longID() : "--" + a->getName());  // <RAWLOG> or --name
+				missing += (missing.empty() ? "" : ", ") + (a->longID().rfind('<', 0) == 0
+				                                                ? a->longID()
+				                                                : "--" + a->getName());  // <RAWLOG> or --name
 		if (reason.find("required arguments missing") != std::string::npos && !missing.empty())
 			reason = "missing required argument(s): " + missing;
 		std::string id = e.argId();
@@ -80,7 +81,7 @@ class OneLineFailure : public TCLAP::StdOutput
 	}
 	bool failed = false;
 
-   private:
+ private:
 	std::string program_;
 };
 }  // namespace detail
@@ -113,13 +114,14 @@ inline std::optional<int> parse(TCLAP::CmdLine& cmd, int argc, char** argv, cons
  *  call load() after parse() and before opening the rawlog. */
 class ObsLibOption
 {
-   public:
+ public:
 	explicit ObsLibOption(TCLAP::CmdLine& cmd)
-		: arg_("", "obs-lib",
-			   "Load an observation-class library (MRPT CObservation subclasses a plugin defines) before reading "
-			   "the rawlog: a path, or a file name searched in the plugin path and by the dynamic loader "
-			   "(repeatable)",
-			   false, "LIB", cmd)
+	    : arg_("", "obs-lib",
+	           "Load an observation-class library (MRPT CObservation subclasses a plugin defines) before "
+	           "reading "
+	           "the rawlog: a path, or a file name searched in the plugin path and by the dynamic loader "
+	           "(repeatable)",
+	           false, "LIB", cmd)
 	{
 	}
 	/** Loads the given libraries plus `declared` (e.g. a navigator config's
@@ -127,7 +129,7 @@ class ObsLibOption
 	 *  plugin host's). Returns kExitBadInput after printing
 	 *  "PROGRAM: error: cannot load observation library 'LIB' ..." if one fails. */
 	std::optional<int> load(const std::string& program, const std::vector<std::string>& declared = {},
-							std::optional<std::vector<std::string>> search_dirs = std::nullopt) const
+	                        std::optional<std::vector<std::string>> search_dirs = std::nullopt) const
 	{
 		try
 		{
@@ -143,7 +145,7 @@ class ObsLibOption
 	}
 	const std::vector<std::string>& values() const { return arg_.getValue(); }
 
-   private:
+ private:
 	mutable TCLAP::MultiArg<std::string> arg_;  // TCLAP's getValue() is not const
 };
 }  // namespace auvnav::cli

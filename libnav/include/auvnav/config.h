@@ -22,8 +22,8 @@
  *  comments, metadata) are marked with markFreeForm(). The record is shared
  *  by copies and not synchronised: read one document from one thread.
  */
-#include <Eigen/Core>
 #include <mrpt/containers/yaml.h>
+#include <Eigen/Core>
 
 #include <map>
 #include <memory>
@@ -36,13 +36,13 @@ namespace auvnav::config
 {
 class ConfigError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
 class Node
 {
-   public:
+ public:
 	/** An empty map node (for default-constructed holders). */
 	Node() = default;
 	/** Parses a YAML file; throws ConfigError if missing or malformed, with
@@ -119,7 +119,7 @@ class Node
 	std::string where(const std::string& key) const;
 	[[noreturn]] void fail(const std::string& key, const std::string& what) const;
 
-   private:
+ private:
 	/** Which keys of one document were read, shared by a node and its children.
 	 *  Paths are full ("filter.initial.heading_deg", "sensors[1].label");
 	 *  `asked` keys the names queried per level with list indices dropped
@@ -134,7 +134,8 @@ class Node
 	std::string fullPath(const std::string& key) const;
 	/** Records that `key` was asked for here; present keys become "used". */
 	void noteAccess(const std::string& key) const;
-	void checkUnder(const mrpt::containers::yaml& y, const std::string& path, const std::vector<std::string>& except) const;
+	void checkUnder(const mrpt::containers::yaml& y, const std::string& path,
+	                const std::vector<std::string>& except) const;
 
 	mrpt::containers::yaml y_;
 	std::string file_;

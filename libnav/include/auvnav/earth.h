@@ -31,7 +31,7 @@ struct Geodetic
 /** An Earth-fixed NED tangent frame at a geodetic origin. */
 class TangentFrame
 {
-   public:
+ public:
 	explicit TangentFrame(const Geodetic& origin);
 	~TangentFrame();
 	TangentFrame(const TangentFrame&);
@@ -49,7 +49,7 @@ class TangentFrame
 	/** Earth rotation vector in this (Earth-fixed) frame [rad/s]; constant. */
 	const Eigen::Vector3d& earthRate() const { return omega_ie_n_; }
 
-   private:
+ private:
 	struct Impl;
 	std::unique_ptr<Impl> impl_;
 	Geodetic origin_;

@@ -55,8 +55,10 @@ inline std::string oneLineReason(const std::string& what)
 	for (char& c : text)
 	{
 		const auto u = static_cast<unsigned char>(c);
-		if (c == '\n' || c == '\r' || c == '\t') c = ' ';
-		else if (u < 0x20 || u == 0x7f) c = '?';  // e.g. a class name read from garbage bytes
+		if (c == '\n' || c == '\r' || c == '\t')
+			c = ' ';
+		else if (u < 0x20 || u == 0x7f)
+			c = '?';  // e.g. a class name read from garbage bytes
 	}
 	return text;
 }

@@ -37,14 +37,14 @@ namespace auvnav
 {
 struct FixConsensusParams
 {
-	int min_fixes = 5;			//!< agreeing fixes needed before the filter starts (1: the first fix)
-	double max_spread_m = 10;	//!< [m] horizontal distance from the median within which a fix agrees
-	double window_s = 60;		//!< [s] fixes older than this before the newest are forgotten
+	int min_fixes = 5;         //!< agreeing fixes needed before the filter starts (1: the first fix)
+	double max_spread_m = 10;  //!< [m] horizontal distance from the median within which a fix agrees
+	double window_s = 60;      //!< [s] fixes older than this before the newest are forgotten
 };
 
 class InitialFixConsensus
 {
-   public:
+ public:
 	explicit InitialFixConsensus(const FixConsensusParams& params = {}) : params_(params) {}
 
 	/** One valid fix taken at t_s [s] (its p_n's down is ignored). */
@@ -59,7 +59,7 @@ class InitialFixConsensus
 	int agreeing() const;
 	const FixConsensusParams& params() const { return params_; }
 
-   private:
+ private:
 	struct Entry
 	{
 		double t_s;
@@ -74,7 +74,7 @@ class InitialFixConsensus
 
 class RejectedFixRun
 {
-   public:
+ public:
 	/** Keeps at most `capacity` rejections (the newest). */
 	explicit RejectedFixRun(int capacity = 16) : capacity_(capacity) {}
 
@@ -100,7 +100,7 @@ class RejectedFixRun
 		return entries_[static_cast<std::size_t>(std::max(0, size() - count))].t_s;
 	}
 
-   private:
+ private:
 	struct Entry
 	{
 		double t_s;

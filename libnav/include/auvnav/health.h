@@ -13,12 +13,11 @@
  *  Per sensor, over the last `window_s` of updates: the NIS sum of the
  *  accepted updates against the χ² quantile of their summed dimensions at
  *  `inconsistent_probability` (a consistent filter exceeds it with
- *  probability 1 − p) and above `inconsistent_nis_ratio` per dimension, and the fraction rejected or only accepted by the
- *  recovery rule. A single outlier rejected by the gate does not count as
- *  inconsistency (it never enters the NIS sum), a streak of rejections does.
- *  Conditions are evaluated at every update and state check; the reason names
- *  the condition and its figures, e.g. "DVL: 46 of 50 updates rejected in
- *  30 s for 61 s".
+ *  probability 1 − p) and above `inconsistent_nis_ratio` per dimension, and the fraction rejected or only
+ * accepted by the recovery rule. A single outlier rejected by the gate does not count as inconsistency (it
+ * never enters the NIS sum), a streak of rejections does. Conditions are evaluated at every update and state
+ * check; the reason names the condition and its figures, e.g. "DVL: 46 of 50 updates rejected in 30 s for 61
+ * s".
  */
 #include <auvnav/config.h>
 #include <auvnav/state.h>
@@ -42,13 +41,13 @@ const char* navStatusName(NavStatus s);
 
 struct HealthLimits
 {
-	double max_heading_sigma_deg = 5.0;	   //!< heading σ above this: not aligned (degraded)
+	double max_heading_sigma_deg = 5.0;    //!< heading σ above this: not aligned (degraded)
 	double max_horizontal_sigma_m = 50.0;  //!< horizontal position σ (larger axis) above this: degraded
-	double window_s = 30.0;				   //!< per-sensor window of updates
-	double min_updates = 5;				   //!< fewer updates in the window: no verdict
+	double window_s = 30.0;                //!< per-sensor window of updates
+	double min_updates = 5;                //!< fewer updates in the window: no verdict
 	double inconsistent_probability = 0.9999;
-	double inconsistent_nis_ratio = 1.5;	  //!< and NIS per dimension above this
-	double rejected_fraction = 0.5;			  //!< above: degraded
+	double inconsistent_nis_ratio = 1.5;      //!< and NIS per dimension above this
+	double rejected_fraction = 0.5;           //!< above: degraded
 	double diverged_rejected_fraction = 0.8;  //!< above for diverged_after_s: diverged
 	double diverged_after_s = 60.0;
 	/** From the navigator's `health:` section (every key optional). */
@@ -57,7 +56,7 @@ struct HealthLimits
 
 class HealthMonitor
 {
-   public:
+ public:
 	explicit HealthMonitor(const HealthLimits& limits = {}) : limits_(limits) {}
 
 	/** One measurement update of sensor `label` at time t [s]. */
@@ -77,7 +76,7 @@ class HealthMonitor
 	/** Called on every change of status (time, new status, reason). */
 	std::function<void(double t_s, NavStatus, const std::string& reason)> on_change;
 
-   private:
+ private:
 	struct Entry
 	{
 		double t_s, nis;

@@ -45,13 +45,13 @@ namespace auvnav
 /** What the filter knows besides the state when a measurement arrives. */
 struct FilterContext
 {
-	double t_s = 0;	 //!< filter time [s, Unix epoch]
+	double t_s = 0;  //!< filter time [s, Unix epoch]
 	//! When the measurement was taken [s, Unix epoch] (measurementTime()).
 	//! The navigator applies it at t_s ≤ t_measurement_s, the last IMU sample
 	//! before it, re-filtering if it arrived late (navigator.h).
 	double t_measurement_s = 0;
-	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();  //!< latest raw gyro sample [rad/s], IMU axes
-	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();  //!< Earth rate in the navigation frame
+	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();      //!< latest raw gyro sample [rad/s], IMU axes
+	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();      //!< Earth rate in the navigation frame
 	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< IMU lever arm in the body frame [m]
 	const earth::TangentFrame* frame = nullptr;  //!< navigation frame (origin), never null in updates
 	//! Body angular acceleration [rad/s²] from the low-pass filtered derivative
@@ -82,7 +82,7 @@ struct FilterContext
  *  plugin uses one T per measurement kind (the tag can tell kinds apart). */
 class MeasurementPayload
 {
-   public:
+ public:
 	static constexpr std::size_t kCapacity = 128;  //!< bytes: 16 doubles
 	static constexpr std::size_t kAlignment = 16;
 
@@ -91,7 +91,8 @@ class MeasurementPayload
 	{
 		static_assert(std::is_trivially_copyable_v<T>, "a measurement payload must be trivially copyable");
 		static_assert(sizeof(T) <= kCapacity, "a measurement payload must fit MeasurementPayload::kCapacity");
-		static_assert(alignof(T) <= kAlignment, "a measurement payload must not need more than 16-byte alignment");
+		static_assert(alignof(T) <= kAlignment,
+		              "a measurement payload must not need more than 16-byte alignment");
 	}
 	template <class T>
 	T& as() noexcept
@@ -112,16 +113,16 @@ class MeasurementPayload
 		return *::new (static_cast<void*>(bytes_)) T(value);
 	}
 
-   private:
+ private:
 	alignas(kAlignment) unsigned char bytes_[kCapacity] = {};
 };
 
 /** One measurement for the filter. Sized by the plugin in `prepare`. */
 struct Measurement
 {
-	Eigen::VectorXd z;	//!< measured value, dimension m
-	Eigen::MatrixXd R;	//!< noise covariance (m × m), SPD
-	int tag = 0;		//!< plugin-private (e.g. ADCP cell index)
+	Eigen::VectorXd z;  //!< measured value, dimension m
+	Eigen::MatrixXd R;  //!< noise covariance (m × m), SPD
+	int tag = 0;        //!< plugin-private (e.g. ADCP cell index)
 	//! Deprecated: untyped numbers for h. No plugin of this project uses it
 	//! (all use the typed payload below); it stays so that plugins written
 	//! before the payload existed build and run unchanged under this ABI, and
@@ -146,7 +147,7 @@ struct Measurement
 	{
 		return payload_storage.set(value);
 	}
-	std::string label;	//!< optional sub-name for statistics (e.g. "cell")
+	std::string label;  //!< optional sub-name for statistics (e.g. "cell")
 	//! A part of the observation that is not applied (e.g. an ADCP cell below
 	//! the seabed): counted as skipped; z and R may be empty.
 	bool skipped = false;
@@ -157,33 +158,34 @@ struct Measurement
  *  body; the navigator moves it to the IMU with the initial attitude. */
 struct InitialFix
 {
-	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();	//!< sensor point, navigation frame [m] (its down is ignored)
-	Eigen::Vector3d r_b = Eigen::Vector3d::Zero();	//!< sensor point in the body frame [m]
+	Eigen::Vector3d p_n =
+	    Eigen::Vector3d::Zero();  //!< sensor point, navigation frame [m] (its down is ignored)
+	Eigen::Vector3d r_b = Eigen::Vector3d::Zero();  //!< sensor point in the body frame [m]
 };
 
 enum class PrepareStatus
 {
-	Ok,		  //!< `out` holds the measurements to apply (possibly none)
-	Skip,	  //!< nothing to apply, not an error (e.g. DVL without bottom lock)
-	Invalid	  //!< bad observation (NaN, wrong class, …): rejected and counted
+	Ok,      //!< `out` holds the measurements to apply (possibly none)
+	Skip,    //!< nothing to apply, not an error (e.g. DVL without bottom lock)
+	Invalid  //!< bad observation (NaN, wrong class, …): rejected and counted
 };
 
 class MeasurementModel
 {
-   public:
+ public:
 	virtual ~MeasurementModel() = default;
 	/** Bit mask of StateBlock values h reads. */
 	virtual uint32_t uses() const noexcept = 0;
 	/** Observation → measurements. `why` explains Invalid/Skip (short). */
 	virtual PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-								  std::vector<Measurement>& out, std::string& why) noexcept = 0;
+	                              std::vector<Measurement>& out, std::string& why) noexcept = 0;
 	/** h(x) into `z_pred` (pre-sized to m). Returns false if it cannot. */
 	virtual bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-						 Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept = 0;
+	                     Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept = 0;
 	/** r = z ⊟ z_pred; default plain difference. */
 	virtual void residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-						  const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-						  Eigen::Ref<Eigen::VectorXd> r) const noexcept
+	                      const Eigen::Ref<const Eigen::VectorXd>& z_pred,
+	                      Eigen::Ref<Eigen::VectorXd> r) const noexcept
 	{
 		r = z - z_pred;
 	}
@@ -197,7 +199,8 @@ class MeasurementModel
 	 *  observation of a sensor whose reportsPositionFix() is true (the
 	 *  re-initialisation rule checks its rejected fixes against all of them,
 	 *  navigator.h). */
-	virtual bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) noexcept
+	virtual bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                        InitialFix& out) noexcept
 	{
 		(void)obs, (void)ctx, (void)out;
 		return false;
@@ -241,7 +244,7 @@ class MeasurementModel
 	 *  an affine h; closed-form slopes save those evaluations and must equal
 	 *  them (auvnav/testing/model_checks.h checks it). */
 	virtual bool affineSlopes(const NavState& /*x*/, const Measurement& /*m*/, const FilterContext& /*ctx*/,
-							  int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const noexcept
+	                          int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const noexcept
 	{
 		return false;
 	}
@@ -258,9 +261,9 @@ class MeasurementModel
  *  throw become Invalid / false and never cross into the host. */
 class SafeMeasurementModel : public MeasurementModel
 {
-   public:
+ public:
 	PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-						  std::vector<Measurement>& out, std::string& why) noexcept final
+	                      std::vector<Measurement>& out, std::string& why) noexcept final
 	{
 		try
 		{
@@ -278,7 +281,7 @@ class SafeMeasurementModel : public MeasurementModel
 		return PrepareStatus::Invalid;
 	}
 	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-				 Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept final
+	             Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept final
 	{
 		try
 		{
@@ -291,7 +294,7 @@ class SafeMeasurementModel : public MeasurementModel
 	}
 
 	bool affineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-					  Eigen::Ref<Eigen::MatrixXd> At) const noexcept final
+	                  Eigen::Ref<Eigen::MatrixXd> At) const noexcept final
 	{
 		try
 		{
@@ -303,14 +306,14 @@ class SafeMeasurementModel : public MeasurementModel
 		}
 	}
 
-   protected:
+ protected:
 	virtual PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-									std::vector<Measurement>& out, std::string& why) = 0;
+	                                std::vector<Measurement>& out, std::string& why) = 0;
 	virtual bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-						   Eigen::Ref<Eigen::VectorXd> z_pred) const = 0;
+	                       Eigen::Ref<Eigen::VectorXd> z_pred) const = 0;
 	/** MeasurementModel::affineSlopes; false (the default): by differences. */
 	virtual bool doAffineSlopes(const NavState& /*x*/, const Measurement& /*m*/, const FilterContext& /*ctx*/,
-								int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const
+	                            int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const
 	{
 		return false;
 	}

@@ -83,14 +83,14 @@ struct SensorStats
 {
 	std::string label, plugin;
 	std::size_t accepted = 0, recovered = 0, rejected = 0, invalid = 0, skipped = 0, denied = 0, late = 0,
-				before_init = 0;
+	            before_init = 0;
 	//! Observations applied at their measurement time by re-filtering (also
 	//! counted by their update status).
 	std::size_t delayed = 0;
 	//! Position re-initialisations from this sensor's fixes (gates.position_reinit).
 	std::size_t reinitialized = 0;
-	double nis_sum = 0;		 //!< over accepted updates
-	double nis_dim_sum = 0;	 //!< Σ dimensions of those updates (E[NIS] = dim)
+	double nis_sum = 0;      //!< over accepted updates
+	double nis_dim_sum = 0;  //!< Σ dimensions of those updates (E[NIS] = dim)
 	std::string last_problem;
 };
 
@@ -114,7 +114,7 @@ std::string pluginConfigText(const config::Node& sensor_entry);
 
 class Navigator
 {
-   public:
+ public:
 	/** Builds the filter and loads the plugins named in `cfg`. Throws
 	 *  ConfigError / PluginError with a clear message. */
 	Navigator(const config::Node& cfg, PluginHost& host);
@@ -125,11 +125,11 @@ class Navigator
 
 	bool initialized() const { return initialized_; }
 	const ManifoldUkf& filter() const { return *ukf_; }
-	double time() const { return t_s_; }					//!< filter time [s, Unix]
+	double time() const { return t_s_; }  //!< filter time [s, Unix]
 	//! The latest IMU sample's time [s, Unix]: time() except while
 	//! re-filtering for a delayed measurement (callbacks then see the past).
 	double latestTime() const { return t_latest_s_; }
-	double startTime() const { return t0_s_; }				//!< first observation [s, Unix]
+	double startTime() const { return t0_s_; }  //!< first observation [s, Unix]
 	const earth::TangentFrame& frame() const { return *frame_; }
 	const Eigen::Vector3d& imuPosition_b() const { return imu_position_b_; }
 	std::vector<SensorStats> stats() const;
@@ -169,9 +169,8 @@ class Navigator
 	 *  stretch per `smoother.keep_every_s` of filter time (default 1 s) to
 	 *  the stretch file at `path`. Segments end at position
 	 *  re-initialisations, clock-jump restarts and (unless
-	 *  `smoother.across_recoveries: true`) before every recovery update. Call before the first observation; the
-	 *  file is complete after finish(). Throws std::runtime_error if the
-	 *  file cannot be created. */
+	 *  `smoother.across_recoveries: true`) before every recovery update. Call before the first observation;
+	 * the file is complete after finish(). Throws std::runtime_error if the file cannot be created. */
 	void enableSmoothing(const std::string& path);
 	const SmoothingRecorder* smoothingRecorder() const { return smoother_.get(); }
 	double smootherKeepEvery_s() const { return smoother_keep_every_s_; }
@@ -185,13 +184,14 @@ class Navigator
 	std::function<void(const Navigator&)> on_predict;
 	/** Called after every measurement update with the sensor label, the
 	 *  observation time, the measurement and its result (any status). */
-	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)> on_update;
+	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)>
+	    on_update;
 	/** Called on an event worth a line in a log: the start from a fix
 	 *  consensus, a position re-initialisation (time from startTime() [s],
 	 *  sensor label, what happened). */
 	std::function<void(double t_s, const std::string& label, const std::string& what)> on_event;
 
-   private:
+ private:
 	struct Slot;
 	struct History;
 	bool handleImu(const mrpt::obs::CObservation& obs);  // false: sample dropped
@@ -199,8 +199,8 @@ class Navigator
 	void propagate(const Eigen::Vector3d& w, double t);
 	/** Applies one observation's prepared measurements (gates, recovery);
 	 *  `record`: count them and report them (false when re-filtering). */
-	void applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx, double t_obs,
-						   bool record);
+	void applyMeasurements(Slot& slot, const std::vector<Measurement>& ms, const FilterContext& ctx,
+	                       double t_obs, bool record);
 	/** Applies an observation at its past time t_m by re-filtering. False: no
 	 *  checkpoint old enough (the caller counts it late). */
 	bool applyDelayed(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m);
@@ -208,7 +208,8 @@ class Navigator
 	 *  current state and applies it, counting a Skip or Invalid; true when
 	 *  measurements were applied. With a history, they are moved into the
 	 *  event inserted at absolute index `at` (the end for in-order ones). */
-	bool prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m, std::size_t at);
+	bool prepareAndApply(std::size_t slot_index, const mrpt::obs::CObservation& obs, double t_m,
+	                     std::size_t at);
 	/** Takes a checkpoint before IMU event `event` if checkpoint_every_s has
 	 *  passed since the last one. */
 	void checkpointIfDue(std::size_t event);
@@ -255,7 +256,7 @@ class Navigator
 	std::unique_ptr<History> history_;
 	std::size_t replayed_predictions_ = 0;
 	std::unique_ptr<SmoothingRecorder> smoother_;  // enableSmoothing
-	double smoother_keep_every_s_ = 1.0;			// smoother.keep_every_s
+	double smoother_keep_every_s_ = 1.0;           // smoother.keep_every_s
 	// smoother.across_recoveries: false ends a smoothing segment before every
 	// recovery update (an aid applied against the gate: the filter's
 	// covariance was just contradicted, so its gains are not trusted across it).
@@ -271,12 +272,12 @@ class Navigator
 	std::size_t clock_jumps_ = 0;
 	/** A jump of the IMU clock by dt at t: throws (stop) or restarts initialisation. */
 	void clockJump(double t, double dt);
-	int consistent_rejections_ = 5;			// gates.consistent_rejections (0: off)
-	double consistency_probability_ = 0.99;	// gates.consistency_probability
+	int consistent_rejections_ = 5;          // gates.consistent_rejections (0: off)
+	double consistency_probability_ = 0.99;  // gates.consistency_probability
 	// gates.position_reinit: this many agreeing gate-rejected fixes reset the position (0: off).
 	int reinit_fixes_ = 3;
 	double reinit_probability_ = 0.99;
-	double reinit_spread_m_ = 10;	// [m] a recorded fix agrees with the run's offset within this
+	double reinit_spread_m_ = 10;  // [m] a recorded fix agrees with the run's offset within this
 	bool position_from_gps_ = false;
 	bool earth_rate_ = true;  // filter.earth_rate: false only for studies (no gyrocompassing)
 	std::string gps_label_;
@@ -288,13 +289,13 @@ class Navigator
 	bool initialized_ = false;
 	double t_s_ = 0, t0_s_ = -1, t_latest_s_ = 0;
 	Eigen::Vector3d omega_ib_b_ = Eigen::Vector3d::Zero();
-	Eigen::Vector3d alpha_b_ = Eigen::Vector3d::Zero();	 // low-pass filtered gyro derivative
+	Eigen::Vector3d alpha_b_ = Eigen::Vector3d::Zero();  // low-pass filtered gyro derivative
 	double alpha_tau_s_ = 0.2;
 	Eigen::Vector3d f_sum_ = Eigen::Vector3d::Zero(), w_sum_ = Eigen::Vector3d::Zero();
 	std::size_t leveling_samples_ = 0;
 	double leveling_start_s_ = -1;
-	InitialFixConsensus fix_consensus_;	 // the fix sensor's fixes before the start (initialFix)
-	std::optional<InitialFix> gps_fix_;	 // the agreed one, once there is a consensus
+	InitialFixConsensus fix_consensus_;  // the fix sensor's fixes before the start (initialFix)
+	std::optional<InitialFix> gps_fix_;  // the agreed one, once there is a consensus
 	SensorStats imu_stats_;
 	std::size_t predictions_ = 0, imu_gaps_ = 0;
 	HealthMonitor health_;

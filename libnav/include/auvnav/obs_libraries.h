@@ -31,7 +31,7 @@ namespace auvnav
 {
 class ObservationLibraryError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
@@ -40,7 +40,8 @@ class ObservationLibraryError : public std::runtime_error
 std::string loadObservationLibrary(const std::string& lib, const std::vector<std::string>& search_dirs = {});
 
 /** Loads each of `libs` in order (the first failure throws). */
-void loadObservationLibraries(const std::vector<std::string>& libs, const std::vector<std::string>& search_dirs = {});
+void loadObservationLibraries(const std::vector<std::string>& libs,
+                              const std::vector<std::string>& search_dirs = {});
 
 /** The libraries a navigator config declares: every `sensors:` entry's
  *  optional `obs_libs` (a list of LIB, or one LIB), paths made absolute

@@ -114,7 +114,7 @@
  *  cross: compiler (clang and gcc mangle and lay out alike only in part),
  *  the std::string ABI, Eigen's version and alignment, MRPT, the state's
  *  storage (43 + room for plugin states), and the sanitizers. */
-#define AUVNAV_BUILD_FINGERPRINT                                                                       \
+#define AUVNAV_BUILD_FINGERPRINT \
 	AUVNAV_COMPILER_ID AUVNAV_STDLIB_ID " eigen-" AUVNAV_STR(EIGEN_WORLD_VERSION) "." AUVNAV_STR(          \
 		EIGEN_MAJOR_VERSION) "." AUVNAV_STR(EIGEN_MINOR_VERSION) " align-" AUVNAV_STR(EIGEN_MAX_ALIGN_BYTES) \
 		" mrpt-" AUVNAV_STR(MRPT_VERSION) " state-43+" AUVNAV_STR(AUVNAV_MAX_EXTRA_STATES) AUVNAV_SANITIZER_ID
@@ -125,14 +125,14 @@ extern "C"
 	{
 		uint32_t abi_version;
 		uint32_t api_version;
-		const char* name;		  //!< e.g. "dvl"
-		const char* version;	  //!< plugin's own version, e.g. "1.0.0"
+		const char* name;         //!< e.g. "dvl"
+		const char* version;      //!< plugin's own version, e.g. "1.0.0"
 		const char* fingerprint;  //!< AUVNAV_BUILD_FINGERPRINT at plugin build time
 		const char* description;  //!< one line for users
 	};
 
 	typedef auvnav::MeasurementModel* (*AuvnavCreateFn)(const char* config_yaml, const char* sensor_label,
-														char* error, size_t error_size);
+	                                                    char* error, size_t error_size);
 	typedef void (*AuvnavDestroyFn)(auvnav::MeasurementModel* model);
 
 	struct AuvnavPluginEntry
@@ -155,38 +155,42 @@ extern "C"
  *  constructor is done, every key of `cfg` must have been read (or marked
  *  free-form): a misspelled key is refused with the nearest valid one
  *  (config.h, checkAllKeysUsed). The host's `config_dir` is always allowed. */
-#define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                  \
-	namespace                                                                                        \
-	{                                                                                                \
-	auvnav::MeasurementModel* auvnavCreate_(const char* yaml, const char* label, char* error,        \
-											size_t error_size)                                       \
-	{                                                                                                \
-		try                                                                                          \
-		{                                                                                            \
-			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                       \
-															std::string(plugin_name) + " plugin config"); \
-			cfg.markFreeForm("config_dir");                                                           \
-			std::unique_ptr<ModelClass> model(new ModelClass(cfg, label ? label : ""));               \
-			cfg.checkAllKeysUsed();                                                                   \
-			return model.release();                                                                   \
-		}                                                                                            \
-		catch (const std::exception& e)                                                              \
-		{                                                                                            \
-			std::snprintf(error, error_size, "%s", e.what());                                        \
-		}                                                                                            \
-		catch (...)                                                                                  \
-		{                                                                                            \
-			std::snprintf(error, error_size, "unknown exception");                                   \
-		}                                                                                            \
-		return nullptr;                                                                              \
-	}                                                                                                \
-	void auvnavDestroy_(auvnav::MeasurementModel* m) { delete m; }                                   \
-	const AuvnavPluginEntry kAuvnavEntry_ = {                                                        \
-		{AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, plugin_name, plugin_version,          \
-		 AUVNAV_BUILD_FINGERPRINT, plugin_description},                                              \
-		&auvnavCreate_, &auvnavDestroy_};                                                            \
-	}                                                                                                \
-	extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1() \
-	{                                                                                                \
-		return &kAuvnavEntry_;                                                                       \
+#define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                        \
+	namespace                                                                                             \
+	{                                                                                                     \
+	auvnav::MeasurementModel* auvnavCreate_(const char* yaml, const char* label, char* error,             \
+	                                        size_t error_size)                                            \
+	{                                                                                                     \
+		try                                                                                               \
+		{                                                                                                 \
+			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                           \
+			                                                std::string(plugin_name) + " plugin config"); \
+			cfg.markFreeForm("config_dir");                                                               \
+			std::unique_ptr<ModelClass> model(new ModelClass(cfg, label ? label : ""));                   \
+			cfg.checkAllKeysUsed();                                                                       \
+			return model.release();                                                                       \
+		}                                                                                                 \
+		catch (const std::exception& e)                                                                   \
+		{                                                                                                 \
+			std::snprintf(error, error_size, "%s", e.what());                                             \
+		}                                                                                                 \
+		catch (...)                                                                                       \
+		{                                                                                                 \
+			std::snprintf(error, error_size, "unknown exception");                                        \
+		}                                                                                                 \
+		return nullptr;                                                                                   \
+	}                                                                                                     \
+	void auvnavDestroy_(auvnav::MeasurementModel* m)                                                      \
+	{                                                                                                     \
+		delete m;                                                                                         \
+	}                                                                                                     \
+	const AuvnavPluginEntry kAuvnavEntry_ = {                                                             \
+	    {AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, plugin_name, plugin_version,               \
+	     AUVNAV_BUILD_FINGERPRINT, plugin_description},                                                   \
+	    &auvnavCreate_,                                                                                   \
+	    &auvnavDestroy_};                                                                                 \
+	}                                                                                                     \
+	extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1()   \
+	{                                                                                                     \
+		return &kAuvnavEntry_;                                                                            \
 	}

@@ -33,7 +33,7 @@ namespace auvnav
 {
 class PluginError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
@@ -57,7 +57,7 @@ using ModelPtr = std::unique_ptr<MeasurementModel, std::function<void(Measuremen
 
 class PluginHost
 {
-   public:
+ public:
 	explicit PluginHost(std::vector<std::string> search_paths = {});
 
 	/** Resolves a plugin name or path to an existing file (throws PluginError). */
@@ -67,11 +67,12 @@ class PluginHost
 	PluginInfo load(const std::string& plugin);
 
 	/** Creates a model from the plugin with its YAML config text. */
-	ModelPtr create(const std::string& plugin, const std::string& config_yaml, const std::string& sensor_label);
+	ModelPtr create(const std::string& plugin, const std::string& config_yaml,
+	                const std::string& sensor_label);
 
 	const std::vector<std::string>& searchPaths() const { return paths_; }
 
-   private:
+ private:
 	struct Library;
 	std::shared_ptr<Library> open(const std::string& plugin);
 	std::vector<std::string> paths_;

@@ -10,8 +10,8 @@
 #include <auvnav/state.h>
 
 #include <Eigen/Core>
-#include <array>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -21,27 +21,28 @@ namespace auvnav
  *  added variance σ²(1 − φ²) (exact for any dt). */
 struct GaussMarkov
 {
-	double sigma = 0;	   //!< stationary standard deviation
-	double tau_s = 3600;   //!< correlation time [s]
+	double sigma = 0;     //!< stationary standard deviation
+	double tau_s = 3600;  //!< correlation time [s]
 	double phi(double dt_s) const;
 	double variance(double dt_s) const;
 };
 
 struct ProcessNoise
 {
-	double gyro_arw = 0;		  //!< gyro angle random walk [rad/√s]
-	GaussMarkov gyro_bias;		  //!< [rad/s]
-	GaussMarkov accel_bias;		  //!< [m/s²]
-	double jerk_psd = 0.01;		  //!< white jerk PSD of the constant-acceleration model [(m/s³)²·s]
-	double velocity_psd = 1e-6;	  //!< extra white velocity noise [(m/s)²/s]
-	double gravity_psd = 1e-12;	  //!< gravity random walk [(m/s²)²/s]
-	GaussMarkov current;		  //!< water currents [m/s]
-	double current_spatial_var_per_m = 0;  //!< extra current variance per metre moved through water [(m/s)²/m]
+	double gyro_arw = 0;         //!< gyro angle random walk [rad/√s]
+	GaussMarkov gyro_bias;       //!< [rad/s]
+	GaussMarkov accel_bias;      //!< [m/s²]
+	double jerk_psd = 0.01;      //!< white jerk PSD of the constant-acceleration model [(m/s³)²·s]
+	double velocity_psd = 1e-6;  //!< extra white velocity noise [(m/s)²/s]
+	double gravity_psd = 1e-12;  //!< gravity random walk [(m/s²)²/s]
+	GaussMarkov current;         //!< water currents [m/s]
+	double current_spatial_var_per_m =
+	    0;  //!< extra current variance per metre moved through water [(m/s)²/m]
 	//! Current variance added per metre of depth change [(m/s)²/m]: the part of
 	//! the vertical profile the linear vehicle/far model does not capture.
 	double current_vertical_var_per_m = 0;
-	GaussMarkov adcp_bias;		  //!< [m/s]
-	double parameter_tau_s = 3600;	//!< model parameter correlation time [s]
+	GaussMarkov adcp_bias;          //!< [m/s]
+	double parameter_tau_s = 3600;  //!< model parameter correlation time [s]
 	//! Stationary σ of the 18 model parameters in tangent order (on the log
 	//! scale for the diagonal entries, see state.h).
 	Eigen::Matrix<double, 18, 1> parameter_sigma = Eigen::Matrix<double, 18, 1>::Zero();
@@ -52,7 +53,10 @@ struct ExtraStateProcess
 {
 	StateProcess kind = StateProcess::RandomConstant;
 	double sigma = 0, tau_s = 0;
-	double phi(double dt_s) const { return kind == StateProcess::GaussMarkov ? std::exp(-dt_s / tau_s) : 1.0; }
+	double phi(double dt_s) const
+	{
+		return kind == StateProcess::GaussMarkov ? std::exp(-dt_s / tau_s) : 1.0;
+	}
 	double variance(double dt_s) const;
 };
 
@@ -63,7 +67,7 @@ struct StepDecay
 {
 	double dt_s = 0;
 	double gyro_bias = 1, accel_bias = 1, current = 1, adcp_bias = 1, parameters = 1;
-	std::array<double, idx::max_extra> extra{};	 //!< plugin-owned coordinates, in order
+	std::array<double, idx::max_extra> extra{};  //!< plugin-owned coordinates, in order
 };
 
 struct ProcessModel
@@ -89,34 +93,35 @@ struct ProcessModel
 	void appendBlock(const StateBlockSpec& block);
 	/** Mean propagation of one state by `dt_s` with raw gyro `omega_ib_b` and
 	 *  Earth rate `omega_ie_n` (a pure function: used per sigma point). */
-	NavState propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
-					   double dt_s) const;
+	NavState propagate(const NavState& x, const Eigen::Vector3d& omega_ib_b,
+	                   const Eigen::Vector3d& omega_ie_n, double dt_s) const;
 	/** The same with the navigation frame's turn over the step given,
 	 *  R_earth_turn = Exp(−ω_ie_n dt) (computed once for all sigma points). */
 	NavState propagateTurned(const NavState& x, const Eigen::Vector3d& omega_ib_b,
-							 const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const;
+	                         const Eigen::Matrix3d& R_earth_turn, const StepDecay& step) const;
 	/** The same with the body's turn given too, R_body_turn =
 	 *  Exp((ω_ib_b − x.b_w) dt) (shared by sigma points with the centre's bias). */
 	NavState propagateTurned(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-							 const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const;
+	                         const Eigen::Matrix3d& R_body_turn, const StepDecay& step) const;
 	/** The inertial members of propagateTurned (attitude … position and the
 	 *  two currents: the first idx::adcp_bias coordinates) into y, bit for
 	 *  bit; y's other members are left as they are. y is not x. For sigma
 	 *  points whose affine rest is never read (the prediction takes it from
 	 *  the centre's), with no state built or copied per point. */
 	void propagateInertialInto(const NavState& x, const Eigen::Matrix3d& R_earth_turn,
-							   const Eigen::Matrix3d& R_body_turn, const StepDecay& step, NavState& y) const;
+	                           const Eigen::Matrix3d& R_body_turn, const StepDecay& step, NavState& y) const;
 	/** The decay factors of a step of `dt_s` (StepDecay). */
 	StepDecay decay(double dt_s) const;
 
 	/** Process noise covariance over `dt_s` (tangent space, dim() × dim()). `speed_through_water_mps`
 	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
 	 *  magnitude) the vertical part. */
-	Covariance noiseCovariance(double dt_s, double speed_through_water_mps, double vertical_speed_mps = 0) const;
+	Covariance noiseCovariance(double dt_s, double speed_through_water_mps,
+	                           double vertical_speed_mps = 0) const;
 	/** P += noiseCovariance(…), touching only Q's non-zero entries (the same
 	 *  sums: the filter's every-tick form, without a dense Q). */
 	void addNoiseCovariance(Covariance& P, double dt_s, double speed_through_water_mps,
-							double vertical_speed_mps = 0) const;
+	                        double vertical_speed_mps = 0) const;
 
 	/** The linear part (everything but attitude and gyro bias) as the map
 	 *  x_L ↦ A x_L + b in tangent coordinates; applies A to the rows of `M`
@@ -139,11 +144,11 @@ struct ProcessModel
 
 	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
 
-   private:
+ private:
 	/** Calls add(i, j, q) once for every non-zero entry q of the process noise. */
 	template <typename AddEntry>
 	void forEachNoiseEntry(double dt_s, double speed_through_water_mps, double vertical_speed_mps,
-						   AddEntry&& add) const;
+	                       AddEntry&& add) const;
 };
 
 // ---------------------------------------------------------------- inline
@@ -153,14 +158,15 @@ void ProcessModel::applyLinearRows(Eigen::MatrixBase<Derived>& M, const StepDeca
 	const double dt_s = step.dt_s;
 	// p += v dt + ½ a dt² (old v), then v += a dt; a and g are constant.
 	M.template middleRows<3>(idx::pos) +=
-		dt_s * M.template middleRows<3>(idx::vel) + (0.5 * dt_s * dt_s) * M.template middleRows<3>(idx::acc);
+	    dt_s * M.template middleRows<3>(idx::vel) + (0.5 * dt_s * dt_s) * M.template middleRows<3>(idx::acc);
 	M.template middleRows<3>(idx::vel) += dt_s * M.template middleRows<3>(idx::acc);
 	M.template middleRows<3>(idx::acc_bias) *= step.accel_bias;
-	M.template middleRows<4>(idx::current_vehicle) *= step.current;	 // both current states
-	if (M.rows() < idx::core_dim) return;  // the inertial block and currents only
+	M.template middleRows<4>(idx::current_vehicle) *= step.current;  // both current states
+	if (M.rows() < idx::core_dim) return;                            // the inertial block and currents only
 	M.template middleRows<2>(idx::adcp_bias) *= step.adcp_bias;
 	M.template middleRows<18>(idx::inertia) *= step.parameters;
-	const int extra_rows = std::min<int>(static_cast<int>(M.rows()) - idx::core_dim, static_cast<int>(extra.size()));
+	const int extra_rows =
+	    std::min<int>(static_cast<int>(M.rows()) - idx::core_dim, static_cast<int>(extra.size()));
 	for (int i = 0; i < extra_rows; ++i)
 		if (extra[i].kind == StateProcess::GaussMarkov) M.row(idx::extra + i) *= step.extra[i];
 }

@@ -31,7 +31,8 @@ struct RunCallbacks
 {
 	/** Installed as Navigator::on_predict / on_update for the run (when set). */
 	std::function<void(const Navigator&)> on_predict;
-	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)> on_update;
+	std::function<void(const std::string& label, double t_obs, const Measurement&, const UpdateResult&)>
+	    on_update;
 	/** After every observation fed (progress displays). */
 	std::function<void(const Navigator&)> on_observation;
 	/** Polled before every observation; true ends the run early (interrupted). */
@@ -40,14 +41,14 @@ struct RunCallbacks
 
 struct RunSummary
 {
-	std::size_t observations = 0;  //!< fed to the navigator
-	double data_s = 0;			   //!< navigator time span (0 if nothing was read)
-	double wall_s = 0;			   //!< of the loop alone
-	bool interrupted = false;	   //!< RunCallbacks::stop said so
-	std::string error;			   //!< what ended the run early (empty: the end of the file)
-	std::exception_ptr failure;	   //!< the same, as thrown
-	std::vector<SensorStats> stats;	//!< Navigator::stats() at the end
-	std::map<std::string, std::size_t> labels;	//!< observations fed, per sensor label
+	std::size_t observations = 0;               //!< fed to the navigator
+	double data_s = 0;                          //!< navigator time span (0 if nothing was read)
+	double wall_s = 0;                          //!< of the loop alone
+	bool interrupted = false;                   //!< RunCallbacks::stop said so
+	std::string error;                          //!< what ended the run early (empty: the end of the file)
+	std::exception_ptr failure;                 //!< the same, as thrown
+	std::vector<SensorStats> stats;             //!< Navigator::stats() at the end
+	std::map<std::string, std::size_t> labels;  //!< observations fed, per sensor label
 
 	bool completed() const { return !interrupted && error.empty(); }
 	/** Rethrows the error that ended the run, if any. */

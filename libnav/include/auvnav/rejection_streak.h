@@ -23,7 +23,7 @@ namespace auvnav
 {
 class RejectionStreak
 {
-   public:
+ public:
 	/** Keeps at most `capacity` rejections (the newest). */
 	explicit RejectionStreak(int capacity = 8) : capacity_(capacity) {}
 
@@ -37,11 +37,11 @@ class RejectionStreak
 	 *  the χ² quantile at `probability` (see above). */
 	bool consistentBias(int count, double probability) const;
 
-   private:
+ private:
 	struct Entry
 	{
 		double t_s;
-		Eigen::VectorXd w;	//!< innovation whitened by R: L⁻¹ ν, R = L Lᵀ
+		Eigen::VectorXd w;  //!< innovation whitened by R: L⁻¹ ν, R = L Lᵀ
 	};
 	int capacity_;
 	std::deque<Entry> entries_;

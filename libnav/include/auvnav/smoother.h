@@ -38,18 +38,18 @@ namespace auvnav
 {
 struct RtsStep
 {
-	double t_s = 0;				//!< time of the filtered estimate (tick k)
-	NavState x_filtered;		//!< x_k
-	Covariance P_filtered;		//!< P_k
-	NavState x_predicted;		//!< x⁻_k+1
-	Covariance P_predicted;		//!< P⁻_k+1 (process noise included)
-	Covariance P_cross;			//!< Cov(x_k, x_k+1)
+	double t_s = 0;          //!< time of the filtered estimate (tick k)
+	NavState x_filtered;     //!< x_k
+	Covariance P_filtered;   //!< P_k
+	NavState x_predicted;    //!< x⁻_k+1
+	Covariance P_predicted;  //!< P⁻_k+1 (process noise included)
+	Covariance P_cross;      //!< Cov(x_k, x_k+1)
 };
 
 /** ukf.predict(omega_ib_b, omega_ie_n, dt_s) that also returns the step;
  *  `t_s` is the time of the state before the prediction. */
-RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
-						double dt_s, double t_s);
+RtsStep predictRecorded(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b,
+                        const Eigen::Vector3d& omega_ie_n, double dt_s, double t_s);
 
 struct SmoothedEstimate
 {
@@ -62,14 +62,14 @@ struct SmoothedEstimate
 /** One backward step from the smoothed estimate at k+1. False (and x_out,
  *  P_out = the filtered ones) if the step failed (see above). */
 bool rtsBackwardStep(const RtsStep& step, const NavState& x_next, const Covariance& P_next, NavState& x_out,
-					 Covariance& P_out);
+                     Covariance& P_out);
 
 /** The backward pass over a whole recorded run: one estimate per step (at
  *  steps[k].t_s) and, last, the end state (x_end, P_end at t_end_s: the
  *  filter's estimate after the last step's updates, which smoothing leaves
  *  as it is). */
 std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const NavState& x_end,
-										const Covariance& P_end, double t_end_s);
+                                        const Covariance& P_end, double t_end_s);
 
 /** What the backward pass needs of one stretch between kept ticks k and k′
  *  (docs/smoother.md): the per-tick recursion telescoped,
@@ -87,15 +87,15 @@ std::vector<SmoothedEstimate> smoothRts(const std::vector<RtsStep>& steps, const
  *  second order in the smoothing corrections. */
 struct RtsStretch
 {
-	double t_s = 0;		  //!< time of tick k
+	double t_s = 0;       //!< time of tick k
 	NavState x_filtered;  //!< x_k
 	Covariance P_filtered;
-	Covariance M;		  //!< G_k ⋯ G_k′−1 (the covariance's)
-	Covariance M_mean;	  //!< the same with each tick's correction transport (below)
+	Covariance M;       //!< G_k ⋯ G_k′−1 (the covariance's)
+	Covariance M_mean;  //!< the same with each tick's correction transport (below)
 	TangentVector sum_dx;
 	Covariance sum_dP;
-	std::size_t ticks = 0;	//!< predictions in the stretch
-	bool broken = false;	//!< a tick's P⁻ was not positive definite: smoothing keeps x_k
+	std::size_t ticks = 0;  //!< predictions in the stretch
+	bool broken = false;    //!< a tick's P⁻ was not positive definite: smoothing keeps x_k
 };
 
 /** Forward bookkeeping for RtsStretch: call predict() in place of the
@@ -126,13 +126,14 @@ struct RtsStretch
  *  predict(); it must stay at the same address while the filter runs. */
 class RtsStretchRecorder : public StepObserver
 {
-   public:
+ public:
 	/** Opens the first stretch at the filter's current estimate. */
 	void begin(const ManifoldUkf& ukf, double t_s);
 	bool open() const { return open_; }
 	/** ukf.predict(...), with the tick's updates folded in. False if the
 	 *  stretch is broken (it keeps the filtered estimate when smoothed). */
-	bool predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s);
+	bool predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
+	             double dt_s);
 	/** Ends the stretch at the filter's current estimate (tick k′, after its
 	 *  updates), returns it and opens the next one there. */
 	RtsStretch close(const ManifoldUkf& ukf, double t_s);
@@ -141,14 +142,15 @@ class RtsStretchRecorder : public StepObserver
 	 *  with `reset` true so that the discarded pass's repairs do not count. */
 	void checkRepairs(const ManifoldUkf& ukf, bool reset = false);
 
-	void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D, const ProcessModel& model,
-				   const StepDecay& step) override;
+	void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
+	               const ProcessModel& model, const StepDecay& step) override;
 	void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
-				  const Eigen::Ref<const Eigen::MatrixXd>& W) override;
-	void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) override;
+	              const Eigen::Ref<const Eigen::MatrixXd>& W) override;
+	void onOtherChange(const Covariance& P_before, const Covariance& P_after,
+	                   const TangentVector& dx) override;
 	bool wantsFullFactor() const override { return transport_pending_; }
 
-   private:
+ private:
 	//! Update columns deferred to one pass over X (flushUpdates).
 	static constexpr int kMaxPending = 16;
 	//! Columns of Σ M ΔP Mᵀ's rank update gathered before it is made.
@@ -159,7 +161,8 @@ class RtsStretchRecorder : public StepObserver
 	static constexpr int kTransportEveryTicks = 5;
 	using Stacked = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * idx::max_dim, idx::max_dim>;
 	using SixColumns = Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6>;
-	using StackedPending = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * idx::max_dim, kMaxPending>;
+	using StackedPending =
+	    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2 * idx::max_dim, kMaxPending>;
 	using Pending = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, kMaxPending>;
 	/** Adds the tick's update correction (after its updates) to the sum
 	 *  since the last transport; every kTransportEveryTicks ticks, or with
@@ -174,8 +177,9 @@ class RtsStretchRecorder : public StepObserver
 	void flushDp();
 	/** An update too wide to defer: applied to X at once (heap scratch; no
 	 *  built-in sensor is this wide). */
-	void applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
-						 const Eigen::Ref<const Eigen::MatrixXd>& W);
+	void applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
+	                     const Eigen::Ref<const Eigen::VectorXd>& u,
+	                     const Eigen::Ref<const Eigen::MatrixXd>& W);
 	RtsStretch current_;
 	NavState x_predicted_;
 	Stacked XX_;  // [X; X_mean], 2n × n, without the pending updates
@@ -184,12 +188,13 @@ class RtsStretchRecorder : public StepObserver
 	StackedPending MW_pending_;
 	Pending W_pending_;
 	int pending_ = 0;
-	Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, kMaxDpPending> MW_dP_;	// M W columns not yet in Σ M ΔP Mᵀ
+	Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, idx::max_dim, kMaxDpPending>
+	    MW_dP_;  // M W columns not yet in Σ M ΔP Mᵀ
 	int dP_pending_ = 0;
 	SixColumns E_, ME_;
 	Covariance scratch_;
 	std::size_t repairs_seen_ = 0;
-	TangentVector dx_since_transport_;	// Σ x_t ⊟ x⁻_t since the last transport
+	TangentVector dx_since_transport_;  // Σ x_t ⊟ x⁻_t since the last transport
 	int ticks_since_transport_ = 0;
 	bool open_ = false, predicted_ = false, transport_pending_ = false;
 };
@@ -199,7 +204,7 @@ class RtsStretchRecorder : public StepObserver
  *  k) if the stretch is broken or the result is not finite or has a
  *  variance that is not positive. */
 bool rtsStretchBackward(const RtsStretch& s, const NavState& x_end_filtered, const Covariance& P_end_filtered,
-						const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
-						Covariance& P_out);
+                        const NavState& x_end_smoothed, const Covariance& P_end_smoothed, NavState& x_out,
+                        Covariance& P_out);
 
 }  // namespace auvnav

@@ -46,17 +46,17 @@ namespace auvnav
 /** What the stretch file says besides its records. */
 struct StretchFileHeader
 {
-	int n = 0;									  //!< tangent dimension
-	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();	//!< body origin → IMU [m], body axes
+	int n = 0;                                                 //!< tangent dimension
+	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< body origin → IMU [m], body axes
 	std::vector<std::string> tangent_names, stored_names;
 };
 
 /** One kept tick's record. */
 struct StretchRecord
 {
-	RtsStretch stretch;			   //!< ticks 0 (and the matrices unset) in an ends_segment record
-	bool ends_segment = false;	   //!< the estimate just before a reset, or the run's end
-	std::uint32_t repairs = 0;	   //!< covariance repairs inside the stretch (makes it broken)
+	RtsStretch stretch;            //!< ticks 0 (and the matrices unset) in an ends_segment record
+	bool ends_segment = false;     //!< the estimate just before a reset, or the run's end
+	std::uint32_t repairs = 0;     //!< covariance repairs inside the stretch (makes it broken)
 	std::uint32_t limit_hits = 0;  //!< sigma-limit hits inside the stretch
 };
 
@@ -64,7 +64,7 @@ struct StretchRecord
  *  std::runtime_error naming the file on any I/O failure. */
 class StretchWriter
 {
-   public:
+ public:
 	StretchWriter(const std::string& path, const StretchFileHeader& header);
 	StretchWriter(const StretchWriter&) = delete;  // and no move: a moved-from writer has no file
 	StretchWriter& operator=(const StretchWriter&) = delete;
@@ -73,7 +73,7 @@ class StretchWriter
 	std::size_t records() const { return records_; }
 	std::uint64_t bytes() const;
 
-   private:
+ private:
 	void writeHeader(const StretchFileHeader& h);
 	std::string path_;
 	io::CFile f_;
@@ -86,16 +86,16 @@ class StretchWriter
  *  std::runtime_error naming the file if it is not one or is unreadable. */
 class StretchReader
 {
-   public:
+ public:
 	explicit StretchReader(const std::string& path);
 	StretchReader(const StretchReader&) = delete;
 	StretchReader& operator=(const StretchReader&) = delete;
 	const StretchFileHeader& header() const { return header_; }
-	std::size_t records() const { return records_; }	//!< whole ones
-	bool partialTail() const { return partial_tail_; }	//!< bytes of an unfinished record after them
+	std::size_t records() const { return records_; }    //!< whole ones
+	bool partialTail() const { return partial_tail_; }  //!< bytes of an unfinished record after them
 	StretchRecord read(std::size_t i);
 
-   private:
+ private:
 	void readHeader();
 	std::string path_;
 	io::CFile f_;
@@ -115,12 +115,12 @@ std::uint64_t stretchRecordBytes(int n);
  *  measurements) could still rewind them and written once it cannot. */
 class SmoothingRecorder
 {
-   public:
+ public:
 	SmoothingRecorder(const std::string& path, const StretchFileHeader& header, double keep_every_s);
 	/** Instead of ukf.predict: closes the stretch first if a kept tick is
 	 *  due (t_s: the time of the state before the prediction). */
-	void predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
-				 double t_s);
+	void predict(ManifoldUkf& ukf, const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n,
+	             double dt_s, double t_s);
 	/** Before a reset of the state at t_s (position re-initialisation, clock
 	 *  jump): ends the segment at the filter's current estimate. */
 	void endSegment(const ManifoldUkf& ukf, double t_s);
@@ -147,7 +147,7 @@ class SmoothingRecorder
 	std::size_t segments() const { return segments_; }
 	std::size_t written() const { return writer_.records(); }
 
-   private:
+ private:
 	void emit(StretchRecord r);
 	void noteFilterCounters(const ManifoldUkf& ukf);
 	StretchWriter writer_;
@@ -161,9 +161,9 @@ class SmoothingRecorder
 /** What the backward pass did at one record. */
 enum class SmoothedKind
 {
-	Smoothed,	 //!< the RTS step over the stretch
-	SegmentEnd,	 //!< the estimate before a reset or the run's end: the filtered one (nothing later to use)
-	Kept,		 //!< a broken stretch or a failed step: the filtered estimate kept
+	Smoothed,    //!< the RTS step over the stretch
+	SegmentEnd,  //!< the estimate before a reset or the run's end: the filtered one (nothing later to use)
+	Kept,        //!< a broken stretch or a failed step: the filtered estimate kept
 };
 const char* smoothedKindName(SmoothedKind k);
 
@@ -177,7 +177,7 @@ struct BackwardPassSummary
  *  the last to the first, with its time, the smoothed (or kept) estimate
  *  and what was done. Memory: two records. */
 BackwardPassSummary smoothStretchFile(
-	const std::string& path,
-	const std::function<void(double t_s, const NavState& x, const Covariance& P, SmoothedKind kind)>& out);
+    const std::string& path,
+    const std::function<void(double t_s, const NavState& x, const Covariance& P, SmoothedKind kind)>& out);
 
 }  // namespace auvnav

@@ -32,18 +32,25 @@ namespace detail
 constexpr double kSeriesMaxX = 0.01;
 inline double sinc(double x)
 {
-	return 1 + x * (-1.0 / 6 + x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880 + x * (-1.0 / 39916800 +
-															x * (1.0 / 6227020800.0))))));
+	return 1 + x * (-1.0 / 6 + x * (1.0 / 120 +
+	                                x * (-1.0 / 5040 + x * (1.0 / 362880 + x * (-1.0 / 39916800 +
+	                                                                            x * (1.0 / 6227020800.0))))));
 }
-inline double versinOver2(double x)	 // (1 − cos θ) / θ²
+inline double versinOver2(double x)  // (1 − cos θ) / θ²
 {
-	return 0.5 + x * (-1.0 / 24 + x * (1.0 / 720 + x * (-1.0 / 40320 + x * (1.0 / 3628800 + x * (-1.0 / 479001600 +
-															x * (1.0 / 87178291200.0))))));
+	return 0.5 +
+	       x * (-1.0 / 24 +
+	            x * (1.0 / 720 + x * (-1.0 / 40320 + x * (1.0 / 3628800 + x * (-1.0 / 479001600 +
+	                                                                           x * (1.0 / 87178291200.0))))));
 }
 inline double asinOverS(double x)  // asin(s) / s, x = s²: Σ C(2n,n) xⁿ / (4ⁿ (2n + 1))
 {
-	return 1 + x * (1.0 / 6 + x * (3.0 / 40 + x * (5.0 / 112 + x * (35.0 / 1152 + x * (63.0 / 2816 + x * (231.0 / 13312 +
-														 x * (143.0 / 10240 + x * (6435.0 / 557056))))))));
+	return 1 + x * (1.0 / 6 +
+	                x * (3.0 / 40 +
+	                     x * (5.0 / 112 +
+	                          x * (35.0 / 1152 +
+	                               x * (63.0 / 2816 + x * (231.0 / 13312 +
+	                                                       x * (143.0 / 10240 + x * (6435.0 / 557056))))))));
 }
 }  // namespace detail
 
@@ -71,9 +78,9 @@ inline Eigen::Matrix3d Exp(const Eigen::Vector3d& phi)
 	const double bxy = b * (x * y), bxz = b * (x * z), byz = b * (y * z);
 	const double ax = a * x, ay = a * y, az = a * z;
 	Eigen::Matrix3d R;
-	R << 1 - b * (y * y + z * z), bxy - az, bxz + ay,	 //
-		bxy + az, 1 - b * (x * x + z * z), byz - ax,	 //
-		bxz - ay, byz + ax, 1 - b * (x * x + y * y);
+	R << 1 - b * (y * y + z * z), bxy - az, bxz + ay,  //
+	    bxy + az, 1 - b * (x * x + z * z), byz - ax,   //
+	    bxz - ay, byz + ax, 1 - b * (x * x + y * y);
 	return R;
 }
 

@@ -48,11 +48,11 @@ namespace auvnav
 namespace idx
 {
 constexpr int att = 0, gyro_bias = 3, acc = 6, gravity = 9, acc_bias = 10, vel = 13, pos = 16,
-			  current_vehicle = 19, current_far = 21, adcp_bias = 23, inertia = 25, damping_lin = 31,
-			  damping_quad = 37;
-constexpr int core_dim = 43;	//!< the paper's state (Table I)
-constexpr int extra = core_dim;	//!< first plugin-owned coordinate
-constexpr int max_extra = AUVNAV_MAX_EXTRA_STATES;	//!< room for plugin-owned states
+              current_vehicle = 19, current_far = 21, adcp_bias = 23, inertia = 25, damping_lin = 31,
+              damping_quad = 37;
+constexpr int core_dim = 43;                        //!< the paper's state (Table I)
+constexpr int extra = core_dim;                     //!< first plugin-owned coordinate
+constexpr int max_extra = AUVNAV_MAX_EXTRA_STATES;  //!< room for plugin-owned states
 constexpr int max_dim = core_dim + max_extra;
 }  // namespace idx
 
@@ -93,20 +93,20 @@ using ExtraVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, idx::max_extra, 
 
 struct NavState
 {
-	Eigen::Matrix3d R_nb = Eigen::Matrix3d::Identity();	 //!< IMU (= body axes) to NED
-	Eigen::Vector3d b_w = Eigen::Vector3d::Zero();		 //!< gyro bias [rad/s]
-	Eigen::Vector3d a_n = Eigen::Vector3d::Zero();		 //!< IMU acceleration [m/s²]
-	double g = 9.78;									 //!< gravity magnitude [m/s²]
-	Eigen::Vector3d b_a = Eigen::Vector3d::Zero();		 //!< accelerometer bias [m/s²]
-	Eigen::Vector3d v_n = Eigen::Vector3d::Zero();		 //!< IMU velocity [m/s]
-	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();		 //!< IMU position [m]
+	Eigen::Matrix3d R_nb = Eigen::Matrix3d::Identity();            //!< IMU (= body axes) to NED
+	Eigen::Vector3d b_w = Eigen::Vector3d::Zero();                 //!< gyro bias [rad/s]
+	Eigen::Vector3d a_n = Eigen::Vector3d::Zero();                 //!< IMU acceleration [m/s²]
+	double g = 9.78;                                               //!< gravity magnitude [m/s²]
+	Eigen::Vector3d b_a = Eigen::Vector3d::Zero();                 //!< accelerometer bias [m/s²]
+	Eigen::Vector3d v_n = Eigen::Vector3d::Zero();                 //!< IMU velocity [m/s]
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();                 //!< IMU position [m]
 	Eigen::Vector2d current_vehicle_ne = Eigen::Vector2d::Zero();  //!< water current around the vehicle
-	Eigen::Vector2d current_far_ne = Eigen::Vector2d::Zero();	   //!< water current at ADCP far range
-	Eigen::Vector2d b_adcp = Eigen::Vector2d::Zero();			   //!< ADCP bias, sensor x/y
+	Eigen::Vector2d current_far_ne = Eigen::Vector2d::Zero();      //!< water current at ADCP far range
+	Eigen::Vector2d b_adcp = Eigen::Vector2d::Zero();              //!< ADCP bias, sensor x/y
 	Eigen::Matrix<double, 2, 3> M_sub = Eigen::Matrix<double, 2, 3>::Zero();
 	Eigen::Matrix<double, 2, 3> Dl_sub = Eigen::Matrix<double, 2, 3>::Zero();
 	Eigen::Matrix<double, 2, 3> Dq_sub = Eigen::Matrix<double, 2, 3>::Zero();
-	ExtraVector extra;	//!< plugin-owned states (tangent 43…), empty by default
+	ExtraVector extra;  //!< plugin-owned states (tangent 43…), empty by default
 
 	/** Tangent dimension: 43 + extra.size(). */
 	int dim() const { return idx::core_dim + static_cast<int>(extra.size()); }
@@ -137,7 +137,7 @@ struct NavState
 	 *  with plus and minus set to x beforehand so that the rest holds x's
 	 *  values; no δ vector is formed. */
 	void boxplusPairBlocks(const Eigen::Ref<const TangentVector>& direction, double step, uint32_t blocks,
-						   NavState& plus, NavState& minus) const;
+	                       NavState& plus, NavState& minus) const;
 	/** x ⊞ h·e_i, one tangent coordinate moved: the same state as boxplus of
 	 *  that vector, without forming it or touching the other members
 	 *  (affine slopes by differences, ukf.cpp). */
@@ -162,21 +162,21 @@ struct NavState
 
 	bool allFinite() const;
 
-   private:
+ private:
 	/** x ⊞ δ (kMinus: x ⊞ (−δ)), δ = step·dir, into y for the members of
 	 *  `blocks` and the attitude, the turn's Exp(±δ_att) given (nullptr:
 	 *  δ_att is 0). */
 	template <bool kMinus>
 	void boxplusInto(const Eigen::Ref<const TangentVector>& dir, double step, const Eigen::Matrix3d* dR,
-					 uint32_t blocks, NavState& y) const;
+	                 uint32_t blocks, NavState& y) const;
 };
 
 /** How a plugin-owned state evolves between updates (exact for any dt). */
 enum class StateProcess
 {
-	RandomConstant,	 //!< x' = x, no process noise (a fixed unknown: a mounting angle)
-	RandomWalk,		 //!< x' = x + w, Var w = process_sigma² · dt  (σ per √s)
-	GaussMarkov		 //!< x' = μ + φ (x − μ), φ = e^{−dt/τ}, Var = process_sigma² (1 − φ²)
+	RandomConstant,  //!< x' = x, no process noise (a fixed unknown: a mounting angle)
+	RandomWalk,      //!< x' = x + w, Var w = process_sigma² · dt  (σ per √s)
+	GaussMarkov      //!< x' = μ + φ (x − μ), φ = e^{−dt/τ}, Var = process_sigma² (1 − φ²)
 };
 
 /** A block of states a plugin owns (plugin SDK v2, measurement_model.h):
@@ -184,13 +184,13 @@ enum class StateProcess
  *  named "<sensor label>.<name>_<component>" in outputs. */
 struct StateBlockSpec
 {
-	std::string name;					  //!< e.g. "dvl_scale"
+	std::string name;                     //!< e.g. "dvl_scale"
 	std::vector<std::string> components;  //!< one name per coordinate (dimension); "" for a scalar
-	std::vector<double> mean;			  //!< initial value and Gauss–Markov mean; empty: zeros
-	std::vector<double> sigma;			  //!< initial σ per coordinate (> 0), or one for all
+	std::vector<double> mean;             //!< initial value and Gauss–Markov mean; empty: zeros
+	std::vector<double> sigma;            //!< initial σ per coordinate (> 0), or one for all
 	StateProcess process = StateProcess::RandomConstant;
 	double process_sigma = 0;  //!< RandomWalk: σ per √s; GaussMarkov: stationary σ
-	double tau_s = 0;		   //!< GaussMarkov correlation time [s]
+	double tau_s = 0;          //!< GaussMarkov correlation time [s]
 
 	int dimension() const { return static_cast<int>(components.size()); }
 	/** Empty if usable, else what is wrong (for the host's refusal message). */

@@ -22,8 +22,8 @@
 namespace auvnav
 {
 inline StateBlockSpec stateBlockFromConfig(const config::Node& n, const std::string& name,
-										   std::vector<std::string> components, const std::string& suffix = "",
-										   double to_si = 1.0)
+                                           std::vector<std::string> components,
+                                           const std::string& suffix = "", double to_si = 1.0)
 {
 	n.allowOnly({"sigma" + suffix, "mean" + suffix, "process", "process_sigma" + suffix, "tau_s"});
 	StateBlockSpec b;
@@ -51,8 +51,10 @@ inline StateBlockSpec stateBlockFromConfig(const config::Node& n, const std::str
 		b.process = StateProcess::GaussMarkov;
 	else
 		n.fail("process", "expected constant, random_walk or gauss_markov, got '" + process + "'");
-	if (b.process != StateProcess::RandomConstant) b.process_sigma = n.nonNegative("process_sigma" + suffix) * to_si;
-	if (b.process == StateProcess::GaussMarkov) b.tau_s = n.positive("tau_s");
+	if (b.process != StateProcess::RandomConstant)
+		b.process_sigma = n.nonNegative("process_sigma" + suffix) * to_si;
+	if (b.process == StateProcess::GaussMarkov)
+		b.tau_s = n.positive("tau_s");
 	else if (n.has("tau_s"))
 		n.fail("tau_s", "only a gauss_markov process has a correlation time");
 	return b;

@@ -59,7 +59,7 @@ namespace auvnav
 struct UtParams
 {
 	double alpha = 0.3, beta = 2.0, kappa = 0.0;
-	double max_attitude_spread_rad = 0.5235987755982988;	//!< largest sigma-point turn, 30° (see above)
+	double max_attitude_spread_rad = 0.5235987755982988;  //!< largest sigma-point turn, 30° (see above)
 };
 
 /** Scale s ∈ (0, 1] of a sigma-point step `c` (tangent order of state.h) so
@@ -84,7 +84,7 @@ bool setWideKernels(bool on);
 /** Sigma-point weights for dimension n. */
 struct UtWeights
 {
-	double gamma = 0;		//!< √(n+λ)
+	double gamma = 0;  //!< √(n+λ)
 	double wm0 = 0, wc0 = 0, wi = 0;
 	static UtWeights make(int n, const UtParams& p);
 };
@@ -92,9 +92,9 @@ struct UtWeights
 enum class UpdateStatus
 {
 	Accepted,
-	Recovered,	//!< accepted on the gate boundary after a run of rejections (see Recovery)
-	Rejected,	//!< failed the χ² gate
-	Invalid		//!< non-finite z/R/h, wrong size, or singular innovation covariance
+	Recovered,  //!< accepted on the gate boundary after a run of rejections (see Recovery)
+	Rejected,   //!< failed the χ² gate
+	Invalid     //!< non-finite z/R/h, wrong size, or singular innovation covariance
 };
 
 /** How an update that fails the χ² gate is applied anyway (re-acquisition).
@@ -102,7 +102,7 @@ enum class UpdateStatus
  *  blame. */
 enum class Recovery
 {
-	None,	//!< gate as usual
+	None,  //!< gate as usual
 	//! The aid may be off: the whole innovation covariance is scaled up, so
 	//! the state moves by at most what the gate allows (a small step when the
 	//! state's σ is small). For a long run of rejections of unknown cause.
@@ -112,18 +112,18 @@ enum class Recovery
 	//! innovation on the gate; closed form, ukf.cpp), then a normal update.
 	//! For rejections of an absolute attitude/position aid that agree with
 	//! each other (rejection_streak.h, navigator.cpp): an over-confident
-	//! heading is pulled to the magnetometer however small its σ had become. Falls back to Noise when no β can (the state cannot
-	//! explain the innovation).
+	//! heading is pulled to the magnetometer however small its σ had become. Falls back to Noise when no β
+	//! can (the state cannot explain the innovation).
 	State
 };
 
 struct UpdateResult
 {
 	UpdateStatus status = UpdateStatus::Invalid;
-	double nis = 0;	 //!< normalised innovation squared
-	int dim = 0;	 //!< measurement dimension
+	double nis = 0;  //!< normalised innovation squared
+	int dim = 0;     //!< measurement dimension
 	const char* why = "";
-	Eigen::VectorXd innovation;	 //!< ν = z ⊟ z̄, once the innovation covariance was formed
+	Eigen::VectorXd innovation;  //!< ν = z ⊟ z̄, once the innovation covariance was formed
 };
 
 /** Makes a symmetric P positive definite without changing any state's
@@ -149,7 +149,7 @@ int limitSigmas(Covariance& P, const TangentVector& min_sigma, const TangentVect
  *  the end of the step it describes. */
 class StepObserver
 {
-   public:
+ public:
 	virtual ~StepObserver() = default;
 	/** predict(): L is the prior P's lower Cholesky factor (n × n; only its
 	 *  first k columns unless `full`, P not positive definite past them) and
@@ -159,18 +159,20 @@ class StepObserver
 	 *  block); the rows k… of the transition only scale (diagonal), as
 	 *  model.applyLinearRows(·, step) does. */
 	virtual void onPredict(const Covariance& L, bool full, const Eigen::Ref<const Eigen::MatrixXd>& D,
-						   const ProcessModel& model, const StepDecay& step) = 0;
+	                       const ProcessModel& model, const StepDecay& step) = 0;
 	/** update(): the correction dx = W u and P ← P − W Wᵀ, with
 	 *  P [B; 0] = W (B: k × m, P the covariance before the update; so
 	 *  P⁻¹ W = [B; 0] where P is invertible). B is formed from the Cholesky
 	 *  columns the filter factored for its sigma points only. */
-	virtual void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B, const Eigen::Ref<const Eigen::VectorXd>& u,
-						  const Eigen::Ref<const Eigen::MatrixXd>& W) = 0;
+	virtual void onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
+	                      const Eigen::Ref<const Eigen::VectorXd>& u,
+	                      const Eigen::Ref<const Eigen::MatrixXd>& W) = 0;
 	/** Any other change of P (sigma limits) and of the mean by dx (tangent
 	 *  at the mean before). A recovery's widening of P along its correction
 	 *  (Recovery::State) is not reported: to a smoother it is process noise
 	 *  added at that tick, which leaves Cov(past states, x) as it is. */
-	virtual void onOtherChange(const Covariance& P_before, const Covariance& P_after, const TangentVector& dx) = 0;
+	virtual void onOtherChange(const Covariance& P_before, const Covariance& P_after,
+	                           const TangentVector& dx) = 0;
 	/** Whether the next predict() should pass all n columns of L (`full`),
 	 *  at the cost of the factor's remaining columns. */
 	virtual bool wantsFullFactor() const { return true; }
@@ -178,7 +180,7 @@ class StepObserver
 
 class ManifoldUkf
 {
-   public:
+ public:
 	ManifoldUkf(const ProcessModel& model, const UtParams& ut);
 
 	/** Sets the state; P0 is x0.dim() square (std::invalid_argument
@@ -198,14 +200,15 @@ class ManifoldUkf
 	 *  a Rauch–Tung–Striebel smoother's gain needs (smoother.h). It costs an
 	 *  n × k × k product and a copy, nothing when not asked for. */
 	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
-				 Covariance* P_cross = nullptr);
+	             Covariance* P_cross = nullptr);
 
 	/** One measurement update; `recovery` says how one failing the gate is
 	 *  applied anyway (see Recovery). */
 	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
-						Recovery recovery = Recovery::None);
+	                    Recovery recovery = Recovery::None);
 	//! `true`: Recovery::Noise (the older form).
-	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx, bool recovery)
+	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
+	                    bool recovery)
 	{
 		return update(model, m, ctx, recovery ? Recovery::Noise : Recovery::None);
 	}
@@ -228,7 +231,7 @@ class ManifoldUkf
 	/** χ² quantile for dimension `dof` at probability `p` (cached). */
 	static double chiSquareQuantile(int dof, double p);
 
-   private:
+ private:
 	/** First k columns of the lower Cholesky factor of P (repairs P if
 	 *  needed): the first `whole_columns` (all k if negative) over all rows,
 	 *  the others over the first k rows only. */
@@ -239,21 +242,22 @@ class ManifoldUkf
 	UtParams ut_;
 	UtWeights w_;
 	NavState x_;
-	int n_ = idx::core_dim;	 // state dimension (43 + plugin states)
+	int n_ = idx::core_dim;  // state dimension (43 + plugin states)
 	Covariance P_ = Covariance::Identity(idx::core_dim, idx::core_dim);
-	Covariance L_;	// scratch: leading Cholesky columns
+	Covariance L_;  // scratch: leading Cholesky columns
 	// Update temporaries (grow-only: no heap allocation once the largest
 	// measurement has been seen), carved into Eigen::Maps per update.
 	std::vector<double> update_scratch_;
-	std::array<NavState, 2 * idx::acc + 1> sigma_scratch_;	// prediction sigma points (along attitude and gyro bias)
-	std::array<NavState, 2> pair_scratch_;	// a sigma-point pair before propagation / h (boxplusPair)
+	std::array<NavState, 2 * idx::acc + 1>
+	    sigma_scratch_;                     // prediction sigma points (along attitude and gyro bias)
+	std::array<NavState, 2> pair_scratch_;  // a sigma-point pair before propagation / h (boxplusPair)
 	std::size_t repairs_ = 0;
 	TangentVector min_sigma_, max_sigma_;  // setSigmaLimits (empty: none)
 	std::size_t sigma_limit_hits_ = 0;
 	/** `report`: tell the observer (an update's limits; a prediction's are
 	 *  part of its P⁻, like process noise). */
 	void applySigmaLimits(bool report = true);
-	TangentVector variance_floor_;	// 1e-12 × the initial variances (repairCovariance)
+	TangentVector variance_floor_;  // 1e-12 × the initial variances (repairCovariance)
 	StepObserver* observer_ = nullptr;
 	Covariance P_before_;  // scratch: P before a change reported as onOtherChange
 };

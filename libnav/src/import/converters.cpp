@@ -3,8 +3,8 @@
 #include <auvnav/obs/CObservationADCP.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <auvnav/obs/CObservationPressure.h>
-#include <auvnav/obs/CObservationUSBL.h>
 #include <auvnav/obs/CObservationThrusters.h>
+#include <auvnav/obs/CObservationUSBL.h>
 #include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -21,11 +21,12 @@ namespace auvnav::import::detail
 namespace
 {
 constexpr double kDeg = M_PI / 180.0;
-constexpr double kGaussPerTesla = 1e4;	// MRPT's CObservationIMU keeps IMU_MAG_* in gauss
+constexpr double kGaussPerTesla = 1e4;  // MRPT's CObservationIMU keeps IMU_MAG_* in gauss
 constexpr int kMaxArray = 256;
-constexpr double kMaxImageSide = 1 << 20;	// pixels; far beyond any camera or sonar image
+constexpr double kMaxImageSide = 1 << 20;  // pixels; far beyond any camera or sonar image
 
-const std::vector<std::string> kCommonKeys = {"label", "class", "source", "time", "axes", "mounting", "optional"};
+const std::vector<std::string> kCommonKeys = {"label", "class",    "source",  "time",
+                                              "axes",  "mounting", "optional"};
 
 // ---------------------------------------------------------------- axes
 
@@ -50,7 +51,9 @@ Eigen::Matrix3d parseAxes(const config::Node& s, std::vector<std::string>& notes
 				a.erase(0, 1);
 			}
 			const int src = a == "x" ? 0 : a == "y" ? 1 : a == "z" ? 2 : -1;
-			if (src < 0) s.fail("axes", "'" + names[static_cast<std::size_t>(k)] + "' is not one of x, y, z, -x, -y, -z");
+			if (src < 0)
+				s.fail("axes",
+				       "'" + names[static_cast<std::size_t>(k)] + "' is not one of x, y, z, -x, -y, -z");
 			M(k, src) = sign;
 		}
 		if ((M.cwiseAbs().colwise().sum().array() != 1).any())
@@ -77,7 +80,8 @@ Eigen::Matrix3d parseAxes(const config::Node& s, std::vector<std::string>& notes
 		}
 	}
 	if (M.determinant() < 0)
-		notes.push_back("axes: the mapping is a reflection (determinant -1): the source axes are left-handed");
+		notes.push_back(
+		    "axes: the mapping is a reflection (determinant -1): the source axes are left-handed");
 	return M;
 }
 
@@ -87,7 +91,7 @@ Eigen::Matrix3d parseAxes(const config::Node& s, std::vector<std::string>& notes
  *  or per record (`fields: [x, y, z, qw, qx, qy, qz]`, metres). */
 class Mounting
 {
-   public:
+ public:
 	explicit Mounting(const config::Node& s)
 	{
 		if (!s.has("mounting")) return;
@@ -138,7 +142,7 @@ class Mounting
 		return true;
 	}
 
-   private:
+ private:
 	bool per_record_ = false;
 	mrpt::poses::CPose3D pose_;
 	ScalarSpec fields_[7];
@@ -146,7 +150,7 @@ class Mounting
 
 /** Reads a 3-vector quantity: Ok (all three), Missing (all three missing), Bad. */
 Read readVec3(const std::vector<ScalarSpec>& spec, const Record& r, Columns& cols, Eigen::Vector3d& out,
-			  std::string& why, const char* name, int index = 0)
+              std::string& why, const char* name, int index = 0)
 {
 	int ok = 0, missing = 0;
 	for (int k = 0; k < 3; ++k)
@@ -182,7 +186,8 @@ struct CountSpec
 		if (n.isScalar(key))
 		{
 			c.constant = n.integer(key);
-			if (c.constant < 0 || c.constant > kMaxArray) n.fail(key, "expected 0.." + std::to_string(kMaxArray));
+			if (c.constant < 0 || c.constant > kMaxArray)
+				n.fail(key, "expected 0.." + std::to_string(kMaxArray));
 			return c;
 		}
 		c.is_constant = false;
@@ -197,9 +202,12 @@ struct CountSpec
 			return true;
 		}
 		double v = 0;
-		if (readScalar(field, r, cols, v, why) != Read::Ok || !(v >= 0 && v <= kMaxArray) || std::floor(v) != v)
+		if (readScalar(field, r, cols, v, why) != Read::Ok || !(v >= 0 && v <= kMaxArray) ||
+		    std::floor(v) != v)
 		{
-			if (why.empty()) why = "count field '" + field.field + "' missing or not an integer in 0.." + std::to_string(kMaxArray);
+			if (why.empty())
+				why = "count field '" + field.field + "' missing or not an integer in 0.." +
+				      std::to_string(kMaxArray);
 			return false;
 		}
 		out = static_cast<int>(v);
@@ -211,7 +219,8 @@ struct CountSpec
 	void explainMissing(int n, std::string& why) const
 	{
 		if (!is_constant && why.rfind("no field", 0) == 0)
-			why = "count field '" + field.field + "' says " + std::to_string(n) + " elements, but there is " + why;
+			why = "count field '" + field.field + "' says " + std::to_string(n) + " elements, but there is " +
+			      why;
 	}
 };
 
@@ -219,9 +228,9 @@ struct CountSpec
 
 class ImuConverter final : public Converter
 {
-   public:
+ public:
 	ImuConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
 	{
 		gyro_ = parseVector(q, "angular_velocity", UnitKind::AngularRate, 3);
 		acc_ = parseVector(q, "linear_acceleration", UnitKind::Acceleration, 3);
@@ -229,13 +238,16 @@ class ImuConverter final : public Converter
 		quat_ = parseVector(q, "orientation", UnitKind::Dimensionless, 4);
 		temp_ = parseScalar(q, "temperature", UnitKind::Temperature);
 		if (!gyro_[0].present && !acc_[0].present && !mag_[0].present && !quat_[0].present)
-			s.fail("class", "an imu needs at least one of angular_velocity, linear_acceleration, magnetic_field, orientation");
+			s.fail("class",
+			       "an imu needs at least one of angular_velocity, linear_acceleration, magnetic_field, "
+			       "orientation");
 		// The quaternion is an attitude of the source frame in the IMU's own world
 		// frame: `axes` (possibly a reflection) cannot be applied to it, and leaving
 		// it unrotated beside rotated rates would be silently inconsistent.
 		if (quat_[0].present && !axes_.isIdentity(1e-12))
-			s.fail("axes", "not applicable to orientation (a quaternion of the source frame): give the orientation "
-						   "in the sensor frame without axes, or import it as a separate sensor");
+			s.fail("axes",
+			       "not applicable to orientation (a quaternion of the source frame): give the orientation "
+			       "in the sensor frame without axes, or import it as a separate sensor");
 	}
 
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
@@ -245,7 +257,8 @@ class ImuConverter final : public Converter
 		o->sensorLabel = label_;
 		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
 		if (!vector(gyro_, r, *o, {IMU_WX, IMU_WY, IMU_WZ}, 1.0, "angular_velocity", why)) return nullptr;
-		if (!vector(acc_, r, *o, {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC}, 1.0, "linear_acceleration", why)) return nullptr;
+		if (!vector(acc_, r, *o, {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC}, 1.0, "linear_acceleration", why))
+			return nullptr;
 		if (!vector(mag_, r, *o, {IMU_MAG_X, IMU_MAG_Y, IMU_MAG_Z}, kGaussPerTesla, "magnetic_field", why))
 			return nullptr;
 		if (quat_[0].present)
@@ -260,7 +273,8 @@ class ImuConverter final : public Converter
 			}
 			if (ok == 4)
 			{
-				if (!(std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]) && std::isfinite(q[3])))
+				if (!(std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]) &&
+				      std::isfinite(q[3])))
 				{
 					why = "non-finite orientation";
 					return nullptr;
@@ -290,9 +304,9 @@ class ImuConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	bool vector(const std::vector<ScalarSpec>& spec, const Record& r, mrpt::obs::CObservationIMU& o,
-				std::array<mrpt::obs::TIMUDataIndex, 3> idx, double scale, const char* name, std::string& why)
+	            std::array<mrpt::obs::TIMUDataIndex, 3> idx, double scale, const char* name, std::string& why)
 	{
 		if (!spec[0].present) return true;
 		Eigen::Vector3d v;
@@ -329,27 +343,34 @@ class ImuConverter final : public Converter
 
 class DvlConverter final : public Converter
 {
-   public:
+ public:
 	DvlConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
 	{
 		frame_ = parseText(s, "frame");
 		if (!frame_.present)
-			s.fail("frame", "required: instrument, vehicle, earth_ned, earth_enu or beam (which one depends on "
-							"the DVL's output setting; a wrong guess is a wrong velocity)");
+			s.fail("frame",
+			       "required: instrument, vehicle, earth_ned, earth_enu or beam (which one depends on "
+			       "the DVL's output setting; a wrong guess is a wrong velocity)");
 		sign_ = parseText(s, "sign");
 		if (!sign_.present)
 			s.fail("sign", "required: vehicle_over_bottom, or bottom_over_instrument (Teledyne RDI PD0)");
-		checkText(s, frame_, "frame", [](const std::string& n) {
-			auvnav::obs::DvlFrame f;
-			return auvnav::obs::parseDvlFrame(n, f);
-		});
-		checkText(s, sign_, "sign", [](const std::string& n) {
-			auvnav::obs::DvlSign x;
-			return auvnav::obs::parseDvlSign(n, x);
-		});
+		checkText(s, frame_, "frame",
+		          [](const std::string& n)
+		          {
+			          auvnav::obs::DvlFrame f;
+			          return auvnav::obs::parseDvlFrame(n, f);
+		          });
+		checkText(s, sign_, "sign",
+		          [](const std::string& n)
+		          {
+			          auvnav::obs::DvlSign x;
+			          return auvnav::obs::parseDvlSign(n, x);
+		          });
 		if (frame_.is_constant && frame_.constant == "beam" && !axes_.isIdentity(1e-12))
-			s.fail("axes", "not applied to beam azimuths with frame: beam (give them in the sensor frame, without axes)");
+			s.fail("axes",
+			       "not applied to beam azimuths with frame: beam (give them in the sensor frame, without "
+			       "axes)");
 		velocity_ = parseVector(q, "velocity", UnitKind::Velocity, 3);
 		cov_ = parseVector(q, "velocity_covariance", UnitKind::VelocitySquared, 9);
 		sigma_ = parseScalar(q, "velocity_sigma", UnitKind::Velocity);
@@ -367,7 +388,8 @@ class DvlConverter final : public Converter
 			beam_velocity_ = parseScalar(b, "velocity", UnitKind::Velocity);
 			azimuth_ = parseScalar(b, "azimuth", UnitKind::Angle);
 			const std::string range_is = b.string("range_is", "slant");
-			if (range_is != "slant" && range_is != "vertical") b.fail("range_is", "expected slant or vertical");
+			if (range_is != "slant" && range_is != "vertical")
+				b.fail("range_is", "expected slant or vertical");
 			ranges_vertical_ = range_is == "vertical";
 			has_beams_ = true;
 		}
@@ -376,8 +398,9 @@ class DvlConverter final : public Converter
 		// altitude from slant ranges is range × cos(inclination): without the
 		// inclination it would be the slant range (15 % high at 30 deg).
 		if (has_beams_ && range_.present && !ranges_vertical_ && !inclination_.present && !altitude_.present)
-			s.fail("beam_inclination", "required with slant beams.range and no altitude (altitude = range x "
-									   "cos(beam_inclination)); or give beams.range_is: vertical");
+			s.fail("beam_inclination",
+			       "required with slant beams.range and no altitude (altitude = range x "
+			       "cos(beam_inclination)); or give beams.range_is: vertical");
 		if (ranges_vertical_ && !inclination_.present && !altitude_.present)
 			notes_.push_back("beams.range_is vertical: altitude = mean of the valid vertical ranges");
 	}
@@ -399,7 +422,9 @@ class DvlConverter final : public Converter
 		// record with axes would be silently in the source frame.
 		if (o->frame == DvlFrame::Beam && !axes_.isIdentity(1e-12))
 		{
-			why = "frame beam: axes are not applied to beam azimuths (give them in the sensor frame, without axes)";
+			why =
+			    "frame beam: axes are not applied to beam azimuths (give them in the sensor frame, without "
+			    "axes)";
 			return nullptr;
 		}
 		if (!readText(sign_, r, cols_, name, why)) return nullptr;
@@ -410,10 +435,14 @@ class DvlConverter final : public Converter
 		}
 		double x = 0;
 		inclination_read_ = readScalar(inclination_, r, cols_, x, why) == Read::Ok;
-		if (inclination_read_) o->beam_inclination_rad = x;
-		else if (!why.empty()) return nullptr;
-		if (readScalar(beam_sigma_, r, cols_, x, why) == Read::Ok) o->beam_velocity_sigma_mps = x;
-		else if (!why.empty()) return nullptr;
+		if (inclination_read_)
+			o->beam_inclination_rad = x;
+		else if (!why.empty())
+			return nullptr;
+		if (readScalar(beam_sigma_, r, cols_, x, why) == Read::Ok)
+			o->beam_velocity_sigma_mps = x;
+		else if (!why.empty())
+			return nullptr;
 		if (!readBeams(r, *o, why)) return nullptr;
 
 		bool velocity_ok = false;
@@ -427,7 +456,8 @@ class DvlConverter final : public Converter
 			const bool rotate = o->frame == DvlFrame::Instrument || o->frame == DvlFrame::Vehicle;
 			const Eigen::Vector3d v_out = velocity_ok ? Eigen::Vector3d(rotate ? axes_ * v : v) : v;
 			// An invalid velocity is kept as read (NaN for a missing one), not made up.
-			for (int k = 0; k < 3; ++k) o->velocity_s_mps[static_cast<std::size_t>(k)] = velocity_ok ? v_out[k] : v[k];
+			for (int k = 0; k < 3; ++k)
+				o->velocity_s_mps[static_cast<std::size_t>(k)] = velocity_ok ? v_out[k] : v[k];
 		}
 		if (o->frame == DvlFrame::Beam)
 		{
@@ -450,7 +480,7 @@ class DvlConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	template <class Valid>
 	static void checkText(const config::Node& s, const TextSpec& t, const char* key, Valid valid)
 	{
@@ -485,7 +515,7 @@ class DvlConverter final : public Converter
 			if (beam_velocity_.present) ok = ok && std::isfinite(vel);
 			b.range_m = std::isfinite(range) ? range : 0;
 			b.valid = ok;
-			b.velocity_mps = vel;	// NaN (no radial velocity) stays NaN: 0 would be a measurement
+			b.velocity_mps = vel;  // NaN (no radial velocity) stays NaN: 0 would be a measurement
 			b.azimuth_rad = az;
 		}
 		return true;
@@ -499,14 +529,16 @@ class DvlConverter final : public Converter
 			int ok = 0;
 			for (int k = 0; k < 9; ++k)
 			{
-				const Read res = readScalar(cov_[static_cast<std::size_t>(k)], r, cols_, C(k / 3, k % 3), why);
+				const Read res =
+				    readScalar(cov_[static_cast<std::size_t>(k)], r, cols_, C(k / 3, k % 3), why);
 				if (res == Read::Bad) return false;
 				ok += res == Read::Ok;
 			}
 			if (ok == 9)
 			{
 				// A NaN covariance (beam mode, no 3-D velocity) is kept as read, not made 0.
-				const bool rotate = o.frame == auvnav::obs::DvlFrame::Instrument || o.frame == auvnav::obs::DvlFrame::Vehicle;
+				const bool rotate =
+				    o.frame == auvnav::obs::DvlFrame::Instrument || o.frame == auvnav::obs::DvlFrame::Vehicle;
 				if (rotate && C.allFinite()) C = axes_ * C * axes_.transpose();
 				for (int k = 0; k < 9; ++k) o.velocity_cov[static_cast<std::size_t>(k)] = C(k / 3, k % 3);
 			}
@@ -547,7 +579,7 @@ class DvlConverter final : public Converter
 	std::vector<ScalarSpec> velocity_, cov_;
 	ScalarSpec sigma_, lock_, altitude_, inclination_, beam_sigma_;
 	bool has_beams_ = false, ranges_vertical_ = false;
-	bool inclination_read_ = false;	// this record's beam_inclination was read
+	bool inclination_read_ = false;  // this record's beam_inclination was read
 	CountSpec beam_count_;
 	ScalarSpec range_, valid_, beam_velocity_, azimuth_;
 	Columns cols_;
@@ -557,9 +589,9 @@ class DvlConverter final : public Converter
 
 class PressureConverter final : public Converter
 {
-   public:
+ public:
 	PressureConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), mounting_(s)
+	    : label_(label), mounting_(s)
 	{
 		pressure_ = parseScalar(q, "pressure", UnitKind::Pressure);
 		depth_ = parseScalar(q, "depth", UnitKind::Length);
@@ -567,7 +599,9 @@ class PressureConverter final : public Converter
 		if (pressure_.present == depth_.present) s.fail("pressure", "give exactly one of pressure and depth");
 		const std::string ref = s.string("pressure_reference", pressure_.present ? "" : "absolute");
 		if (ref != "absolute" && ref != "gauge")
-			s.fail("pressure_reference", "required with pressure: absolute (atmosphere included) or gauge (relative to the atmosphere)");
+			s.fail("pressure_reference",
+			       "required with pressure: absolute (atmosphere included) or gauge (relative to the "
+			       "atmosphere)");
 		gauge_ = ref == "gauge";
 		// Converting a gauge reading or a depth to absolute pressure needs the
 		// atmosphere (and for a depth the water density and gravity): asked
@@ -577,7 +611,8 @@ class PressureConverter final : public Converter
 		{
 			density_ = s.inRange("density_kg_m3", 900, 1100);
 			gravity_ = s.inRange("gravity_mps2", 9.7, 9.9);
-			notes_.push_back("depth converted to absolute pressure with the spec's density, gravity and atmosphere");
+			notes_.push_back(
+			    "depth converted to absolute pressure with the spec's density, gravity and atmosphere");
 		}
 	}
 
@@ -605,7 +640,7 @@ class PressureConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_;
 	Mounting mounting_;
 	ScalarSpec pressure_, depth_, temp_;
@@ -622,9 +657,9 @@ class PressureConverter final : public Converter
  *  transponder id and measurement time (UNIX seconds). */
 class UsblConverter final : public Converter
 {
-   public:
+ public:
 	UsblConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), mounting_(s)
+	    : label_(label), mounting_(s)
 	{
 		lat_ = parseScalar(q, "latitude", UnitKind::Angle);
 		lon_ = parseScalar(q, "longitude", UnitKind::Angle);
@@ -639,7 +674,8 @@ class UsblConverter final : public Converter
 		if (q.has("position_covariance"))
 			cov_ = parseVector(q, "position_covariance", UnitKind::LengthSquared, 9);
 		sigma_ = parseScalar(q, "position_sigma", UnitKind::Length);
-		if (!cov_.empty() && sigma_.present) s.fail("position_sigma", "give position_covariance or position_sigma");
+		if (!cov_.empty() && sigma_.present)
+			s.fail("position_sigma", "give position_covariance or position_sigma");
 		range_ = parseScalar(q, "slant_range", UnitKind::Length);
 		id_ = parseScalar(q, "transponder_id", UnitKind::Dimensionless);
 		time_ = parseScalar(q, "measurement_time", UnitKind::Time);
@@ -720,7 +756,7 @@ class UsblConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_;
 	Mounting mounting_;
 	ScalarSpec lat_, lon_, depth_, north_, east_, down_, sigma_, range_, id_, time_;
@@ -732,9 +768,9 @@ class UsblConverter final : public Converter
 
 class GpsConverter final : public Converter
 {
-   public:
+ public:
 	GpsConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), mounting_(s)
+	    : label_(label), mounting_(s)
 	{
 		lat_ = parseScalar(q, "latitude", UnitKind::Angle);
 		lon_ = parseScalar(q, "longitude", UnitKind::Angle);
@@ -745,10 +781,12 @@ class GpsConverter final : public Converter
 		sats_ = parseScalar(q, "satellites", UnitKind::Dimensionless);
 		hdop_ = parseScalar(q, "hdop", UnitKind::Dimensionless);
 		if (!lat_.present || !lon_.present) s.fail("latitude", "a gps needs latitude and longitude");
-		if (quality_.present && status_.present) s.fail("fix_quality", "give fix_quality or navsat_status, not both");
+		if (quality_.present && status_.present)
+			s.fail("fix_quality", "give fix_quality or navsat_status, not both");
 		const std::string ref = s.string("altitude_reference", alt_.present ? "" : "msl");
 		if (ref != "msl" && ref != "ellipsoid")
-			s.fail("altitude_reference", "required with altitude: msl (NMEA GGA) or ellipsoid (sensor_msgs/NavSatFix)");
+			s.fail("altitude_reference",
+			       "required with altitude: msl (NMEA GGA) or ellipsoid (sensor_msgs/NavSatFix)");
 		ellipsoid_ = ref == "ellipsoid";
 	}
 
@@ -757,7 +795,7 @@ class GpsConverter final : public Converter
 		using mrpt::obs::gnss::Message_NMEA_GGA;
 		double lat = 0, lon = 0, lat_raw = 0, lon_raw = 0;
 		if (readScalar(lat_, r, cols_, lat, why, 0, &lat_raw) != Read::Ok ||
-			readScalar(lon_, r, cols_, lon, why, 0, &lon_raw) != Read::Ok)
+		    readScalar(lon_, r, cols_, lon, why, 0, &lon_raw) != Read::Ok)
 		{
 			if (why.empty()) why = "latitude/longitude missing";
 			return nullptr;
@@ -814,7 +852,7 @@ class GpsConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_;
 	Mounting mounting_;
 	ScalarSpec lat_, lon_, alt_, geoid_, quality_, status_, sats_, hdop_;
@@ -826,14 +864,15 @@ class GpsConverter final : public Converter
 
 class AdcpConverter final : public Converter
 {
-   public:
+ public:
 	AdcpConverter(const config::Node& q, const config::Node& s, const std::string& label)
-		: label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
 	{
 		blank_ = parseScalar(q, "blank_distance", UnitKind::Length);
 		cell_size_ = parseScalar(q, "cell_size", UnitKind::Length);
 		sigma_ = parseScalar(q, "velocity_sigma", UnitKind::Velocity);
-		if (!blank_.present || !cell_size_.present) s.fail("cell_size", "an adcp needs blank_distance and cell_size");
+		if (!blank_.present || !cell_size_.present)
+			s.fail("cell_size", "an adcp needs blank_distance and cell_size");
 		const config::Node c = q.child("cells");
 		c.allowOnly({"count", "velocity", "correlation", "valid"});
 		count_ = CountSpec::parse(c, "count");
@@ -849,7 +888,7 @@ class AdcpConverter final : public Converter
 		o->sensorLabel = label_;
 		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
 		if (readScalar(blank_, r, cols_, o->blank_distance_m, why) != Read::Ok ||
-			readScalar(cell_size_, r, cols_, o->cell_size_m, why) != Read::Ok)
+		    readScalar(cell_size_, r, cols_, o->cell_size_m, why) != Read::Ok)
 		{
 			if (why.empty()) why = "blank_distance/cell_size missing";
 			return nullptr;
@@ -881,7 +920,7 @@ class AdcpConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_;
 	Eigen::Matrix3d axes_;
 	Mounting mounting_;
@@ -896,10 +935,11 @@ class AdcpConverter final : public Converter
 
 class ThrustersConverter final : public Converter
 {
-   public:
+ public:
 	ThrustersConverter(const config::Node& q, const config::Node& s, const std::string& label) : label_(label)
 	{
-		if (s.has("mounting")) s.fail("mounting", "thruster efforts have no mounting (the geometry is vehicle configuration)");
+		if (s.has("mounting"))
+			s.fail("mounting", "thruster efforts have no mounting (the geometry is vehicle configuration)");
 		const config::Node e = q.child("effort");
 		e.allowOnly({"count", "field", "unit"});
 		count_ = CountSpec::parse(e, "count");
@@ -907,9 +947,12 @@ class ThrustersConverter final : public Converter
 		field_.field = e.string("field");
 		field_.where = e.where("field");
 		const std::string unit = e.string("unit");
-		if (unit == "N") unit_ = auvnav::obs::EffortUnit::Force_N;
-		else if (unit == "rpm") unit_ = auvnav::obs::EffortUnit::Speed_rpm;
-		else e.fail("unit", "expected N (commanded force) or rpm (shaft speed)");
+		if (unit == "N")
+			unit_ = auvnav::obs::EffortUnit::Force_N;
+		else if (unit == "rpm")
+			unit_ = auvnav::obs::EffortUnit::Speed_rpm;
+		else
+			e.fail("unit", "expected N (commanded force) or rpm (shaft speed)");
 	}
 
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
@@ -933,7 +976,7 @@ class ThrustersConverter final : public Converter
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_;
 	CountSpec count_;
 	ScalarSpec field_;
@@ -945,13 +988,14 @@ class ThrustersConverter final : public Converter
 
 class ImageConverter final : public Converter
 {
-   public:
+ public:
 	ImageConverter(const config::Node& q, const config::Node& s, const std::string& label,
-				   const std::string& data_dir)
-		: label_(label), data_dir_(data_dir), mounting_(s)
+	               const std::string& data_dir)
+	    : label_(label), data_dir_(data_dir), mounting_(s)
 	{
 		file_ = parseText(q, "file");
-		if (!file_.present || file_.is_constant) q.fail("file", "expected {field: NAME} (image file per record)");
+		if (!file_.present || file_.is_constant)
+			q.fail("file", "expected {field: NAME} (image file per record)");
 		if (q.has("camera"))
 		{
 			const config::Node c = q.child("camera");
@@ -1003,7 +1047,7 @@ class ImageConverter final : public Converter
 				if (!(v[i] >= 0 && v[i] <= kMaxImageSide) || std::floor(v[i]) != v[i])
 				{
 					why = std::string("camera ") + (i == 0 ? "ncols" : "nrows") + " " + std::to_string(v[i]) +
-						  " is not an integer in 0.." + std::to_string(static_cast<long>(kMaxImageSide));
+					      " is not an integer in 0.." + std::to_string(static_cast<long>(kMaxImageSide));
 					return nullptr;
 				}
 			auto& cam = o->cameraParams;
@@ -1017,12 +1061,13 @@ class ImageConverter final : public Converter
 			cam.intrinsicParams(2, 2) = 1.0;
 			cam.dist.fill(0);
 			// An empty name is a name (MRPT's default is ""): the export writes it as an empty cell.
-			if (camera_name_.present && !readText(camera_name_, r, cols_, cam.cameraName, why, true)) return nullptr;
+			if (camera_name_.present && !readText(camera_name_, r, cols_, cam.cameraName, why, true))
+				return nullptr;
 		}
 		return o;
 	}
 
-   private:
+ private:
 	std::string label_, data_dir_;
 	Mounting mounting_;
 	TextSpec file_, camera_name_;
@@ -1048,8 +1093,8 @@ void finishObservation(mrpt::obs::CObservation& obs)
 
 const std::vector<std::string>& observationClassNames()
 {
-	static const std::vector<std::string> names = {"imu", "dvl", "pressure", "gps", "adcp", "thrusters", "image",
-												   "usbl"};
+	static const std::vector<std::string> names = {"imu",  "dvl",       "pressure", "gps",
+	                                               "adcp", "thrusters", "image",    "usbl"};
 	return names;
 }
 
@@ -1069,30 +1114,32 @@ std::string mrptClassOf(const std::string& cls)
 std::vector<std::string> classKeys(const std::string& cls)
 {
 	std::vector<std::string> k = kCommonKeys;
-	auto add = [&](std::initializer_list<const char*> more) {
+	auto add = [&](std::initializer_list<const char*> more)
+	{
 		for (const char* m : more) k.emplace_back(m);
 	};
-	if (cls == "imu") add({"angular_velocity", "linear_acceleration", "magnetic_field", "orientation", "temperature"});
+	if (cls == "imu")
+		add({"angular_velocity", "linear_acceleration", "magnetic_field", "orientation", "temperature"});
 	if (cls == "dvl")
 		add({"frame", "sign", "velocity", "velocity_covariance", "velocity_sigma", "bottom_lock", "altitude",
-			 "beam_inclination", "beam_velocity_sigma", "beams"});
+		     "beam_inclination", "beam_velocity_sigma", "beams"});
 	if (cls == "pressure")
-		add({"pressure", "depth", "temperature", "pressure_reference", "atmospheric_pressure_pa", "density_kg_m3",
-			 "gravity_mps2"});
+		add({"pressure", "depth", "temperature", "pressure_reference", "atmospheric_pressure_pa",
+		     "density_kg_m3", "gravity_mps2"});
 	if (cls == "gps")
 		add({"latitude", "longitude", "altitude", "altitude_reference", "geoid_separation", "fix_quality",
-			 "navsat_status", "satellites", "hdop"});
+		     "navsat_status", "satellites", "hdop"});
 	if (cls == "adcp") add({"blank_distance", "cell_size", "velocity_sigma", "cells"});
 	if (cls == "thrusters") add({"effort"});
 	if (cls == "image") add({"file", "camera"});
 	if (cls == "usbl")
-		add({"latitude", "longitude", "depth", "north", "east", "down", "position_covariance", "position_sigma",
-			 "slant_range", "transponder_id", "measurement_time"});
+		add({"latitude", "longitude", "depth", "north", "east", "down", "position_covariance",
+		     "position_sigma", "slant_range", "transponder_id", "measurement_time"});
 	return k;
 }
 
 std::unique_ptr<Converter> makeConverter(const std::string& cls, const config::Node& q, const config::Node& s,
-										 const std::string& label, const std::string& data_dir)
+                                         const std::string& label, const std::string& data_dir)
 {
 	if (cls == "imu") return std::make_unique<ImuConverter>(q, s, label);
 	if (cls == "dvl") return std::make_unique<DvlConverter>(q, s, label);
@@ -1114,25 +1161,30 @@ std::string presetFor(const std::string& message_type, const std::string& cls)
 	const auto p = t.find("/msg/");
 	if (p != std::string::npos) t.erase(p, 4);
 	const std::string twist_cov =
-		"velocity_covariance: {fields: ['twist.covariance[0]', 'twist.covariance[1]', 'twist.covariance[2]', "
-		"'twist.covariance[6]', 'twist.covariance[7]', 'twist.covariance[8]', 'twist.covariance[12]', "
-		"'twist.covariance[13]', 'twist.covariance[14]'], unit: 'm^2/s^2'}\n";
+	    "velocity_covariance: {fields: ['twist.covariance[0]', 'twist.covariance[1]', 'twist.covariance[2]', "
+	    "'twist.covariance[6]', 'twist.covariance[7]', 'twist.covariance[8]', 'twist.covariance[12]', "
+	    "'twist.covariance[13]', 'twist.covariance[14]'], unit: 'm^2/s^2'}\n";
 	if (cls == "imu" && t == "sensor_msgs/Imu")
-		return "angular_velocity: {fields: [angular_velocity.x, angular_velocity.y, angular_velocity.z], unit: rad/s}\n"
-			   "linear_acceleration: {fields: [linear_acceleration.x, linear_acceleration.y, linear_acceleration.z], "
-			   "unit: 'm/s^2'}\n";
+		return "angular_velocity: {fields: [angular_velocity.x, angular_velocity.y, angular_velocity.z], "
+		       "unit: rad/s}\n"
+		       "linear_acceleration: {fields: [linear_acceleration.x, linear_acceleration.y, "
+		       "linear_acceleration.z], "
+		       "unit: 'm/s^2'}\n";
 	if (cls == "imu" && t == "sensor_msgs/MagneticField")
 		return "magnetic_field: {fields: [magnetic_field.x, magnetic_field.y, magnetic_field.z], unit: T}\n";
-	if (cls == "pressure" && t == "sensor_msgs/FluidPressure") return "pressure: {field: fluid_pressure, unit: Pa}\n";
+	if (cls == "pressure" && t == "sensor_msgs/FluidPressure")
+		return "pressure: {field: fluid_pressure, unit: Pa}\n";
 	if (cls == "gps" && t == "sensor_msgs/NavSatFix")
 		return "latitude: {field: latitude, unit: deg}\nlongitude: {field: longitude, unit: deg}\n"
-			   "altitude: {field: altitude, unit: m}\nnavsat_status: {field: status.status}\n";
+		       "altitude: {field: altitude, unit: m}\nnavsat_status: {field: status.status}\n";
 	if (cls == "dvl" && t == "geometry_msgs/TwistWithCovarianceStamped")
-		return "velocity: {fields: [twist.twist.linear.x, twist.twist.linear.y, twist.twist.linear.z], unit: m/s}\n" +
-			   twist_cov;
+		return "velocity: {fields: [twist.twist.linear.x, twist.twist.linear.y, twist.twist.linear.z], unit: "
+		       "m/s}\n" +
+		       twist_cov;
 	if (cls == "dvl" && t == "nav_msgs/Odometry")
-		return "velocity: {fields: [twist.twist.linear.x, twist.twist.linear.y, twist.twist.linear.z], unit: m/s}\n" +
-			   twist_cov;
+		return "velocity: {fields: [twist.twist.linear.x, twist.twist.linear.y, twist.twist.linear.z], unit: "
+		       "m/s}\n" +
+		       twist_cov;
 	return {};
 }
 

@@ -14,7 +14,7 @@ namespace auvnav::import::detail
 {
 class Converter
 {
-   public:
+ public:
 	virtual ~Converter() = default;
 	/** The observation for `r` (timestamp left to the caller), or nullptr and
 	 *  `why` (the rejection reason, without the record's place). */
@@ -22,7 +22,7 @@ class Converter
 	/** Facts about the mapping worth a line in the report. */
 	const std::vector<std::string>& notes() const { return notes_; }
 
-   protected:
+ protected:
 	std::vector<std::string> notes_;
 };
 
@@ -41,7 +41,7 @@ std::vector<std::string> classKeys(const std::string& cls);
  *  own node, or a preset for a standard message type); `s` the sensor node;
  *  `data_dir` resolves relative image paths. Throws ConfigError. */
 std::unique_ptr<Converter> makeConverter(const std::string& cls, const config::Node& q, const config::Node& s,
-										 const std::string& label, const std::string& data_dir);
+                                         const std::string& label, const std::string& data_dir);
 
 /** A preset quantity mapping (YAML text) for a standard ROS message type
  *  ("sensor_msgs/Imu" or "sensor_msgs/msg/Imu") and class, or empty. */

@@ -35,7 +35,7 @@ std::string trimmed(const std::string& s)
 }  // namespace
 
 CsvSource::CsvSource(const std::string& path, char delimiter)
-	: path_(path), in_(path, std::ios::binary), delimiter_(delimiter), layout_id_(newLayoutId())
+    : path_(path), in_(path, std::ios::binary), delimiter_(delimiter), layout_id_(newLayoutId())
 {
 	if (!in_) throw ImportError(path + ": cannot open CSV file");
 	std::string line;
@@ -44,16 +44,18 @@ CsvSource::CsvSource(const std::string& path, char delimiter)
 		if (line_no_ == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
 		if (isBlankOrComment(line)) continue;
 		if (!splitCells(line, delimiter_, cells_, quoted_))
-			throw ImportError(path + ":" + std::to_string(line_no_) + ": header row has an unterminated quote");
+			throw ImportError(path + ":" + std::to_string(line_no_) +
+			                  ": header row has an unterminated quote");
 		std::set<std::string> seen;
 		for (auto& c : cells_)
 		{
 			c = trimmed(c);
 			if (c.empty())
-				throw ImportError(path + ":" + std::to_string(line_no_) + ": header row has an empty column name");
+				throw ImportError(path + ":" + std::to_string(line_no_) +
+				                  ": header row has an empty column name");
 			if (!seen.insert(c).second)
 				throw ImportError(path + ":" + std::to_string(line_no_) + ": column '" + c +
-								  "' appears twice in the header row");
+				                  "' appears twice in the header row");
 		}
 		header_ = cells_;
 		return;
@@ -81,7 +83,7 @@ bool CsvSource::readLine(std::string& line)
 		if (c == '\n') break;
 		if (line.size() >= kMaxLineBytes)
 			throw ImportError(path_ + ":" + std::to_string(line_no_ + 1) + ": line longer than " +
-							  std::to_string(kMaxLineBytes / (1 << 20)) + " MiB (not a CSV file?)");
+			                  std::to_string(kMaxLineBytes / (1 << 20)) + " MiB (not a CSV file?)");
 		line.push_back(static_cast<char>(c));
 	}
 	++line_no_;
@@ -90,7 +92,7 @@ bool CsvSource::readLine(std::string& line)
 }
 
 bool CsvSource::splitCells(const std::string& line, char delimiter, std::vector<std::string>& cells,
-						   std::vector<bool>& quoted)
+                           std::vector<bool>& quoted)
 {
 	cells.clear();
 	quoted.clear();
@@ -154,7 +156,8 @@ bool CsvSource::next(Record& out)
 		}
 		if (cells_.size() != header_.size())
 		{
-			out.defect = std::to_string(cells_.size()) + " cells, the header has " + std::to_string(header_.size());
+			out.defect =
+			    std::to_string(cells_.size()) + " cells, the header has " + std::to_string(header_.size());
 			for (auto& v : out.values) v.kind = Value::Kind::Missing;
 			return true;
 		}

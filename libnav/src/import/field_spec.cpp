@@ -18,7 +18,8 @@ std::string replaceAll(std::string s, const std::string& from, const std::string
 void parseCommon(const config::Node& q, ScalarSpec& s, UnitKind kind)
 {
 	const std::string unit = q.string("unit", kind == UnitKind::Dimensionless ? "1" : "");
-	if (unit.empty()) q.fail("unit", "missing unit (" + std::string(kindName(kind)) + ": " + unitsOfKind(kind) + ")");
+	if (unit.empty())
+		q.fail("unit", "missing unit (" + std::string(kindName(kind)) + ": " + unitsOfKind(kind) + ")");
 	try
 	{
 		s.unit = unitFor(unit, kind, q.where("unit"));
@@ -67,7 +68,7 @@ ScalarSpec parseScalar(const config::Node& n, const std::string& key, UnitKind k
 }
 
 std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& key, UnitKind kind,
-									std::size_t count)
+                                    std::size_t count)
 {
 	std::vector<ScalarSpec> out(count);
 	for (auto& s : out) s.where = n.where(key);
@@ -83,7 +84,8 @@ std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& ke
 	{
 		const auto names = q.strings("fields");
 		if (names.size() != count)
-			q.fail("fields", "expected " + std::to_string(count) + " names, got " + std::to_string(names.size()));
+			q.fail("fields",
+			       "expected " + std::to_string(count) + " names, got " + std::to_string(names.size()));
 		for (std::size_t i = 0; i < count; ++i)
 		{
 			out[i] = common;
@@ -94,7 +96,8 @@ std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& ke
 	{
 		const auto values = q.numbers("values");
 		if (values.size() != count)
-			q.fail("values", "expected " + std::to_string(count) + " numbers, got " + std::to_string(values.size()));
+			q.fail("values",
+			       "expected " + std::to_string(count) + " numbers, got " + std::to_string(values.size()));
 		for (std::size_t i = 0; i < count; ++i)
 		{
 			out[i] = common;
@@ -123,9 +126,14 @@ Read readNumber(const Value& v, double& out, std::string& why)
 {
 	switch (v.kind)
 	{
-		case Value::Kind::Missing: return Read::Missing;
-		case Value::Kind::Number: out = v.number; return Read::Ok;
-		case Value::Kind::Time: why = "is a time stamp, not a number"; return Read::Bad;
+		case Value::Kind::Missing:
+			return Read::Missing;
+		case Value::Kind::Number:
+			out = v.number;
+			return Read::Ok;
+		case Value::Kind::Time:
+			why = "is a time stamp, not a number";
+			return Read::Bad;
 		case Value::Kind::Text:
 		{
 			const char* b = v.text.c_str();
@@ -154,8 +162,8 @@ Read readNumber(const Value& v, double& out, std::string& why)
 	return Read::Bad;
 }
 
-Read readScalar(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why, int index,
-				double* raw_out)
+Read readScalar(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why,
+                int index, double* raw_out)
 {
 	if (!s.present) return Read::Missing;
 	if (s.is_constant)
@@ -207,7 +215,8 @@ TextSpec parseText(const config::Node& n, const std::string& key)
 	return t;
 }
 
-bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why, bool empty_ok)
+bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why,
+              bool empty_ok)
 {
 	if (t.is_constant)
 	{
@@ -229,7 +238,7 @@ bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& ou
 		// Integers as integers, so that `map: {"3": earth_enu}` matches 3.0.
 		const double x = v.number;
 		raw = (std::floor(x) == x && std::abs(x) < 1e15) ? std::to_string(static_cast<long long>(x))
-														  : std::to_string(x);
+		                                                 : std::to_string(x);
 	}
 	else if (empty_ok && t.map.empty())
 	{

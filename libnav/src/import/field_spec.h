@@ -17,7 +17,7 @@ enum class Read
 {
 	Ok,
 	Missing,  //!< empty cell, absent optional field, or a declared invalid value
-	Bad		  //!< present but unusable (why set)
+	Bad       //!< present but unusable (why set)
 };
 
 /** One scalar: `{field: name, unit: u}` or `{value: 3.2, unit: u}`. The
@@ -26,12 +26,12 @@ struct ScalarSpec
 {
 	bool present = false;
 	bool is_constant = false;
-	bool optional = false;	//!< the field may be absent from the source or empty
+	bool optional = false;  //!< the field may be absent from the source or empty
 	std::string field;
 	double constant_si = 0;
 	Unit unit{"1", UnitKind::Dimensionless, 1};
 	std::vector<double> invalid_raw;  //!< source values meaning "no data" (e.g. PD0 -32768)
-	std::string where;	//!< "spec.yaml: sensors[0].angular_velocity"
+	std::string where;                //!< "spec.yaml: sensors[0].angular_velocity"
 
 	std::string fieldFor(int index) const;
 };
@@ -41,16 +41,16 @@ struct ScalarSpec
 ScalarSpec parseScalar(const config::Node& n, const std::string& key, UnitKind kind);
 /** `{fields: [a, b, c], unit: u}` or `{values: [...], unit: u}`: `count` scalars. */
 std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& key, UnitKind kind,
-									std::size_t count);
+                                    std::size_t count);
 
 /** Column indices of a record layout, cached per layout id. */
 class Columns
 {
-   public:
+ public:
 	/** Index of `name` in `r` (−1 if absent), memoised per layout. */
 	int index(const Record& r, const std::string& name);
 
-   private:
+ private:
 	uint64_t layout_ = 0;
 	std::vector<std::pair<std::string, int>> cache_;
 };
@@ -60,7 +60,7 @@ Read readNumber(const Value& v, double& out, std::string& why);
 
 /** Reads `s` (element `index` when templated) from `r` in SI. */
 Read readScalar(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why,
-				int index = 0, double* raw_out = nullptr);
+                int index = 0, double* raw_out = nullptr);
 
 /** A text-valued setting, constant (`frame: earth_enu`) or per record
  *  (`frame: {field: coord_sys, map: {"3": earth_enu}}`). */
@@ -77,6 +77,6 @@ TextSpec parseText(const config::Node& n, const std::string& key);
 /** The text in `r` (mapped), or the constant; false and `why` if missing or
  *  unmapped. `empty_ok`: an empty cell is the text "" (unmapped). */
 bool readText(const TextSpec& t, const Record& r, Columns& cols, std::string& out, std::string& why,
-			  bool empty_ok = false);
+              bool empty_ok = false);
 
 }  // namespace auvnav::import::detail

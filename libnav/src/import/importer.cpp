@@ -6,11 +6,11 @@
 #include <auvnav/io/rawlog.h>
 #include <mrpt/system/filesystem.h>
 
+#include <fnmatch.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fnmatch.h>
 #include <limits>
 #include <optional>
 #include <queue>
@@ -27,8 +27,8 @@ using detail::Converter;
 
 constexpr TimeNs kNoTime = std::numeric_limits<TimeNs>::min();
 constexpr std::size_t kMaxNotes = 5;
-constexpr std::size_t kMaxPending = 2000000;	// ~1.5 GB at worst; 5.5 h of a 100 Hz IMU
-constexpr std::size_t kMaxReasons = 20;	// distinct rejection reasons kept per sensor
+constexpr std::size_t kMaxPending = 2000000;  // ~1.5 GB at worst; 5.5 h of a 100 Hz IMU
+constexpr std::size_t kMaxReasons = 20;       // distinct rejection reasons kept per sensor
 
 bool isDirectory(const std::string& p)
 {
@@ -51,10 +51,11 @@ std::string baseName(const std::string& p)
  *  a file matching it inside an INPUT folder (also a rosbag2 folder, for
  *  `allow_dirs`). Exactly one match, else ImportError listing what was seen. */
 std::string resolveInput(const std::string& pattern, const std::vector<std::string>& inputs, bool allow_dirs,
-						 const std::string& what)
+                         const std::string& what)
 {
 	std::vector<std::string> matches;
-	auto consider = [&](const std::string& path, const std::string& name) {
+	auto consider = [&](const std::string& path, const std::string& name)
+	{
 		if (::fnmatch(pattern.c_str(), name.c_str(), 0) != 0) return;
 		if (isFile(path) || (allow_dirs && isDirectory(path))) matches.push_back(path);
 	};
@@ -82,8 +83,8 @@ std::string resolveInput(const std::string& pattern, const std::vector<std::stri
 	std::string list;
 	for (const auto& in : inputs) list += (list.empty() ? "" : ", ") + in;
 	if (matches.empty())
-		throw ImportError(what + ": no input matches '" + pattern + "' (inputs: " + (list.empty() ? "none" : list) +
-						  ")");
+		throw ImportError(what + ": no input matches '" + pattern +
+		                  "' (inputs: " + (list.empty() ? "none" : list) + ")");
 	std::string m;
 	for (const auto& x : matches) m += (m.empty() ? "" : ", ") + x;
 	throw ImportError(what + ": '" + pattern + "' matches several inputs (" + m + "); name one");
@@ -102,8 +103,9 @@ struct TimeSpec
  *  standard type gets the preset mapping. */
 bool hasQuantityKeys(const config::Node& s)
 {
-	for (const char* k : {"angular_velocity", "linear_acceleration", "magnetic_field", "orientation", "velocity",
-						  "pressure", "depth", "latitude", "longitude", "effort", "cells", "file", "beams"})
+	for (const char* k :
+	     {"angular_velocity", "linear_acceleration", "magnetic_field", "orientation", "velocity", "pressure",
+	      "depth", "latitude", "longitude", "effort", "cells", "file", "beams"})
 		if (s.has(k)) return true;
 	return false;
 }
@@ -124,10 +126,10 @@ struct SensorRun
 	std::size_t report_index = 0;
 
 	bool done = false;
-	TimeNs frontier = kNoTime;	// stamp of the last record placed (where this sensor's reading stands)
-	TimeNs newest = kNoTime;	// newest stamp placed
-	TimeNs previous = kNoTime;	// stamp of the previous accepted record
-	std::vector<std::pair<TimeNs, TimeNs>> steps;	// (start, step) of positive steps
+	TimeNs frontier = kNoTime;  // stamp of the last record placed (where this sensor's reading stands)
+	TimeNs newest = kNoTime;    // newest stamp placed
+	TimeNs previous = kNoTime;  // stamp of the previous accepted record
+	std::vector<std::pair<TimeNs, TimeNs>> steps;  // (start, step) of positive steps
 	Record record;
 
 	// A record more than clock_jump_s from the last one placed (or the first
@@ -142,7 +144,7 @@ struct SensorRun
 	};
 	std::optional<Held> suspect;
 	bool has_placed = false, first_rejected = false;
-	TimeNs placed_prev = 0;	// stamp of the last record placed (valid with has_placed)
+	TimeNs placed_prev = 0;  // stamp of the last record placed (valid with has_placed)
 };
 
 struct Spec
@@ -157,14 +159,15 @@ TimeSpec parseTimeSpec(const config::Node& s, bool bag)
 {
 	if (!s.has("time"))
 		s.fail("time", bag ? "required: {field: header.stamp} or {source: record} (the bag's record time)"
-						   : "required: {field: COLUMN, format: s|ms|us|ns|iso8601}");
+		                   : "required: {field: COLUMN, format: s|ms|us|ns|iso8601}");
 	const config::Node t = s.child("time");
 	t.allowOnly({"source", "field", "format", "offset_s"});
 	TimeSpec ts;
 	const std::string src = t.string("source", "field");
 	if (src != "field" && src != "record") t.fail("source", "expected field or record");
 	ts.from_record = src == "record";
-	if (ts.from_record && !bag) t.fail("source", "record times exist only in bags; a CSV names its time column");
+	if (ts.from_record && !bag)
+		t.fail("source", "record times exist only in bags; a CSV names its time column");
 	if (ts.from_record && t.has("field")) t.fail("field", "not used with source: record");
 	if (!ts.from_record) ts.field = t.string("field");
 	if (t.has("format"))
@@ -182,12 +185,13 @@ TimeSpec parseTimeSpec(const config::Node& s, bool bag)
 
 Spec parseSpec(const config::Node& root)
 {
-	root.allowOnly({"format_version", "description", "reorder_window_s", "clock_jump_s", "gap_factor", "sensors"});
+	root.allowOnly(
+	    {"format_version", "description", "reorder_window_s", "clock_jump_s", "gap_factor", "sensors"});
 	if (root.has("format_version") && root.integer("format_version") != 1)
 		root.fail("format_version", "this auvnav-import reads format_version 1");
 	Spec spec;
 	spec.reorder_window_s = root.inRange("reorder_window_s", 0, 600, 1.0);
-	spec.clock_jump_s = root.inRange("clock_jump_s", 1e-6, 1e9, 10.0);	// 1e9 s: ~30 years, in int64 ns
+	spec.clock_jump_s = root.inRange("clock_jump_s", 1e-6, 1e9, 10.0);  // 1e9 s: ~30 years, in int64 ns
 	spec.gap_factor = root.inRange("gap_factor", 1.5, 1e6, 5.0);
 	for (const auto& s : root.sequence("sensors"))
 	{
@@ -279,7 +283,7 @@ bool openSensor(SensorRun& run, const std::vector<std::string>& inputs)
 		const std::string preset = detail::presetFor(run.source->messageType(), run.cls);
 		if (preset.empty())
 			run.node.fail("class", "topic " + run.topic + " has type '" + run.source->messageType() +
-									   "', which has no preset for class " + run.cls + ": name its fields");
+			                           "', which has no preset for class " + run.cls + ": name its fields");
 		quantities = config::Node::fromText(preset, "preset for " + run.source->messageType());
 	}
 	const std::string dir = mrpt::system::extractFileDirectory(run.path);
@@ -313,7 +317,9 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 	const Value& v = r.values[static_cast<std::size_t>(i)];
 	switch (v.kind)
 	{
-		case Value::Kind::Time: out = v.time_ns; break;
+		case Value::Kind::Time:
+			out = v.time_ns;
+			break;
 		case Value::Kind::Text:
 		{
 			std::string err;
@@ -332,13 +338,14 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 			// field in ms or ns would be a silent factor 1e3..1e9.
 			if (!run.time.format_given)
 			{
-				why = "spec: time field '" + run.time.field + "' is a number: give time.format (s, ms, us or ns)";
+				why = "spec: time field '" + run.time.field +
+				      "' is a number: give time.format (s, ms, us or ns)";
 				return false;
 			}
-			const double scale = run.time.format == TimeFormat::Seconds		  ? 1e9
-								 : run.time.format == TimeFormat::Milliseconds ? 1e6
-								 : run.time.format == TimeFormat::Microseconds ? 1e3
-																			   : 1.0;
+			const double scale = run.time.format == TimeFormat::Seconds        ? 1e9
+			                     : run.time.format == TimeFormat::Milliseconds ? 1e6
+			                     : run.time.format == TimeFormat::Microseconds ? 1e3
+			                                                                   : 1.0;
 			const double ns = v.number * scale;
 			if (!std::isfinite(ns) || std::abs(ns) > 9e18 || run.time.format == TimeFormat::Iso8601)
 			{
@@ -348,7 +355,9 @@ bool stampOf(const SensorRun& run, const Record& r, detail::Columns& cols, TimeN
 			out = static_cast<TimeNs>(std::llround(ns));
 			break;
 		}
-		case Value::Kind::Missing: why = "time field '" + run.time.field + "' is empty"; return false;
+		case Value::Kind::Missing:
+			why = "time field '" + run.time.field + "' is empty";
+			return false;
 	}
 	if (__builtin_add_overflow(out, run.time.offset_ns, &out))
 	{
@@ -459,7 +468,8 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 		const auto out_abs = std::filesystem::weakly_canonical(opt.out_rawlog, ec);
 		for (const auto& run : spec.sensors)
 			if (!run.path.empty() && std::filesystem::weakly_canonical(run.path, ec) == out_abs)
-				throw ImportError(opt.out_rawlog + ": the output is one of the inputs (" + run.label + " reads it)");
+				throw ImportError(opt.out_rawlog + ": the output is one of the inputs (" + run.label +
+				                  " reads it)");
 	}
 	report.reorder_window_s = spec.reorder_window_s;
 	const TimeNs window_ns = static_cast<TimeNs>(spec.reorder_window_s * 1e9);
@@ -472,7 +482,8 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 	uint64_t seq = 0;
 	std::vector<detail::Columns> time_cols(spec.sensors.size());
 
-	auto writeUpTo = [&](TimeNs limit) {
+	auto writeUpTo = [&](TimeNs limit)
+	{
 		// Strictly older than the limit: a record with the limit's stamp may still
 		// come from a sensor listed earlier in the spec.
 		while (!heap.empty() && (heap.top().t < limit || limit == std::numeric_limits<TimeNs>::max()))
@@ -485,21 +496,26 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			heap.pop();
 		}
 	};
-	auto reject = [&](SensorRun& run, const std::string& reason, const std::string& where, bool always_fatal) {
+	auto reject = [&](SensorRun& run, const std::string& reason, const std::string& where, bool always_fatal)
+	{
 		if (!opt.lenient || always_fatal)
-			throw ImportError(where + ": " + reason + (always_fatal || opt.lenient ? "" : " (--lenient counts such records and goes on)"));
+			throw ImportError(
+			    where + ": " + reason +
+			    (always_fatal || opt.lenient ? "" : " (--lenient counts such records and goes on)"));
 		SensorReport& rep = report.sensors[run.report_index];
 		rep.rejected++;
 		// Reasons quote the bad value: bound how many distinct ones are kept.
-		const std::string key = rep.rejected_by_reason.count(reason) || rep.rejected_by_reason.size() < kMaxReasons
-									? reason
-									: std::string("other reasons");
+		const std::string key =
+		    rep.rejected_by_reason.count(reason) || rep.rejected_by_reason.size() < kMaxReasons
+		        ? reason
+		        : std::string("other reasons");
 		rep.rejected_by_reason[key]++;
 		rep.first_rejected_where.emplace(key, where);
 	};
 
 	// Puts an accepted record in the reorder buffer (or counts it behind the window).
-	auto place = [&](SensorRun& run, std::size_t idx, SensorRun::Held h) {
+	auto place = [&](SensorRun& run, std::size_t idx, SensorRun::Held h)
+	{
 		SensorReport& rep = report.sensors[run.report_index];
 		const TimeNs t = h.t;
 		if (written_upto != kNoTime && t < written_upto)
@@ -531,11 +547,14 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 		run.has_placed = true;
 		run.placed_prev = t;
 	};
-	auto far = [&](TimeNs a, TimeNs b) {
-		return std::abs(static_cast<long double>(a) - static_cast<long double>(b)) > static_cast<long double>(jump_ns);
+	auto far = [&](TimeNs a, TimeNs b)
+	{
+		return std::abs(static_cast<long double>(a) - static_cast<long double>(b)) >
+		       static_cast<long double>(jump_ns);
 	};
 	// A converted record: placed, or held as a suspect (see SensorRun::Held).
-	auto arrive = [&](SensorRun& run, std::size_t idx, SensorRun::Held h) {
+	auto arrive = [&](SensorRun& run, std::size_t idx, SensorRun::Held h)
+	{
 		if (run.suspect)
 		{
 			SensorRun::Held s = std::move(*run.suspect);
@@ -544,16 +563,17 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			// clock_jump_s (a later one, when its neighbours agree without it).
 			// Only the very first record is judged so: a log stepping back more
 			// than clock_jump_s at every record must not lose all but its last.
-			const bool isolated = !run.has_placed
-									  ? !run.first_rejected && far(h.t, s.t) && h.t < s.t
-									  : far(s.t, run.placed_prev) && far(h.t, s.t) && !far(h.t, run.placed_prev);
+			const bool isolated =
+			    !run.has_placed ? !run.first_rejected && far(h.t, s.t) && h.t < s.t
+			                    : far(s.t, run.placed_prev) && far(h.t, s.t) && !far(h.t, run.placed_prev);
 			if (isolated && !run.has_placed) run.first_rejected = true;
 			if (isolated)
 			{
 				// Like "behind the reorder window": the log's fact, counted, not fatal.
 				SensorReport& rep = report.sensors[run.report_index];
 				const std::string reason =
-					"isolated time stamp (more than clock_jump_s from both neighbouring records, which agree)";
+				    "isolated time stamp (more than clock_jump_s from both neighbouring records, which "
+				    "agree)";
 				rep.rejected++;
 				rep.rejected_by_reason[reason]++;
 				rep.first_rejected_where.emplace(reason, s.where);
@@ -575,7 +595,8 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			// buffer holds about one reorder window of every sensor.
 			std::size_t pick = spec.sensors.size();
 			for (std::size_t i = 0; i < spec.sensors.size(); ++i)
-				if (!spec.sensors[i].done && (pick == spec.sensors.size() || spec.sensors[i].frontier < spec.sensors[pick].frontier))
+				if (!spec.sensors[i].done &&
+				    (pick == spec.sensors.size() || spec.sensors[i].frontier < spec.sensors[pick].frontier))
 					pick = i;
 			if (pick == spec.sensors.size()) break;
 			SensorRun& run = spec.sensors[pick];
@@ -612,18 +633,22 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 					if (run.previous != kNoTime)
 					{
 						// Steps in long double: two valid stamps can be 1.8e19 ns apart.
-						const long double step = static_cast<long double>(t) - static_cast<long double>(run.previous);
+						const long double step =
+						    static_cast<long double>(t) - static_cast<long double>(run.previous);
 						if (t == run.previous) rep.repeated_stamps++;
 						if (t < run.previous) rep.backward_stamps++;
-						if (t > run.previous && step < 9e18L) run.steps.emplace_back(run.previous, t - run.previous);
-						if (step > static_cast<long double>(jump_ns) || -step > static_cast<long double>(jump_ns))
+						if (t > run.previous && step < 9e18L)
+							run.steps.emplace_back(run.previous, t - run.previous);
+						if (step > static_cast<long double>(jump_ns) ||
+						    -step > static_cast<long double>(jump_ns))
 						{
 							rep.clock_jumps++;
 							if (rep.clock_jump_notes.size() < kMaxNotes)
 							{
 								char buf[64];
 								std::snprintf(buf, sizeof buf, "%+.3Lf", step * 1e-9L);
-								rep.clock_jump_notes.push_back("at " + secondsText(run.previous) + " s: " + buf + " s");
+								rep.clock_jump_notes.push_back("at " + secondsText(run.previous) +
+								                               " s: " + buf + " s");
 							}
 						}
 					}
@@ -639,9 +664,11 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 				if (!s.done)
 				{
 					all_done = false;
-					watermark = std::min(watermark, s.frontier == kNoTime ? kNoTime
-																		 : (s.frontier < kNoTime + window_ns + 1 ? kNoTime + 1
-																												  : s.frontier - window_ns));
+					watermark = std::min(
+					    watermark,
+					    s.frontier == kNoTime
+					        ? kNoTime
+					        : (s.frontier < kNoTime + window_ns + 1 ? kNoTime + 1 : s.frontier - window_ns));
 				}
 			if (all_done) break;
 			if (watermark != kNoTime) writeUpTo(watermark);
@@ -687,7 +714,10 @@ std::string num(double v, int prec = 6)
 	return s.str();
 }
 
-double spanSeconds(const SensorReport& s) { return s.has_span ? static_cast<double>(s.last_ns - s.first_ns) * 1e-9 : 0; }
+double spanSeconds(const SensorReport& s)
+{
+	return s.has_span ? static_cast<double>(s.last_ns - s.first_ns) * 1e-9 : 0;
+}
 }  // namespace
 
 std::string ImportReport::toJson() const
@@ -706,27 +736,27 @@ std::string ImportReport::toJson() const
 		Json by_reason = Json::object();
 		for (const auto& [reason, n] : s.rejected_by_reason)
 			by_reason[reason] = {{"count", n}, {"first", s.first_rejected_where.at(reason)}};
-		const Json no_time;	// null: no observation written
+		const Json no_time;  // null: no observation written
 		j["sensors"].push_back({{"label", s.label},
-								{"class", s.observation_class},
-								{"source", s.source},
-								{"rows_read", s.rows_read},
-								{"written", s.written},
-								{"rejected", s.rejected},
-								{"rejected_by_reason", by_reason},
-								{"first_time_s", s.has_span ? Json(s.first_ns * 1e-9) : no_time},
-								{"last_time_s", s.has_span ? Json(s.last_ns * 1e-9) : no_time},
-								{"span_s", spanSeconds(s)},
-								{"median_rate_hz", s.median_rate_hz},
-								{"repeated_stamps", s.repeated_stamps},
-								{"backward_stamps", s.backward_stamps},
-								{"reordered", s.reordered},
-								{"gaps", s.gaps},
-								{"largest_gap_s", s.largest_gap_s},
-								{"largest_gap_at_s", s.largest_gap_at_s},
-								{"clock_jumps", s.clock_jumps},
-								{"clock_jump_notes", s.clock_jump_notes},
-								{"notes", s.notes}});
+		                        {"class", s.observation_class},
+		                        {"source", s.source},
+		                        {"rows_read", s.rows_read},
+		                        {"written", s.written},
+		                        {"rejected", s.rejected},
+		                        {"rejected_by_reason", by_reason},
+		                        {"first_time_s", s.has_span ? Json(s.first_ns * 1e-9) : no_time},
+		                        {"last_time_s", s.has_span ? Json(s.last_ns * 1e-9) : no_time},
+		                        {"span_s", spanSeconds(s)},
+		                        {"median_rate_hz", s.median_rate_hz},
+		                        {"repeated_stamps", s.repeated_stamps},
+		                        {"backward_stamps", s.backward_stamps},
+		                        {"reordered", s.reordered},
+		                        {"gaps", s.gaps},
+		                        {"largest_gap_s", s.largest_gap_s},
+		                        {"largest_gap_at_s", s.largest_gap_at_s},
+		                        {"clock_jumps", s.clock_jumps},
+		                        {"clock_jump_notes", s.clock_jump_notes},
+		                        {"notes", s.notes}});
 	}
 	return io::jsonText(j);
 }
@@ -738,19 +768,23 @@ std::string ImportReport::toMarkdown() const
 	  << " observations)\n- completed: " << (completed ? "yes" : "no") << "\n";
 	if (!error.empty()) o << "- error: " << error << "\n";
 	o << "- reorder window: " << reorder_window_s << " s\n\n";
-	o << "| sensor | class | source | read | written | rejected | span [s] | rate [Hz] | repeated | backward | "
-		 "reordered | gaps (largest [s]) | clock jumps |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+	o << "| sensor | class | source | read | written | rejected | span [s] | rate [Hz] | repeated | backward "
+	     "| "
+	     "reordered | gaps (largest [s]) | clock jumps "
+	     "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
 	for (const auto& s : sensors)
-		o << "| " << s.label << " | " << s.observation_class << " | " << s.source << " | " << s.rows_read << " | "
-		  << s.written << " | " << s.rejected << " | " << num(spanSeconds(s), 4) << " | " << num(s.median_rate_hz, 4)
-		  << " | " << s.repeated_stamps << " | " << s.backward_stamps << " | " << s.reordered << " | " << s.gaps
-		  << " (" << num(s.largest_gap_s, 3) << ") | " << s.clock_jumps << " |\n";
+		o << "| " << s.label << " | " << s.observation_class << " | " << s.source << " | " << s.rows_read
+		  << " | " << s.written << " | " << s.rejected << " | " << num(spanSeconds(s), 4) << " | "
+		  << num(s.median_rate_hz, 4) << " | " << s.repeated_stamps << " | " << s.backward_stamps << " | "
+		  << s.reordered << " | " << s.gaps << " (" << num(s.largest_gap_s, 3) << ") | " << s.clock_jumps
+		  << " |\n";
 	for (const auto& s : sensors)
 	{
 		if (s.rejected_by_reason.empty() && s.clock_jump_notes.empty() && s.notes.empty()) continue;
 		o << "\n## " << s.label << "\n\n";
 		for (const auto& [reason, n] : s.rejected_by_reason)
-			o << "- rejected " << n << " × " << reason << " (first: " << s.first_rejected_where.at(reason) << ")\n";
+			o << "- rejected " << n << " × " << reason << " (first: " << s.first_rejected_where.at(reason)
+			  << ")\n";
 		for (const auto& j : s.clock_jump_notes) o << "- clock jump " << j << "\n";
 		for (const auto& n : s.notes) o << "- " << n << "\n";
 	}
@@ -762,13 +796,13 @@ std::string ImportReport::toTable() const
 	std::ostringstream o;
 	char line[256];
 	std::snprintf(line, sizeof line, "  %-12s %-34s %9s %9s %9s %9s %8s %9s %7s\n", "sensor", "class", "read",
-				  "written", "rejected", "span[s]", "rate[Hz]", "repeated", "gaps");
+	              "written", "rejected", "span[s]", "rate[Hz]", "repeated", "gaps");
 	o << line;
 	for (const auto& s : sensors)
 	{
-		std::snprintf(line, sizeof line, "  %-12s %-34s %9zu %9zu %9zu %9.1f %8.2f %9zu %7zu\n", s.label.c_str(),
-					  s.observation_class.c_str(), s.rows_read, s.written, s.rejected, spanSeconds(s),
-					  s.median_rate_hz, s.repeated_stamps, s.gaps);
+		std::snprintf(line, sizeof line, "  %-12s %-34s %9zu %9zu %9zu %9.1f %8.2f %9zu %7zu\n",
+		              s.label.c_str(), s.observation_class.c_str(), s.rows_read, s.written, s.rejected,
+		              spanSeconds(s), s.median_rate_hz, s.repeated_stamps, s.gaps);
 		o << line;
 	}
 	return o.str();

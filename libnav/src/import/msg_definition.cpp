@@ -224,7 +224,7 @@ std::string normalizeTypeName(std::string_view name)
 /** Parses and links the types reachable from the main type, depth first. */
 class SchemaBuilder
 {
-   public:
+ public:
 	SchemaBuilder(std::string_view type_name, std::string_view text, Dialect dialect,
 	              const DefinitionFallback& fallback)
 	    : main_(normalizeTypeName(type_name)), dialect_(dialect), fallback_(fallback)
@@ -241,7 +241,7 @@ class SchemaBuilder
 		return schema_;
 	}
 
-   private:
+ private:
 	const MessageDef* resolve(const std::string& name, const std::string& used_by, std::size_t depth)
 	{
 		const auto done = index_.find(name);
@@ -385,7 +385,7 @@ T byteSwapped(T v)
 template <bool kCdr>
 class WireReader
 {
-   public:
+ public:
 	WireReader(const uint8_t* data, std::size_t size, std::size_t origin, bool swap)
 	    : data_(data), size_(size), pos_(origin), origin_(origin), swap_(swap)
 	{
@@ -451,7 +451,7 @@ class WireReader
 		return true;
 	}
 
-   private:
+ private:
 	std::size_t aligned(std::size_t n) const
 	{
 		if (!kCdr) return pos_;
@@ -521,7 +521,7 @@ std::size_t saturatingAdd(std::size_t a, std::size_t b)
 template <class Reader>
 class Walker
 {
-   public:
+ public:
 	Walker(Reader& in, const std::vector<std::size_t>& min_size, std::vector<Value>& values,
 	       std::vector<std::string>* names, std::vector<uint32_t>& lengths, bool cdr)
 	    : in_(in), min_size_(min_size), values_(values), names_(names), lengths_(lengths), cdr_(cdr)
@@ -553,7 +553,7 @@ class Walker
 		}
 	}
 
-   private:
+ private:
 	void field(const FieldDef& f)
 	{
 		const std::size_t len = path_.size();

@@ -87,7 +87,7 @@ struct MessageDef
  *  line and token. */
 class DefinitionError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
@@ -101,7 +101,7 @@ std::string normalizeTypeName(std::string_view name);
 /** The parsed main type and every type it uses, linked. Immutable. */
 class Schema
 {
-   public:
+ public:
 	/** Parses `text` as the definition of `type_name` (either spelling). Types
 	 *  that the text uses but does not define are asked of `fallback`. Throws
 	 *  DefinitionError on bad syntax, an unknown type, a recursive type or an
@@ -114,7 +114,7 @@ class Schema
 	const std::vector<std::unique_ptr<MessageDef>>& messages() const { return messages_; }
 	Dialect dialect() const { return dialect_; }
 
-   private:
+ private:
 	Schema() = default;
 	friend class SchemaBuilder;
 	std::vector<std::unique_ptr<MessageDef>> messages_;  // root first
@@ -133,7 +133,7 @@ enum class WireFormat : uint8_t
  *  flattened: `bottom.velocity.x`), its type and the byte offset. */
 class DecodeError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
@@ -146,7 +146,7 @@ class DecodeError : public std::runtime_error
  *  (counted from 2^40, away from small per-source counters). */
 class FlatDecoder
 {
-   public:
+ public:
 	FlatDecoder(std::shared_ptr<const Schema> schema, WireFormat format);
 
 	/** Fills out.names, out.values and out.layout_id from one message (for CDR
@@ -160,7 +160,7 @@ class FlatDecoder
 
 	const Schema& schema() const { return *schema_; }
 
-   private:
+ private:
 	// One pass over the bytes; collects the names too when `names` is given
 	// (and then the field path for error messages).
 	void run(const uint8_t* data, std::size_t size, std::vector<Value>& values,

@@ -67,7 +67,7 @@ uint64_t littleEndian(const char* p, std::size_t n)
 /** The bytes of a file by position; reads past the end fail. */
 class BagFile
 {
-   public:
+ public:
 	explicit BagFile(const std::string& path)
 	    : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC)), open_errno_(fd_ < 0 ? errno : 0)
 	{
@@ -99,7 +99,7 @@ class BagFile
 		return true;
 	}
 
-   private:
+ private:
 	int fd_;
 	int open_errno_;
 	uint64_t size_ = 0;
@@ -108,7 +108,7 @@ class BagFile
 /** `name=value` fields of a record header or of connection data. */
 class HeaderFields
 {
-   public:
+ public:
 	/** False (and `why`) when a field's length overruns the bytes or a field has no '='. */
 	bool parse(std::string_view bytes, std::string& why)
 	{
@@ -156,7 +156,7 @@ class HeaderFields
 		return littleEndian(v->data(), n);
 	}
 
-   private:
+ private:
 	std::vector<std::pair<std::string_view, std::string_view>> fields_;
 };
 
@@ -164,7 +164,7 @@ class HeaderFields
  *  once (positions are file positions either way). */
 class ByteSource
 {
-   public:
+ public:
 	virtual ~ByteSource() = default;
 	/** Up to `n` bytes at `pos` (fewer at the end), valid until the next call. */
 	virtual std::string_view view(uint64_t pos, std::size_t n) = 0;
@@ -172,7 +172,7 @@ class ByteSource
 
 class FileBytes final : public ByteSource
 {
-   public:
+ public:
 	explicit FileBytes(const BagFile& file) : file_(file) {}
 	std::string_view view(uint64_t pos, std::size_t n) override
 	{
@@ -182,14 +182,14 @@ class FileBytes final : public ByteSource
 		return scratch_;
 	}
 
-   private:
+ private:
 	const BagFile& file_;
 	std::string scratch_;
 };
 
 class MemoryBytes final : public ByteSource
 {
-   public:
+ public:
 	MemoryBytes(uint64_t base, std::string bytes) : base_(base), bytes_(std::move(bytes)) {}
 	std::string_view view(uint64_t pos, std::size_t n) override
 	{
@@ -197,7 +197,7 @@ class MemoryBytes final : public ByteSource
 		return std::string_view(bytes_).substr(static_cast<std::size_t>(pos - base_), n);
 	}
 
-   private:
+ private:
 	uint64_t base_;
 	std::string bytes_;
 };
@@ -216,7 +216,7 @@ struct RecordInfo
 
 class BagChecker
 {
-   public:
+ public:
 	BagChecker(const std::string& path, const BagFile& file) : path_(path), file_(file), file_bytes_(file) {}
 
 	/** The whole check; `topic` empty: the topic-specific part is skipped. */
@@ -227,7 +227,7 @@ class BagChecker
 		for (const Chunk& c : chunk_infos_) checkChunk(c, topic);
 	}
 
-   private:
+ private:
 	struct Chunk
 	{
 		uint64_t pos = 0;
@@ -514,7 +514,7 @@ TimeNs toNs(const ros::Time& t)
 
 class Ros1Source final : public RecordSource
 {
-   public:
+ public:
 	Ros1Source(std::string path, std::string topic, std::unique_ptr<rosbag::Bag> bag)
 	    : path_(std::move(path)), topic_(std::move(topic)), bag_(std::move(bag))
 	{
@@ -568,7 +568,7 @@ class Ros1Source final : public RecordSource
 	std::string describe() const override { return path_ + " topic " + topic_; }
 	std::string messageType() const override { return type_; }
 
-   private:
+ private:
 	std::string where() const { return path_ + ": topic " + topic_ + " message #" + std::to_string(index_); }
 
 	void readBytes(const rosbag::MessageInstance& m)

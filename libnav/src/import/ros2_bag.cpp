@@ -121,7 +121,7 @@ std::string sqliteReason(sqlite3* db, int rc)
 /** A read-only SQLite connection. */
 class Database
 {
-   public:
+ public:
 	explicit Database(std::string path) : path_(std::move(path))
 	{
 		const int rc = sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr);
@@ -145,7 +145,7 @@ class Database
 		fail(path_, doing + ": " + sqliteReason(db_, rc));
 	}
 
-   private:
+ private:
 	std::string path_;
 	sqlite3* db_ = nullptr;
 };
@@ -153,7 +153,7 @@ class Database
 /** A prepared statement; step() throws ImportError on errors. */
 class Statement
 {
-   public:
+ public:
 	Statement(const Database& db, const std::string& sql, std::string doing)
 	    : db_(db), doing_(std::move(doing))
 	{
@@ -196,7 +196,7 @@ class Statement
 	}
 	bool isNull(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
 
-   private:
+ private:
 	const Database& db_;
 	std::string doing_;
 	sqlite3_stmt* stmt_ = nullptr;
@@ -439,7 +439,7 @@ std::shared_ptr<const msg::Schema> schemaFor(const BagPart& part, const std::str
 
 class Ros2Source final : public RecordSource
 {
-   public:
+ public:
 	Ros2Source(std::string path, std::string topic, std::vector<BagPart> parts)
 	    : path_(std::move(path)), topic_(std::move(topic)), parts_(std::move(parts))
 	{
@@ -487,7 +487,7 @@ class Ros2Source final : public RecordSource
 	std::string describe() const override { return path_ + " topic " + topic_; }
 	std::string messageType() const override { return type_; }
 
-   private:
+ private:
 	void prepareDecoders(std::size_t i)
 	{
 		for (const TopicRow& t : parts_[i].topics)

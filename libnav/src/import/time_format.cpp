@@ -32,7 +32,7 @@ std::optional<int64_t> decimalToScaledInt(std::string_view s, int scale_exp, std
 	while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
 	bool negative = false;
 	if (i < s.size() && (s[i] == '+' || s[i] == '-')) negative = s[i++] == '-';
-	std::string digits;	 // all mantissa digits
+	std::string digits;  // all mantissa digits
 	int frac_digits = 0;
 	bool seen_point = false, any_digit = false;
 	for (; i < s.size(); ++i)
@@ -83,7 +83,7 @@ std::optional<int64_t> decimalToScaledInt(std::string_view s, int scale_exp, std
 		const int drop = -shift;
 		if (drop > static_cast<int>(digits.size()))
 		{
-			return int64_t{0};	// below half a unit unless drop == size and first digit >= 5
+			return int64_t{0};  // below half a unit unless drop == size and first digit >= 5
 		}
 		const std::size_t keep = digits.size() - static_cast<std::size_t>(drop);
 		round_up = digits[keep] >= '5';
@@ -127,12 +127,12 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 	std::size_t i = 0;
 	int Y, M, D, h, m, sec;
 	if (!readInt(s, i, 4, Y) || i >= s.size() || s[i++] != '-' || !readInt(s, i, 2, M) || i >= s.size() ||
-		s[i++] != '-' || !readInt(s, i, 2, D))
+	    s[i++] != '-' || !readInt(s, i, 2, D))
 		return std::nullopt;
 	if (i >= s.size() || (s[i] != 'T' && s[i] != ' ')) return std::nullopt;
 	++i;
 	if (!readInt(s, i, 2, h) || i >= s.size() || s[i++] != ':' || !readInt(s, i, 2, m) || i >= s.size() ||
-		s[i++] != ':' || !readInt(s, i, 2, sec))
+	    s[i++] != ':' || !readInt(s, i, 2, sec))
 		return std::nullopt;
 	if (M < 1 || M > 12 || D < 1 || D > 31 || h > 23 || m > 59 || sec > 60)
 	{
@@ -151,7 +151,7 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 			if (digits < 9)
 				frac_ns += (s[i] - '0') * scale;
 			else if (digits == 9)
-				round_up = s[i] >= '5';	 // nearest nanosecond, as the decimal formats
+				round_up = s[i] >= '5';  // nearest nanosecond, as the decimal formats
 			scale /= 10;
 		}
 		if (!any) return std::nullopt;
@@ -190,7 +190,7 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 	tm.tm_hour = h;
 	tm.tm_min = m;
 	tm.tm_sec = sec;
-	const int64_t days_s = static_cast<int64_t>(timegm(&tm));	// UTC, no time zone database involved
+	const int64_t days_s = static_cast<int64_t>(timegm(&tm));  // UTC, no time zone database involved
 	// timegm() normalises impossible dates (2016-02-31 -> 03-02): refuse them.
 	std::tm back{};
 	const time_t tt = static_cast<time_t>(days_s);
@@ -200,7 +200,8 @@ std::optional<TimeNs> parseIso8601(std::string_view s, std::string& why)
 		return std::nullopt;
 	}
 	int64_t ns = 0;
-	if (__builtin_mul_overflow(days_s - offset_s, int64_t{1000000000}, &ns) || __builtin_add_overflow(ns, frac_ns, &ns))
+	if (__builtin_mul_overflow(days_s - offset_s, int64_t{1000000000}, &ns) ||
+	    __builtin_add_overflow(ns, frac_ns, &ns))
 	{
 		why = "out of range";
 		return std::nullopt;
@@ -223,11 +224,16 @@ std::optional<TimeNs> parseTime(std::string_view text, TimeFormat format, std::s
 {
 	switch (format)
 	{
-		case TimeFormat::Seconds: return decimalToScaledInt(text, 9, why);
-		case TimeFormat::Milliseconds: return decimalToScaledInt(text, 6, why);
-		case TimeFormat::Microseconds: return decimalToScaledInt(text, 3, why);
-		case TimeFormat::Nanoseconds: return decimalToScaledInt(text, 0, why);
-		case TimeFormat::Iso8601: return parseIso8601(text, why);
+		case TimeFormat::Seconds:
+			return decimalToScaledInt(text, 9, why);
+		case TimeFormat::Milliseconds:
+			return decimalToScaledInt(text, 6, why);
+		case TimeFormat::Microseconds:
+			return decimalToScaledInt(text, 3, why);
+		case TimeFormat::Nanoseconds:
+			return decimalToScaledInt(text, 0, why);
+		case TimeFormat::Iso8601:
+			return parseIso8601(text, why);
 	}
 	why = "unknown format";
 	return std::nullopt;
@@ -241,9 +247,10 @@ std::string formatSeconds7(TimeNs t)
 	char buf[48];
 	if (sec < 0 && frac != 0)
 		std::snprintf(buf, sizeof buf, "-%lld.%07lld", static_cast<long long>(-(sec + 1)),
-					  static_cast<long long>(10000000 - frac));
+		              static_cast<long long>(10000000 - frac));
 	else
-		std::snprintf(buf, sizeof buf, "%lld.%07lld", static_cast<long long>(sec), static_cast<long long>(frac));
+		std::snprintf(buf, sizeof buf, "%lld.%07lld", static_cast<long long>(sec),
+		              static_cast<long long>(frac));
 	return buf;
 }
 
@@ -264,8 +271,9 @@ std::optional<TimeNs> fromMrptTimeChecked(mrpt::Clock::time_point t)
 	// INVALID_TIMESTAMP (tick 0, 1601) and any time after 2262 have no int64
 	// nanosecond count: (ticks - epoch) * 100 would overflow.
 	int64_t ticks = 0, ns = 0;
-	if (__builtin_sub_overflow(static_cast<int64_t>(t.time_since_epoch().count()), unixEpochTicks(), &ticks) ||
-		__builtin_mul_overflow(ticks, int64_t{100}, &ns))
+	if (__builtin_sub_overflow(static_cast<int64_t>(t.time_since_epoch().count()), unixEpochTicks(),
+	                           &ticks) ||
+	    __builtin_mul_overflow(ticks, int64_t{100}, &ns))
 		return std::nullopt;
 	return ns;
 }
@@ -273,8 +281,9 @@ std::optional<TimeNs> fromMrptTimeChecked(mrpt::Clock::time_point t)
 TimeNs fromMrptTime(mrpt::Clock::time_point t)
 {
 	const auto ns = fromMrptTimeChecked(t);
-	if (!ns) throw ImportError("MRPT time stamp " + std::to_string(t.time_since_epoch().count()) +
-							   " (100 ns ticks) is outside the int64 nanosecond range (1678..2262)");
+	if (!ns)
+		throw ImportError("MRPT time stamp " + std::to_string(t.time_since_epoch().count()) +
+		                  " (100 ns ticks) is outside the int64 nanosecond range (1678..2262)");
 	return *ns;
 }
 

@@ -8,14 +8,18 @@
 
 namespace auvnav::io
 {
-LineFile::LineFile(const std::string& path, std::size_t flush_at_bytes) : path_(path), flush_at_(flush_at_bytes)
+LineFile::LineFile(const std::string& path, std::size_t flush_at_bytes)
+    : path_(path), flush_at_(flush_at_bytes)
 {
 	fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
 	if (fd_ < 0) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
 	buffer_.reserve(flush_at_ + 4096);
 }
 
-LineFile::LineFile(LineFile&& other) noexcept { *this = std::move(other); }
+LineFile::LineFile(LineFile&& other) noexcept
+{
+	*this = std::move(other);
+}
 
 LineFile& LineFile::operator=(LineFile&& other) noexcept
 {
@@ -30,7 +34,10 @@ LineFile& LineFile::operator=(LineFile&& other) noexcept
 	return *this;
 }
 
-LineFile::~LineFile() { close(); }
+LineFile::~LineFile()
+{
+	close();
+}
 
 void LineFile::close() noexcept
 {

@@ -258,7 +258,10 @@ size_t BufferedGzInput::readAcross(void* buf, size_t n)
 	return done;
 }
 
-uint64_t BufferedGzInput::Seek(int64_t, CStream::TSeekOrigin) { throw std::logic_error("BufferedGzInput::Seek"); }
+uint64_t BufferedGzInput::Seek(int64_t, CStream::TSeekOrigin)
+{
+	throw std::logic_error("BufferedGzInput::Seek");
+}
 
 RawlogReader::RawlogReader(const std::string& path) : path_(path)
 {

@@ -36,7 +36,7 @@ TrajectoryPoint blend(const TrajectoryPoint& a, const TrajectoryPoint& b, double
 Trajectory::const_iterator firstNotBefore(const Trajectory& tr, double t)
 {
 	return std::lower_bound(tr.begin(), tr.end(), t - kTimeTolerance_s,
-							[](const TrajectoryPoint& p, double v) { return p.t_unix < v; });
+	                        [](const TrajectoryPoint& p, double v) { return p.t_unix < v; });
 }
 
 /** Interpolated or exact point, nullopt outside or across a gap longer than max_gap_s. */
@@ -57,10 +57,10 @@ Trajectory readGroundTruth(const std::filesystem::path& csv)
 {
 	CsvTable c(csv.string());
 	const std::size_t t = c.column("unix_time_s"), n = c.column("north_m"), e = c.column("east_m"),
-					  d = c.column("down_m"), qw = c.column("qw"), qx = c.column("qx"), qy = c.column("qy"),
-					  qz = c.column("qz"), dist = c.column("distance_m"), cn = c.column("current_n_mps"),
-					  ce = c.column("current_e_mps");
-	const bool has_submerged = c.has("submerged");	// hand-made truth files may leave it out
+	                  d = c.column("down_m"), qw = c.column("qw"), qx = c.column("qx"), qy = c.column("qy"),
+	                  qz = c.column("qz"), dist = c.column("distance_m"), cn = c.column("current_n_mps"),
+	                  ce = c.column("current_e_mps");
+	const bool has_submerged = c.has("submerged");  // hand-made truth files may leave it out
 	const std::size_t sub = has_submerged ? c.column("submerged") : 0;
 	Trajectory tr;
 	while (c.next())
@@ -105,7 +105,7 @@ Trajectory readTum(const std::filesystem::path& file)
 		if (!std::isfinite(p.t_unix) || !p.p_n.allFinite() || !q)
 			throw std::runtime_error(where + ": non-finite value or non-unit quaternion");
 		p.q_nb = *q;
-		if (!tr.empty() && p.t_unix <= tr.back().t_unix) continue;	// keep it strictly increasing
+		if (!tr.empty() && p.t_unix <= tr.back().t_unix) continue;  // keep it strictly increasing
 		tr.push_back(p);
 	}
 	if (tr.empty()) throw std::runtime_error(file.string() + ": no poses");

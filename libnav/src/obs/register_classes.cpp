@@ -19,4 +19,7 @@ MRPT_INITIALIZER(registerAllClasses_auvnav_obs)
 	registerClass(CLASS_ID(auvnav::obs::CObservationUSBL));
 }
 
-void auvnav::obs::registerAllClasses() { registerAllClasses_auvnav_obs(); }
+void auvnav::obs::registerAllClasses()
+{
+	registerAllClasses_auvnav_obs();
+}

@@ -41,7 +41,8 @@ std::vector<Detection> detectPoles(const cv::Mat& polar, const PolarGeometry& g,
 	denoised.convertTo(f, CV_32F);
 	// Matched to a pole's footprint (about a beam wide, ~0.15 m long): averages
 	// the speckle down before thresholding.
-	cv::GaussianBlur(f, f, cv::Size(0, 0), p.smooth_sigma_beams, std::max(0.5, p.smooth_sigma_m / g.rangeStep_m()));
+	cv::GaussianBlur(f, f, cv::Size(0, 0), p.smooth_sigma_beams,
+	                 std::max(0.5, p.smooth_sigma_m / g.rangeStep_m()));
 
 	std::vector<float> level, spread;
 	rowBackground(f, level, spread);
@@ -56,7 +57,7 @@ std::vector<Detection> detectPoles(const cv::Mat& polar, const PolarGeometry& g,
 	cv::Mat excess(f.size(), CV_32F), snr(f.size(), CV_32F), mask(f.size(), CV_8U), local_max;
 	for (int r = 0; r < f.rows; ++r)
 	{
-		const float bg = lv.at<float>(r), s = std::max(sp.at<float>(r), 2.0f);	// floor: quantisation
+		const float bg = lv.at<float>(r), s = std::max(sp.at<float>(r), 2.0f);  // floor: quantisation
 		const float* src = f.ptr<float>(r);
 		float* e = excess.ptr<float>(r);
 		float* q = snr.ptr<float>(r);
@@ -141,7 +142,8 @@ std::vector<Detection> detectPoles(const cv::Mat& polar, const PolarGeometry& g,
 		d.area_px = area;
 		out.push_back(d);
 	}
-	std::sort(out.begin(), out.end(), [](const Detection& a, const Detection& b) { return a.bearing_rad < b.bearing_rad; });
+	std::sort(out.begin(), out.end(),
+	          [](const Detection& a, const Detection& b) { return a.bearing_rad < b.bearing_rad; });
 	return out;
 }
 

@@ -36,7 +36,7 @@ std::optional<PolarGeometry> geometryOf(const mrpt::obs::CObservationImage& obs,
 	g.range_bins = static_cast<int>(cam.nrows);
 	const double fx = cam.fx(), fy = cam.fy();
 	if (!(std::isfinite(fx) && fx > 0 && std::isfinite(fy) && fy > 0 && std::isfinite(cam.cx()) &&
-		  std::isfinite(cam.cy())))
+	      std::isfinite(cam.cy())))
 	{
 		why = "polar intrinsics not finite and positive";
 		return std::nullopt;
@@ -54,11 +54,11 @@ std::optional<PolarGeometry> geometryOf(const mrpt::obs::CObservationImage& obs,
 		return std::nullopt;
 	}
 	if (static_cast<int>(obs.image.getWidth()) != g.beam_count ||
-		static_cast<int>(obs.image.getHeight()) != g.range_bins)
+	    static_cast<int>(obs.image.getHeight()) != g.range_bins)
 	{
 		why = "image " + std::to_string(obs.image.getWidth()) + "x" + std::to_string(obs.image.getHeight()) +
-			  " disagrees with the geometry's " + std::to_string(g.beam_count) + " beams x " +
-			  std::to_string(g.range_bins) + " bins";
+		      " disagrees with the geometry's " + std::to_string(g.beam_count) + " beams x " +
+		      std::to_string(g.range_bins) + " bins";
 		return std::nullopt;
 	}
 	return g;
@@ -73,10 +73,11 @@ cv::Mat polarImage(const mrpt::obs::CObservationImage& obs)
 }
 
 mrpt::obs::CObservationImage::Ptr makeFrame(const cv::Mat& polar_u8, const PolarGeometry& g,
-											const std::string& label, double unix_time_s)
+                                            const std::string& label, double unix_time_s)
 {
 	if (polar_u8.type() != CV_8UC1 || polar_u8.cols != g.beam_count || polar_u8.rows != g.range_bins)
-		throw std::invalid_argument("sonar frame: image must be CV_8UC1 with beams x bins matching the geometry");
+		throw std::invalid_argument(
+		    "sonar frame: image must be CV_8UC1 with beams x bins matching the geometry");
 	auto o = mrpt::obs::CObservationImage::Create();
 	o->sensorLabel = label;
 	o->timestamp = mrpt::Clock::fromDouble(unix_time_s);

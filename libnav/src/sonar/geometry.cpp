@@ -12,7 +12,8 @@ void PolarGeometry::validate() const
 	if (range_bins < 2) bad("range_bins must be at least 2");
 	if (!(aperture_rad > 0 && aperture_rad < 2 * M_PI)) bad("aperture must be in (0, 360) degrees");
 	if (!(min_range_m >= 0)) bad("min_range_m must be a non-negative number");
-	if (!(max_range_m > min_range_m) || !std::isfinite(max_range_m)) bad("max_range_m must exceed min_range_m");
+	if (!(max_range_m > min_range_m) || !std::isfinite(max_range_m))
+		bad("max_range_m must exceed min_range_m");
 }
 
 PolarGeometry PolarGeometry::fromConfig(const config::Node& n)

@@ -1,7 +1,7 @@
 #include <auvnav/sonar/landmarks.h>
 
-#include <algorithm>
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <set>
@@ -9,7 +9,10 @@
 
 namespace auvnav::sonar
 {
-double wrapAngle(double a) { return std::remainder(a, 2 * M_PI); }
+double wrapAngle(double a)
+{
+	return std::remainder(a, 2 * M_PI);
+}
 
 PoleMap PoleMap::fromConfig(const config::Node& n)
 {
@@ -47,16 +50,17 @@ void predictPole(const SonarPose& pose, const Eigen::Vector2d& ne, double& beari
 namespace
 {
 /** Jacobians of bearing and range w.r.t. the sonar position. */
-void positionJacobians(const Eigen::Vector2d& d, double range_m, Eigen::RowVector2d& J_b, Eigen::RowVector2d& J_r)
+void positionJacobians(const Eigen::Vector2d& d, double range_m, Eigen::RowVector2d& J_b,
+                       Eigen::RowVector2d& J_r)
 {
 	const double r2 = range_m * range_m;
-	J_b << d.y() / r2, -d.x() / r2;	 // ∂atan2(ΔE, ΔN)/∂(N_s, E_s)
+	J_b << d.y() / r2, -d.x() / r2;  // ∂atan2(ΔE, ΔN)/∂(N_s, E_s)
 	J_r << -d.x() / range_m, -d.y() / range_m;
 }
 }  // namespace
 
-std::vector<Association> associate(const std::vector<Detection>& dets, const PoleMap& map, const SonarPose& pose,
-								   const AssociationParams& p)
+std::vector<Association> associate(const std::vector<Detection>& dets, const PoleMap& map,
+                                   const SonarPose& pose, const AssociationParams& p)
 {
 	const double gate = boost::math::quantile(boost::math::chi_squared(2.0), p.gate_probability);
 	std::vector<Association> cand;
@@ -71,7 +75,8 @@ std::vector<Association> associate(const std::vector<Detection>& dets, const Pol
 			if (a.predicted_range_m < 1e-6) continue;
 			// The return comes from the pole's near face.
 			const double r_face = a.predicted_range_m - map.poles[j].radius_m;
-			const Eigen::Vector2d nu(wrapAngle(dets[i].bearing_rad - a.predicted_bearing_rad), dets[i].range_m - r_face);
+			const Eigen::Vector2d nu(wrapAngle(dets[i].bearing_rad - a.predicted_bearing_rad),
+			                         dets[i].range_m - r_face);
 			Eigen::RowVector2d J_b, J_r;
 			positionJacobians(map.poles[j].ne_m - pose.ne_m, a.predicted_range_m, J_b, J_r);
 			Eigen::Matrix<double, 2, 2> J;
@@ -83,12 +88,14 @@ std::vector<Association> associate(const std::vector<Detection>& dets, const Pol
 			nis_of[i].push_back(a.nis);
 			if (a.nis <= gate) cand.push_back(a);
 		}
-	std::sort(cand.begin(), cand.end(), [](const Association& x, const Association& y) { return x.nis < y.nis; });
+	std::sort(cand.begin(), cand.end(),
+	          [](const Association& x, const Association& y) { return x.nis < y.nis; });
 	std::vector<Association> out;
 	std::vector<bool> det_used(dets.size(), false), pole_used(map.poles.size(), false);
 	for (const auto& a : cand)
 	{
-		if (det_used[static_cast<std::size_t>(a.detection)] || pole_used[static_cast<std::size_t>(a.pole)]) continue;
+		if (det_used[static_cast<std::size_t>(a.detection)] || pole_used[static_cast<std::size_t>(a.pole)])
+			continue;
 		// Ambiguous: another pole explains this detection nearly as well.
 		auto& all = nis_of[static_cast<std::size_t>(a.detection)];
 		std::sort(all.begin(), all.end());
@@ -101,23 +108,24 @@ std::vector<Association> associate(const std::vector<Detection>& dets, const Pol
 	return out;
 }
 
-std::optional<FrameHeading> headingFromPoles(const std::vector<Detection>& dets, const std::vector<Association>& as,
-											 const PoleMap& map, const SonarPose& pose, double mount_yaw_rad)
+std::optional<FrameHeading> headingFromPoles(const std::vector<Detection>& dets,
+                                             const std::vector<Association>& as, const PoleMap& map,
+                                             const SonarPose& pose, double mount_yaw_rad)
 {
 	if (as.empty()) return std::nullopt;
 	// Circular mean about the first pole's heading: small wrapped offsets.
 	double ref = 0, sum_w = 0, sum_wx = 0;
-	std::vector<std::pair<double, double>> hv;	// heading, variance
+	std::vector<std::pair<double, double>> hv;  // heading, variance
 	for (std::size_t k = 0; k < as.size(); ++k)
 	{
 		const auto& a = as[k];
 		const Eigen::Vector2d d = map.poles[static_cast<std::size_t>(a.pole)].ne_m - pose.ne_m;
-		const double psi = wrapAngle(std::atan2(d.y(), d.x()) - dets[static_cast<std::size_t>(a.detection)].bearing_rad -
-									 mount_yaw_rad);
+		const double psi = wrapAngle(std::atan2(d.y(), d.x()) -
+		                             dets[static_cast<std::size_t>(a.detection)].bearing_rad - mount_yaw_rad);
 		Eigen::RowVector2d J_b, J_r;
 		positionJacobians(d, d.norm(), J_b, J_r);
 		const double var = std::pow(dets[static_cast<std::size_t>(a.detection)].sigma_bearing_rad, 2) +
-						   (J_b * pose.P_ne * J_b.transpose())(0, 0);
+		                   (J_b * pose.P_ne * J_b.transpose())(0, 0);
 		if (k == 0) ref = psi;
 		hv.emplace_back(psi, var);
 		const double w = 1.0 / var;

@@ -31,7 +31,8 @@ SonarConfig SonarConfig::fromConfig(const config::Node& n)
 		p.min_snr = d.positive("min_snr", p.min_snr);
 		p.min_area_px = d.integer("min_area_px", p.min_area_px);
 		p.max_area_px = d.integer("max_area_px", p.max_area_px);
-		if (p.min_area_px < 1 || p.max_area_px < p.min_area_px) d.fail("max_area_px", "need 1 <= min_area_px <= max_area_px");
+		if (p.min_area_px < 1 || p.max_area_px < p.min_area_px)
+			d.fail("max_area_px", "need 1 <= min_area_px <= max_area_px");
 		p.max_extent_m = d.positive("max_extent_m", p.max_extent_m);
 		p.max_width_m = d.positive("max_width_m", p.max_width_m);
 		p.smooth_sigma_beams = d.positive("smooth_sigma_beams", p.smooth_sigma_beams);
@@ -45,7 +46,8 @@ SonarConfig SonarConfig::fromConfig(const config::Node& n)
 	if (n.has("association"))
 	{
 		const auto a = n.child("association");
-		c.association.gate_probability = a.inRange("gate_probability", 0.5, 0.999999, c.association.gate_probability);
+		c.association.gate_probability =
+		    a.inRange("gate_probability", 0.5, 0.999999, c.association.gate_probability);
 		c.association.ambiguity_ratio = a.inRange("ambiguity_ratio", 1, 1e6, c.association.ambiguity_ratio);
 		c.position_sigma_m = a.positive("position_sigma_m", c.position_sigma_m);
 		c.heading_sigma_rad = a.positive("heading_sigma_deg", c.heading_sigma_rad / kDeg) * kDeg;
@@ -54,7 +56,7 @@ SonarConfig SonarConfig::fromConfig(const config::Node& n)
 }
 
 SonarPose sonarPose(const SonarConfig& c, const Eigen::Vector3d& p_n, const Eigen::Matrix3d& R_nb,
-					const Eigen::Matrix2d& P_ne, double sigma_heading_rad)
+                    const Eigen::Matrix2d& P_ne, double sigma_heading_rad)
 {
 	SonarPose s;
 	s.ne_m = (p_n + R_nb * c.position_b).head<2>();
@@ -65,7 +67,7 @@ SonarPose sonarPose(const SonarConfig& c, const Eigen::Vector3d& p_n, const Eige
 }
 
 FrameResult analyseFrame(const cv::Mat& polar, const PolarGeometry& g, const SonarConfig& c,
-						 const std::optional<SonarPose>& pose)
+                         const std::optional<SonarPose>& pose)
 {
 	FrameResult r;
 	r.detections = detectPoles(polar, g, c.detector);

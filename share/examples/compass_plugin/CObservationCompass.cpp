@@ -9,7 +9,10 @@ using compass_example::CObservationCompass;
 
 IMPLEMENTS_SERIALIZABLE(CObservationCompass, CObservation, compass_example)
 
-uint8_t CObservationCompass::serializeGetVersion() const { return 0; }
+uint8_t CObservationCompass::serializeGetVersion() const
+{
+	return 0;
+}
 
 void CObservationCompass::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -20,8 +23,11 @@ void CObservationCompass::serializeFrom(mrpt::serialization::CArchive& in, uint8
 {
 	switch (version)
 	{
-		case 0: in >> timestamp >> sensorLabel >> sensorPose >> heading_rad; break;
-		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+		case 0:
+			in >> timestamp >> sensorLabel >> sensorPose >> heading_rad;
+			break;
+		default:
+			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	}
 }
 

@@ -22,8 +22,8 @@ class CObservationCompass : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationCompass, compass_example)
 
-   public:
-	double heading_rad = 0;			  //!< magnetic heading [rad]
+ public:
+	double heading_rad = 0;           //!< magnetic heading [rad]
 	mrpt::poses::CPose3D sensorPose;  //!< mounting in the body frame (FRD)
 
 	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }

@@ -17,39 +17,46 @@ constexpr double kDeg = M_PI / 180;
 }
 
 CompassModel::CompassModel(const auvnav::config::Node& cfg, const std::string& label)
-	: label_(label),
-	  declination_rad_(cfg.inRange("declination_deg", -180.0, 180.0, 0.0) * kDeg),
-	  sigma_rad_(cfg.positive("sigma_deg", 2.0) * kDeg),
-	  gate_probability_(cfg.inRange("gate_probability", 0.0, 1.0, 0.999))
+    : label_(label),
+      declination_rad_(cfg.inRange("declination_deg", -180.0, 180.0, 0.0) * kDeg),
+      sigma_rad_(cfg.positive("sigma_deg", 2.0) * kDeg),
+      gate_probability_(cfg.inRange("gate_probability", 0.0, 1.0, 0.999))
 {
-	if (sigma_rad_ > M_PI / 2) cfg.fail("sigma_deg", "a compass sigma above 90 deg carries no heading information");
+	if (sigma_rad_ > M_PI / 2)
+		cfg.fail("sigma_deg", "a compass sigma above 90 deg carries no heading information");
 	if (!(gate_probability_ > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
 	if (cfg.has("states"))
 	{
 		const auto st = cfg.child("states");
 		st.allowOnly({"heading_bias"});
 		if (st.has("heading_bias"))
-			blocks_.push_back(auvnav::stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
+			blocks_.push_back(
+			    auvnav::stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
 	}
 }
 
 double CompassModel::wrapAngle(double a)
 {
-	double w = std::remainder(a, 2 * M_PI);	 // [−π, π]
+	double w = std::remainder(a, 2 * M_PI);  // [−π, π]
 	if (w <= -M_PI) w += 2 * M_PI;
 	return w;
 }
 
-double CompassModel::yawOf(const Eigen::Matrix3d& R_nb) { return wrapAngle(std::atan2(R_nb(1, 0), R_nb(0, 0))); }
+double CompassModel::yawOf(const Eigen::Matrix3d& R_nb)
+{
+	return wrapAngle(std::atan2(R_nb(1, 0), R_nb(0, 0)));
+}
 
-void CompassModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-							Eigen::Ref<Eigen::VectorXd> r) const noexcept
+void CompassModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
+                            const Eigen::Ref<const Eigen::VectorXd>& z_pred,
+                            Eigen::Ref<Eigen::VectorXd> r) const noexcept
 {
 	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
 }
 
-auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext& /*ctx*/,
-											  std::vector<auvnav::Measurement>& out, std::string& why)
+auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs,
+                                              const auvnav::FilterContext& /*ctx*/,
+                                              std::vector<auvnav::Measurement>& out, std::string& why)
 {
 	using mrpt::obs::CObservationIMU;
 	out.clear();
@@ -67,8 +74,9 @@ auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs
 	}
 	else
 	{
-		why = std::string("expected compass_example::CObservationCompass or mrpt::obs::CObservationIMU, got ") +
-			  obs.GetRuntimeClass()->className;
+		why =
+		    std::string("expected compass_example::CObservationCompass or mrpt::obs::CObservationIMU, got ") +
+		    obs.GetRuntimeClass()->className;
 		return auvnav::PrepareStatus::Invalid;
 	}
 	if (!std::isfinite(heading))
@@ -85,7 +93,7 @@ auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs
 }
 
 bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measurement& /*m*/,
-							 const auvnav::FilterContext& /*ctx*/, Eigen::Ref<Eigen::VectorXd> z_pred) const
+                             const auvnav::FilterContext& /*ctx*/, Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 1) return false;
 	double bias = 0;
@@ -101,6 +109,7 @@ bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measuremen
 }  // namespace compass_example
 
 // The plugin's entry point: the only symbol libauvnav_plugin_compass.so exports.
-AUVNAV_PLUGIN(compass_example::CompassModel, "compass", "1.0.0",
-			  "Magnetic compass heading (own CObservationCompass, or CObservationIMU IMU_YAW) on the attitude, "
-			  "optional heading-bias state; example out-of-tree plugin")
+AUVNAV_PLUGIN(
+    compass_example::CompassModel, "compass", "1.0.0",
+    "Magnetic compass heading (own CObservationCompass, or CObservationIMU IMU_YAW) on the attitude, "
+    "optional heading-bias state; example out-of-tree plugin")

@@ -35,7 +35,7 @@ namespace compass_example
 {
 class CompassModel final : public auvnav::SafeMeasurementModel
 {
-   public:
+ public:
 	CompassModel(const auvnav::config::Node& cfg, const std::string& label);
 
 	uint32_t uses() const noexcept override
@@ -47,7 +47,7 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	double gateProbability() const noexcept override { return gate_probability_; }
 	/** r = wrap(z − z_pred) into (−π, π]: the boxminus of the circle. */
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-				  Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
 
 	/** An angle wrapped into (−π, π]. */
 	static double wrapAngle(double a);
@@ -57,18 +57,18 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	double declination_rad() const { return declination_rad_; }
 	double sigma_rad() const { return sigma_rad_; }
 
-   protected:
+ protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext& ctx,
-									std::vector<auvnav::Measurement>& out, std::string& why) override;
+	                                std::vector<auvnav::Measurement>& out, std::string& why) override;
 	bool doPredict(const auvnav::NavState& x, const auvnav::Measurement& m, const auvnav::FilterContext& ctx,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
-   private:
+ private:
 	std::string label_;
 	double declination_rad_ = 0;
 	double sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
 	std::vector<auvnav::StateBlockSpec> blocks_;  // the heading bias, if configured
-	int bias_at_ = -1;							  // its index in NavState::extra (bindStates)
+	int bias_at_ = -1;                            // its index in NavState::extra (bindStates)
 };
 }  // namespace compass_example

@@ -47,7 +47,7 @@ int main(int argc, char** argv)
 
 		auvnav::io::RawlogWriter writer(out);
 		const long steps = std::lround(seconds * 100);
-		for (long k = 0; k < steps; ++k)	// 10 ms ticks
+		for (long k = 0; k < steps; ++k)  // 10 ms ticks
 		{
 			const auto stamp = mrpt::Clock::fromDouble(t0 + 0.01 * k);
 			auto imu = mrpt::obs::CObservationIMU::Create();
@@ -81,7 +81,7 @@ int main(int argc, char** argv)
 			}
 		}
 		std::printf("%s: %zu observations, %.1f s, heading %.1f deg\n", out.c_str(), writer.count(), seconds,
-					heading / kDeg);
+		            heading / kDeg);
 	}
 	catch (const std::exception& e)
 	{

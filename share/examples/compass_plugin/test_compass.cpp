@@ -7,8 +7,8 @@
 #include <auvnav/testing/model_checks.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
-#include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CObservationGPS.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -34,7 +34,10 @@ mrpt::obs::CObservationIMU::Ptr compassObs(double heading_rad)
 	return o;
 }
 
-auvnav::config::Node configText(const std::string& yaml) { return auvnav::config::Node::fromText(yaml, "test"); }
+auvnav::config::Node configText(const std::string& yaml)
+{
+	return auvnav::config::Node::fromText(yaml, "test");
+}
 
 std::string readFile(const std::string& path)
 {
@@ -64,7 +67,7 @@ TEST(Compass, DefaultConfig)
 TEST(Compass, RejectsBadConfigNamingTheKey)
 {
 	for (const char* bad : {"sigma_deg: -1", "sigma_deg: 0", "sigma_deg: 120", "declination_deg: 400",
-							"gate_probability: 0", "gate_probability: 2"})
+	                        "gate_probability: 0", "gate_probability: 2"})
 	{
 		try
 		{
@@ -90,7 +93,7 @@ TEST(Compass, WellFormedOnRandomStates)
 		opt.accept_skip = false;
 		const double heading = (seed * 37.0 - 180) * kDeg;
 		EXPECT_TRUE(at::IsWellFormed(model, *compassObs(heading), tc.ctx(), at::RandomNavState(seed), opt))
-			<< "seed " << seed;
+		    << "seed " << seed;
 	}
 }
 
@@ -106,8 +109,9 @@ TEST(Compass, PredictsTheYawOfTheAttitude)
 		{
 			auvnav::NavState x;
 			x.R_nb = at::rotationYpr(yaw_deg * kDeg, pitch_deg * kDeg, 17 * kDeg);
-			EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], CompassModel::wrapAngle(yaw_deg * kDeg), 1e-12)
-				<< yaw_deg << " " << pitch_deg;
+			EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], CompassModel::wrapAngle(yaw_deg * kDeg),
+			            1e-12)
+			    << yaw_deg << " " << pitch_deg;
 		}
 }
 
@@ -118,7 +122,7 @@ TEST(Compass, ResidualWrapsIntoMinusPiPi)
 	EXPECT_NEAR(residual(m, -179 * kDeg, 179 * kDeg), 2 * kDeg, 1e-12);
 	EXPECT_NEAR(residual(m, 10 * kDeg, 5 * kDeg), 5 * kDeg, 1e-12);
 	EXPECT_DOUBLE_EQ(residual(m, M_PI, -M_PI), 0);
-	EXPECT_DOUBLE_EQ(CompassModel::wrapAngle(-M_PI), M_PI);	 // (−π, π]: −π maps to π
+	EXPECT_DOUBLE_EQ(CompassModel::wrapAngle(-M_PI), M_PI);  // (−π, π]: −π maps to π
 	EXPECT_DOUBLE_EQ(CompassModel::wrapAngle(M_PI), M_PI);
 	for (double a = -20; a <= 20; a += 0.37)
 	{
@@ -159,7 +163,8 @@ TEST(Compass, InvalidInputs)
 	no_yaw->set(mrpt::obs::IMU_WZ, 0.01);
 	EXPECT_EQ(model.prepare(*no_yaw, tc.ctx(), out, why), auvnav::PrepareStatus::Invalid);
 	EXPECT_NE(why.find("IMU_YAW"), std::string::npos) << why;
-	EXPECT_EQ(model.prepare(*mrpt::obs::CObservationGPS::Create(), tc.ctx(), out, why), auvnav::PrepareStatus::Invalid);
+	EXPECT_EQ(model.prepare(*mrpt::obs::CObservationGPS::Create(), tc.ctx(), out, why),
+	          auvnav::PrepareStatus::Invalid);
 	EXPECT_NE(why.find("CObservationIMU"), std::string::npos) << why;
 }
 
@@ -177,7 +182,8 @@ TEST(Compass, UpdateCorrectsHeadingAcrossTheWrap)
 	ASSERT_EQ(res.status, auvnav::PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, auvnav::UpdateStatus::Accepted) << res.updates[0].why;
-	const double err_after = std::abs(CompassModel::wrapAngle(CompassModel::yawOf(ukf.state().R_nb) - 179 * kDeg));
+	const double err_after =
+	    std::abs(CompassModel::wrapAngle(CompassModel::yawOf(ukf.state().R_nb) - 179 * kDeg));
 	EXPECT_LT(err_after, 1.0 * kDeg) << "heading error 2 deg -> " << err_after / kDeg << " deg";
 	EXPECT_LT(ukf.covariance()(2, 2), std::pow(2 * kDeg, 2));
 	// Position untouched (uncorrelated in P0).
@@ -191,7 +197,8 @@ TEST(Compass, NanHeadingNeverChangesTheState)
 	auvnav::ManifoldUkf ukf(auvnav::ProcessModel{}, auvnav::UtParams{});
 	ukf.initialize(at::RandomNavState(3), at::TypicalCovariance());
 	const auvnav::NavState before = ukf.state();
-	EXPECT_EQ(at::ApplyObservation(ukf, model, *compassObs(NAN), tc.ctx()).status, auvnav::PrepareStatus::Invalid);
+	EXPECT_EQ(at::ApplyObservation(ukf, model, *compassObs(NAN), tc.ctx()).status,
+	          auvnav::PrepareStatus::Invalid);
 	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
 }
 
@@ -277,7 +284,7 @@ TEST(Compass, HeadingBiasStateIsDeclaredAndRead)
 	x.extra.resize(3);
 	x.extra << 0.7, -0.7, 4 * kDeg;
 	EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], 54 * kDeg, 1e-12);
-	x.extra.resize(2);	// the state the model was bound into is missing: h refuses
+	x.extra.resize(2);  // the state the model was bound into is missing: h refuses
 	Eigen::VectorXd z(1);
 	EXPECT_FALSE(model.predict(x, out[0], tc.ctx(), z));
 }
@@ -292,6 +299,6 @@ TEST(Compass, WithoutStatesConfigThereIsNoState)
 TEST(Compass, MisspelledStateKeysAreRefused)
 {
 	for (const char* bad : {"states: {heading_bais: {sigma_deg: 3}}", "states: {heading_bias: {sigma: 3}}",
-							"states: {heading_bias: {sigma_deg: 3, process: walk}}"})
+	                        "states: {heading_bias: {sigma_deg: 3, process: walk}}"})
 		EXPECT_THROW(CompassModel(configText(bad), "COMPASS"), auvnav::config::ConfigError) << bad;
 }

@@ -8,22 +8,22 @@ namespace
 {
 class FailingModel final : public auvnav::SafeMeasurementModel
 {
-   public:
+ public:
 	FailingModel(const auvnav::config::Node& cfg, const std::string& /*label*/)
 	{
 		throw std::runtime_error("calibration file '" + cfg.string("calibration", "none") +
-								 "' cannot be read (failing_factory test plugin)");
+		                         "' cannot be read (failing_factory test plugin)");
 	}
 	uint32_t uses() const noexcept override { return auvnav::kPosition; }
 
-   protected:
+ protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation&, const auvnav::FilterContext&,
-									std::vector<auvnav::Measurement>&, std::string&) override
+	                                std::vector<auvnav::Measurement>&, std::string&) override
 	{
 		return auvnav::PrepareStatus::Skip;
 	}
 	bool doPredict(const auvnav::NavState&, const auvnav::Measurement&, const auvnav::FilterContext&,
-				   Eigen::Ref<Eigen::VectorXd>) const override
+	               Eigen::Ref<Eigen::VectorXd>) const override
 	{
 		return false;
 	}

@@ -15,17 +15,17 @@ namespace
 {
 class ProbeModel final : public auvnav::SafeMeasurementModel
 {
-   public:
+ public:
 	ProbeModel(const auvnav::config::Node& cfg, const std::string& /*label*/)
-		: mode_(cfg.string("mode", "passthrough"))
+	    : mode_(cfg.string("mode", "passthrough"))
 	{
 		if (mode_ != "passthrough" && mode_ != "nan_h") cfg.fail("mode", "expected passthrough or nan_h");
 	}
 	uint32_t uses() const noexcept override { return auvnav::kPosition; }
 
-   protected:
+ protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext&,
-									std::vector<auvnav::Measurement>& out, std::string& why) override
+	                                std::vector<auvnav::Measurement>& out, std::string& why) override
 	{
 		out.clear();
 		const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(&obs);
@@ -35,20 +35,20 @@ class ProbeModel final : public auvnav::SafeMeasurementModel
 			return auvnav::PrepareStatus::Invalid;
 		}
 		auvnav::Measurement m;
-		m.z = Eigen::VectorXd::Constant(1, p->pressure_pa);	 // unchecked on purpose
+		m.z = Eigen::VectorXd::Constant(1, p->pressure_pa);  // unchecked on purpose
 		m.R = Eigen::MatrixXd::Constant(1, 1, 0.01);
 		m.label = "depth";
 		out.push_back(std::move(m));
 		return auvnav::PrepareStatus::Ok;
 	}
 	bool doPredict(const auvnav::NavState& x, const auvnav::Measurement&, const auvnav::FilterContext&,
-				   Eigen::Ref<Eigen::VectorXd> z_pred) const override
+	               Eigen::Ref<Eigen::VectorXd> z_pred) const override
 	{
 		z_pred[0] = mode_ == "nan_h" ? std::numeric_limits<double>::quiet_NaN() : x.p_n.z();
 		return true;
 	}
 
-   private:
+ private:
 	std::string mode_;
 };
 }  // namespace

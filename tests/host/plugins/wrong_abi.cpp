@@ -10,9 +10,13 @@ auvnav::MeasurementModel* create(const char*, const char*, char* error, size_t s
 	return nullptr;
 }
 void destroy(auvnav::MeasurementModel*) {}
-const AuvnavPluginEntry kEntry = {
-	{99u, AUVNAV_PLUGIN_API_VERSION, "wrong_abi", "0.0.1", AUVNAV_BUILD_FINGERPRINT, "test: wrong ABI version"},
-	&create, &destroy};
+const AuvnavPluginEntry kEntry = {{99u, AUVNAV_PLUGIN_API_VERSION, "wrong_abi", "0.0.1",
+                                   AUVNAV_BUILD_FINGERPRINT, "test: wrong ABI version"},
+                                  &create,
+                                  &destroy};
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1() { return &kEntry; }
+extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1()
+{
+	return &kEntry;
+}

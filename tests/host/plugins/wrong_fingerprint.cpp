@@ -10,9 +10,14 @@ auvnav::MeasurementModel* create(const char*, const char*, char* error, size_t s
 	return nullptr;
 }
 void destroy(auvnav::MeasurementModel*) {}
-const AuvnavPluginEntry kEntry = {{AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, "wrong_fingerprint", "0.0.1",
-								   "gcc-0.0 eigen-3.0.0 align-8 mrpt-0x100 state-42", "test: foreign build"},
-								  &create, &destroy};
+const AuvnavPluginEntry kEntry = {
+    {AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, "wrong_fingerprint", "0.0.1",
+     "gcc-0.0 eigen-3.0.0 align-8 mrpt-0x100 state-42", "test: foreign build"},
+    &create,
+    &destroy};
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1() { return &kEntry; }
+extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1()
+{
+	return &kEntry;
+}

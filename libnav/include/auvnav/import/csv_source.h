@@ -21,16 +21,16 @@ namespace auvnav::import
 {
 class CsvSource final : public RecordSource
 {
-   public:
+ public:
 	explicit CsvSource(const std::string& path, char delimiter = ',');
 	bool next(Record& out) override;
 	std::string describe() const override { return path_; }
 	const std::vector<std::string>& header() const { return header_; }
 
-   private:
+ private:
 	bool readLine(std::string& line);
 	static bool splitCells(const std::string& line, char delimiter, std::vector<std::string>& cells,
-						   std::vector<bool>& quoted);
+	                       std::vector<bool>& quoted);
 
 	std::string path_;
 	std::ifstream in_;

@@ -40,8 +40,8 @@ void exportRawlog(const std::string& rawlog, const std::string& out_dir, ExportR
  *  `optional_sensors`: every sensor `optional: true` (a spec for exports that
  *  may lack some of the labels, as config/import/auvnav_export.yaml). */
 std::string exportSpecText(const std::vector<std::pair<std::string, std::string>>& labels_and_classes,
-						   const std::map<std::string, std::string>& thruster_units = {},
-						   bool optional_sensors = false);
+                           const std::map<std::string, std::string>& thruster_units = {},
+                           bool optional_sensors = false);
 
 /** The simulator's labels and classes, in the order of config/import/auvnav_export.yaml. */
 std::vector<std::pair<std::string, std::string>> simulatorLabels();

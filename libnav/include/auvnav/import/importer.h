@@ -46,24 +46,24 @@ struct SensorReport
 {
 	std::string label;
 	std::string observation_class;
-	std::string source;	 //!< file or "bag topic"
+	std::string source;  //!< file or "bag topic"
 	std::size_t rows_read = 0;
 	std::size_t written = 0;
 	std::size_t rejected = 0;
 	std::map<std::string, std::size_t> rejected_by_reason;
 	std::map<std::string, std::string> first_rejected_where;  //!< reason → first "file:line"
-	std::size_t repeated_stamps = 0;  //!< same stamp as the previous record
+	std::size_t repeated_stamps = 0;                          //!< same stamp as the previous record
 	std::size_t backward_stamps = 0;  //!< older than the previous record (reordered or rejected)
-	std::size_t reordered = 0;	//!< written in place thanks to the reorder buffer
-	std::size_t gaps = 0;  //!< steps longer than gap_factor × median step
+	std::size_t reordered = 0;        //!< written in place thanks to the reorder buffer
+	std::size_t gaps = 0;             //!< steps longer than gap_factor × median step
 	double largest_gap_s = 0;
 	double largest_gap_at_s = 0;  //!< UNIX time where it starts
 	std::size_t clock_jumps = 0;  //!< forward steps > clock_jump_s, backward steps beyond the window
-	std::vector<std::string> clock_jump_notes;	//!< first few, "at 1453606150.8: +3600.0 s"
+	std::vector<std::string> clock_jump_notes;  //!< first few, "at 1453606150.8: +3600.0 s"
 	bool has_span = false;
 	TimeNs first_ns = 0, last_ns = 0;
 	double median_rate_hz = 0;
-	std::vector<std::string> notes;	 //!< mapping facts worth reviewing (e.g. a left-handed axis map)
+	std::vector<std::string> notes;  //!< mapping facts worth reviewing (e.g. a left-handed axis map)
 };
 
 struct ImportReport
@@ -76,7 +76,7 @@ struct ImportReport
 	double reorder_window_s = 0;
 	bool completed = false;
 	bool output_created = false;  //!< runImport created (truncated) out_rawlog
-	std::string error;	//!< why the import stopped, if it did
+	std::string error;            //!< why the import stopped, if it did
 
 	std::string toJson() const;
 	std::string toMarkdown() const;

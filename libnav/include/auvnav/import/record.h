@@ -40,7 +40,7 @@ constexpr std::size_t kMaxFlattenedArray = 256;
 
 class ImportError : public std::runtime_error
 {
-   public:
+ public:
 	using std::runtime_error::runtime_error;
 };
 
@@ -54,9 +54,9 @@ struct Value
 		Text
 	};
 	Kind kind = Kind::Missing;
-	double number = 0;	//!< Kind::Number
-	TimeNs time_ns = 0;	 //!< Kind::Time
-	std::string text;  //!< Kind::Text (CSV cells, ROS strings)
+	double number = 0;   //!< Kind::Number
+	TimeNs time_ns = 0;  //!< Kind::Time
+	std::string text;    //!< Kind::Text (CSV cells, ROS strings)
 
 	static Value ofNumber(double v)
 	{
@@ -91,8 +91,8 @@ struct Record
 	std::vector<Value> values;
 	uint64_t layout_id = 0;
 	bool has_record_time = false;
-	TimeNs record_time_ns = 0;	//!< bag record time (when has_record_time)
-	std::string where;	//!< "imu.csv:17", "run.bag: topic /dvl message #42"
+	TimeNs record_time_ns = 0;  //!< bag record time (when has_record_time)
+	std::string where;          //!< "imu.csv:17", "run.bag: topic /dvl message #42"
 	/** Non-empty when the source could read the record but not make sense of
 	 *  it (a CSV row with the wrong number of fields): why. The source goes on
 	 *  with the next record; the importer rejects this one (counted, or an
@@ -111,7 +111,7 @@ struct Record
 /** A stream of records from one file or one bag topic. */
 class RecordSource
 {
-   public:
+ public:
 	virtual ~RecordSource() = default;
 	/** Fills `out` with the next record; false at the end. Throws ImportError
 	 *  on unreadable input (naming file and line/message). */

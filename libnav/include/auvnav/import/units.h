@@ -46,7 +46,7 @@ struct Unit
 {
 	std::string name;
 	UnitKind kind;
-	double factor;	//!< SI value = factor * value + offset
+	double factor;  //!< SI value = factor * value + offset
 	double offset = 0;
 	double toSi(double v) const { return factor * v + offset; }
 };

@@ -30,7 +30,9 @@ inline CFile openCFile(const std::string& path, const char* mode, const std::str
 {
 	errno = 0;
 	CFile f(std::fopen(path.c_str(), mode));
-	if (!f) throw std::runtime_error(path + ": " + what + (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
+	if (!f)
+		throw std::runtime_error(path + ": " + what +
+		                         (errno ? std::string(" (") + std::strerror(errno) + ")" : ""));
 	return f;
 }
 }  // namespace auvnav::io

@@ -15,7 +15,7 @@ namespace auvnav::io
 {
 class CsvTable
 {
-   public:
+ public:
 	explicit CsvTable(const std::string& file) : file_(file), in_(file)
 	{
 		if (!in_) throw std::runtime_error("cannot read " + file);
@@ -66,7 +66,7 @@ class CsvTable
 	std::string where() const { return file_ + ":" + std::to_string(line_); }
 	const std::string& file() const { return file_; }
 
-   private:
+ private:
 	std::string file_;
 	std::ifstream in_;
 	std::map<std::string, std::size_t> col_;

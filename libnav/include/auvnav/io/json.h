@@ -24,7 +24,10 @@ namespace auvnav::io
 {
 using Json = nlohmann::ordered_json;
 
-inline std::string jsonText(const Json& j) { return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n"; }
+inline std::string jsonText(const Json& j)
+{
+	return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
+}
 
 /** Throws std::runtime_error naming the file if it cannot be written. */
 inline void writeJsonAtomically(const std::filesystem::path& file, const Json& j)

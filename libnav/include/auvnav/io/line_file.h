@@ -27,7 +27,7 @@ namespace auvnav::io
 {
 class LineFile
 {
-   public:
+ public:
 	LineFile() = default;
 	/** Creates (truncates) `path`; throws std::runtime_error naming it. */
 	explicit LineFile(const std::string& path, std::size_t flush_at_bytes = 64 * 1024);
@@ -46,7 +46,7 @@ class LineFile
 	/** Lines appended since opened. */
 	std::size_t lines() const { return lines_; }
 
-   private:
+ private:
 	void close() noexcept;
 
 	int fd_ = -1;

@@ -25,12 +25,12 @@ namespace auvnav::io
 {
 struct TrajectoryPoint
 {
-	double t_unix = 0;	   //!< [s]
-	double distance_m = 0;  //!< travelled so far (ground truth only)
-	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();	//!< body origin, NED [m]
+	double t_unix = 0;                              //!< [s]
+	double distance_m = 0;                          //!< travelled so far (ground truth only)
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();  //!< body origin, NED [m]
 	Eigen::Quaterniond q_nb = Eigen::Quaterniond::Identity();
 	Eigen::Vector2d current_ne = Eigen::Vector2d::Zero();  //!< water current (ground truth only) [m/s]
-	bool submerged = false;	 //!< ground truth only
+	bool submerged = false;                                //!< ground truth only
 };
 
 /** Points in strictly increasing time. */

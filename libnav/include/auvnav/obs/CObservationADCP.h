@@ -25,19 +25,19 @@ namespace auvnav::obs
 {
 struct AdcpCell
 {
-	std::array<double, 3> velocity_s_mps{0, 0, 0};	//!< water rel. to sensor, sensor frame [m/s]
-	double correlation = 0;	 //!< beam correlation, 0..1
-	bool valid = false;	 //!< inside the water column and above the correlation floor
+	std::array<double, 3> velocity_s_mps{0, 0, 0};  //!< water rel. to sensor, sensor frame [m/s]
+	double correlation = 0;                         //!< beam correlation, 0..1
+	bool valid = false;  //!< inside the water column and above the correlation floor
 };
 
 class CObservationADCP : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationADCP, auvnav::obs)
 
-   public:
-	double blank_distance_m = 0;  //!< distance from transducer to first cell start [m]
-	double cell_size_m = 0;	 //!< cell length along the profiling axis [m]
-	double velocity_sigma_mps = 0;	//!< per-axis 1σ velocity noise of one cell [m/s]
+ public:
+	double blank_distance_m = 0;    //!< distance from transducer to first cell start [m]
+	double cell_size_m = 0;         //!< cell length along the profiling axis [m]
+	double velocity_sigma_mps = 0;  //!< per-axis 1σ velocity noise of one cell [m/s]
 	std::vector<AdcpCell> cells;
 	mrpt::poses::CPose3D sensorPose;  //!< sensor pose in the body frame (FRD)
 

@@ -56,7 +56,7 @@ enum class DvlFrame : uint8_t
 /** Sign convention of the reported velocities (serialized as uint8). */
 enum class DvlSign : uint8_t
 {
-	VehicleOverBottom = 0,	  //!< velocity of the sensor over the seabed
+	VehicleOverBottom = 0,    //!< velocity of the sensor over the seabed
 	BottomOverInstrument = 1  //!< velocity of the seabed seen from the sensor (RDI PD0): minus the above
 };
 
@@ -77,27 +77,27 @@ bool parseDvlSign(const std::string& name, DvlSign& out);
  *  frame), negated under BottomOverInstrument. */
 struct DvlBeam
 {
-	double range_m = 0;	 //!< slant range along the beam to the seabed [m]
-	bool valid = false;	 //!< beam had a bottom return inside the lock window
+	double range_m = 0;       //!< slant range along the beam to the seabed [m]
+	bool valid = false;       //!< beam had a bottom return inside the lock window
 	double velocity_mps = 0;  //!< radial velocity along u [m/s] (Beam mode; version >= 1)
-	double azimuth_rad = 0;	  //!< beam azimuth about the sensor z axis, from sensor x [rad] (version >= 1)
+	double azimuth_rad = 0;   //!< beam azimuth about the sensor z axis, from sensor x [rad] (version >= 1)
 };
 
 class CObservationDVL : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationDVL, auvnav::obs)
 
-   public:
+ public:
 	std::array<double, 3> velocity_s_mps{0, 0, 0};  //!< sensor velocity over ground, sensor frame [m/s]
-	std::array<double, 9> velocity_cov{};  //!< row-major covariance of velocity_s_mps [m²/s²]
-	bool bottom_lock = false;  //!< enough valid beams to solve the 3D velocity
-	double altitude_m = 0;	//!< vertical distance to the seabed [m], NaN if unknown
-	double beam_inclination_rad = 0;  //!< Janus angle of the beams from the sensor z axis
-	std::vector<DvlBeam> beams;	 //!< per-beam range and validity
-	DvlFrame frame = DvlFrame::Instrument;	//!< coordinates of velocity_s_mps (version >= 1)
-	DvlSign sign = DvlSign::VehicleOverBottom;	//!< sign convention (version >= 1)
-	double beam_velocity_sigma_mps = 0;	 //!< 1σ of one beam's radial velocity, 0 = unknown (version >= 1)
-	mrpt::poses::CPose3D sensorPose;  //!< sensor pose in the body frame (FRD)
+	std::array<double, 9> velocity_cov{};           //!< row-major covariance of velocity_s_mps [m²/s²]
+	bool bottom_lock = false;                       //!< enough valid beams to solve the 3D velocity
+	double altitude_m = 0;                          //!< vertical distance to the seabed [m], NaN if unknown
+	double beam_inclination_rad = 0;                //!< Janus angle of the beams from the sensor z axis
+	std::vector<DvlBeam> beams;                     //!< per-beam range and validity
+	DvlFrame frame = DvlFrame::Instrument;          //!< coordinates of velocity_s_mps (version >= 1)
+	DvlSign sign = DvlSign::VehicleOverBottom;      //!< sign convention (version >= 1)
+	double beam_velocity_sigma_mps = 0;  //!< 1σ of one beam's radial velocity, 0 = unknown (version >= 1)
+	mrpt::poses::CPose3D sensorPose;     //!< sensor pose in the body frame (FRD)
 
 	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }
 	void setSensorPose(const mrpt::poses::CPose3D& p) override { sensorPose = p; }

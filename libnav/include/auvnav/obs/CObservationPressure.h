@@ -16,9 +16,9 @@ class CObservationPressure : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationPressure, auvnav::obs)
 
-   public:
-	double pressure_pa = 0;	 //!< absolute pressure [Pa]
-	double temperature_c = 0;  //!< temperature [°C]
+ public:
+	double pressure_pa = 0;           //!< absolute pressure [Pa]
+	double temperature_c = 0;         //!< temperature [°C]
 	mrpt::poses::CPose3D sensorPose;  //!< sensor pose in the body frame (FRD)
 
 	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }

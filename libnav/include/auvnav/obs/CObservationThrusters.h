@@ -26,9 +26,9 @@ class CObservationThrusters : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationThrusters, auvnav::obs)
 
-   public:
+ public:
 	EffortUnit unit = EffortUnit::Force_N;
-	std::vector<double> effort;	 //!< per-thruster commanded effort, in `unit`
+	std::vector<double> effort;  //!< per-thruster commanded effort, in `unit`
 
 	std::size_t thrusterCount() const { return effort.size(); }
 

@@ -41,7 +41,7 @@ class CObservationUSBL : public mrpt::obs::CObservation
 {
 	DEFINE_SERIALIZABLE(CObservationUSBL, auvnav::obs)
 
-   public:
+ public:
 	static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 	mrpt::Clock::time_point measurement_time = INVALID_TIMESTAMP;  //!< when the fix was taken
 	UsblFrame frame = UsblFrame::Geodetic;

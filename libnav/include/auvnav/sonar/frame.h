@@ -32,7 +32,7 @@ cv::Mat polarImage(const mrpt::obs::CObservationImage& obs);
 
 /** Wraps a CV_8UC1 polar image and its geometry into an observation. */
 mrpt::obs::CObservationImage::Ptr makeFrame(const cv::Mat& polar_u8, const PolarGeometry& g,
-											const std::string& label, double unix_time_s);
+                                            const std::string& label, double unix_time_s);
 
 /** Fan (Cartesian) view of a polar frame: `pixels_per_m` scale, the sonar at
  *  the bottom centre, forward up, starboard right (cv::remap, bilinear). */

@@ -22,11 +22,11 @@ namespace auvnav::sonar
 {
 struct PolarGeometry
 {
-	int beam_count = 256;		   //!< image columns
-	int range_bins = 400;		   //!< image rows
-	double aperture_rad = 0;	   //!< horizontal aperture (130° for the Gemini 720i)
-	double min_range_m = 0;		   //!< centre of the first bin [m]
-	double max_range_m = 0;		   //!< centre of the last bin [m]
+	int beam_count = 256;     //!< image columns
+	int range_bins = 400;     //!< image rows
+	double aperture_rad = 0;  //!< horizontal aperture (130° for the Gemini 720i)
+	double min_range_m = 0;   //!< centre of the first bin [m]
+	double max_range_m = 0;   //!< centre of the last bin [m]
 
 	/** Throws std::invalid_argument naming the field if not usable. */
 	void validate() const;
@@ -37,13 +37,20 @@ struct PolarGeometry
 	double bearingStep_rad() const { return aperture_rad / beam_count; }
 	double rangeStep_m() const { return (max_range_m - min_range_m) / (range_bins - 1); }
 	/** Bearing of a (fractional) column: beams centred in equal slices. */
-	double bearingOfColumn(double column) const { return -0.5 * aperture_rad + (column + 0.5) * bearingStep_rad(); }
-	double columnOfBearing(double bearing_rad) const { return (bearing_rad + 0.5 * aperture_rad) / bearingStep_rad() - 0.5; }
+	double bearingOfColumn(double column) const
+	{
+		return -0.5 * aperture_rad + (column + 0.5) * bearingStep_rad();
+	}
+	double columnOfBearing(double bearing_rad) const
+	{
+		return (bearing_rad + 0.5 * aperture_rad) / bearingStep_rad() - 0.5;
+	}
 	double rangeOfRow(double row) const { return min_range_m + row * rangeStep_m(); }
 	double rowOfRange(double range_m) const { return (range_m - min_range_m) / rangeStep_m(); }
 	bool inView(double bearing_rad, double range_m) const
 	{
-		return std::abs(bearing_rad) <= 0.5 * aperture_rad && range_m >= min_range_m && range_m <= max_range_m;
+		return std::abs(bearing_rad) <= 0.5 * aperture_rad && range_m >= min_range_m &&
+		       range_m <= max_range_m;
 	}
 	/** Point in the sonar's x–y plane (x forward, y starboard) [m]. */
 	static Eigen::Vector2d toCartesian(double bearing_rad, double range_m);

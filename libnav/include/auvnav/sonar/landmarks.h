@@ -31,7 +31,7 @@ namespace auvnav::sonar
 struct Pole
 {
 	std::string id;
-	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();	 //!< in the mission's NED tangent frame
+	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();  //!< in the mission's NED tangent frame
 	double radius_m = 0.1;
 };
 
@@ -47,9 +47,9 @@ struct PoleMap
 /** Where the sonar is and looks, with uncertainty (navigation frame). */
 struct SonarPose
 {
-	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();		  //!< sonar head position
-	double heading_rad = 0;								  //!< direction of bearing 0 (vehicle yaw + mounting yaw)
-	Eigen::Matrix2d P_ne = Eigen::Matrix2d::Identity();	  //!< position covariance [m²]
+	Eigen::Vector2d ne_m = Eigen::Vector2d::Zero();  //!< sonar head position
+	double heading_rad = 0;                          //!< direction of bearing 0 (vehicle yaw + mounting yaw)
+	Eigen::Matrix2d P_ne = Eigen::Matrix2d::Identity();  //!< position covariance [m²]
 	double sigma_heading_rad = 0.05;
 };
 
@@ -57,31 +57,33 @@ struct Association
 {
 	int detection = -1, pole = -1;
 	double predicted_bearing_rad = 0, predicted_range_m = 0;
-	double nis = 0;	 //!< Mahalanobis² of the innovation (2 dof)
+	double nis = 0;  //!< Mahalanobis² of the innovation (2 dof)
 };
 
 struct AssociationParams
 {
-	double gate_probability = 0.99;	 //!< chi-square(2) gate
-	double ambiguity_ratio = 20;	 //!< best pole must be this many times likelier than the second (else dropped)
+	double gate_probability = 0.99;  //!< chi-square(2) gate
+	double ambiguity_ratio =
+	    20;  //!< best pole must be this many times likelier than the second (else dropped)
 };
 
 /** Predicted bearing [rad, wrapped] and range of pole `ne` from `pose`. */
 void predictPole(const SonarPose& pose, const Eigen::Vector2d& ne, double& bearing_rad, double& range_m);
 
-std::vector<Association> associate(const std::vector<Detection>& dets, const PoleMap& map, const SonarPose& pose,
-								   const AssociationParams& p = {});
+std::vector<Association> associate(const std::vector<Detection>& dets, const PoleMap& map,
+                                   const SonarPose& pose, const AssociationParams& p = {});
 
 struct FrameHeading
 {
-	double heading_rad = 0;	 //!< vehicle heading (wrapped to (−π, π])
+	double heading_rad = 0;  //!< vehicle heading (wrapped to (−π, π])
 	double sigma_rad = 0;
 	int poles = 0;
 };
 
 /** Vehicle heading implied by the associations (nullopt if none). */
-std::optional<FrameHeading> headingFromPoles(const std::vector<Detection>& dets, const std::vector<Association>& as,
-											 const PoleMap& map, const SonarPose& pose, double mount_yaw_rad);
+std::optional<FrameHeading> headingFromPoles(const std::vector<Detection>& dets,
+                                             const std::vector<Association>& as, const PoleMap& map,
+                                             const SonarPose& pose, double mount_yaw_rad);
 
 double wrapAngle(double a);
 

@@ -51,19 +51,19 @@ struct BlockSpan
 inline const std::array<BlockSpan, 13>& stateBlocks()
 {
 	static const std::array<BlockSpan, 13> blocks = {{
-		{kAttitude, idx::att, 3, "attitude"},
-		{kGyroBias, idx::gyro_bias, 3, "gyro_bias"},
-		{kAcceleration, idx::acc, 3, "acceleration"},
-		{kGravity, idx::gravity, 1, "gravity"},
-		{kAccelBias, idx::acc_bias, 3, "accel_bias"},
-		{kVelocity, idx::vel, 3, "velocity"},
-		{kPosition, idx::pos, 3, "position"},
-		{kCurrentVehicle, idx::current_vehicle, 2, "current_vehicle"},
-		{kCurrentFar, idx::current_far, 2, "current_far"},
-		{kAdcpBias, idx::adcp_bias, 2, "adcp_bias"},
-		{kInertia, idx::inertia, 6, "inertia"},
-		{kDampingLinear, idx::damping_lin, 6, "damping_linear"},
-		{kDampingQuadratic, idx::damping_quad, 6, "damping_quadratic"},
+	    {kAttitude, idx::att, 3, "attitude"},
+	    {kGyroBias, idx::gyro_bias, 3, "gyro_bias"},
+	    {kAcceleration, idx::acc, 3, "acceleration"},
+	    {kGravity, idx::gravity, 1, "gravity"},
+	    {kAccelBias, idx::acc_bias, 3, "accel_bias"},
+	    {kVelocity, idx::vel, 3, "velocity"},
+	    {kPosition, idx::pos, 3, "position"},
+	    {kCurrentVehicle, idx::current_vehicle, 2, "current_vehicle"},
+	    {kCurrentFar, idx::current_far, 2, "current_far"},
+	    {kAdcpBias, idx::adcp_bias, 2, "adcp_bias"},
+	    {kInertia, idx::inertia, 6, "inertia"},
+	    {kDampingLinear, idx::damping_lin, 6, "damping_linear"},
+	    {kDampingQuadratic, idx::damping_quad, 6, "damping_quadratic"},
 	}};
 	return blocks;
 }
@@ -83,9 +83,10 @@ inline std::string blockNames(uint32_t mask)
 /** Rotation from yaw, pitch, roll [rad] (Z-Y-X, as MRPT's CPose3D): R_nb. */
 inline Eigen::Matrix3d rotationYpr(double yaw, double pitch, double roll)
 {
-	return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-			Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-		.toRotationMatrix();
+	return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+	        Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+	        Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+	    .toRotationMatrix();
 }
 
 /** A random tangent vector of `dim` coordinates with independent
@@ -93,7 +94,7 @@ inline Eigen::Matrix3d rotationYpr(double yaw, double pitch, double roll)
  *  kept below `max_angle_rad` (so that ⊞/⊟ stay inside the injectivity
  *  radius of Log). */
 inline TangentVector RandomTangent(uint32_t seed, double scale = 1.0, double max_angle_rad = 3.0,
-								   int dim = idx::core_dim)
+                                   int dim = idx::core_dim)
 {
 	std::mt19937 rng(seed);
 	std::normal_distribution<double> n01(0.0, 1.0);
@@ -119,7 +120,8 @@ inline NavState RandomNavState(uint32_t seed, int plugin_states = 0)
 	auto v2 = [&](double s) { return Eigen::Vector2d(s * n01(rng), s * n01(rng)); };
 	constexpr double kDeg = M_PI / 180;
 	NavState x;
-	x.R_nb = rotationYpr((360 * u01(rng) - 180) * kDeg, (60 * u01(rng) - 30) * kDeg, (60 * u01(rng) - 30) * kDeg);
+	x.R_nb =
+	    rotationYpr((360 * u01(rng) - 180) * kDeg, (60 * u01(rng) - 30) * kDeg, (60 * u01(rng) - 30) * kDeg);
 	x.b_w = v3(1e-4);
 	x.a_n = v3(0.2);
 	x.g = 9.78 + 0.05 * u01(rng);
@@ -165,9 +167,9 @@ inline Covariance TypicalCovariance(int plugin_states = 0)
  *  Earth rate is filled in, the gyro sample and IMU lever arm are zero. */
 class TestContext
 {
-   public:
+ public:
 	explicit TestContext(const earth::Geodetic& origin = {53.1 * M_PI / 180, 8.8 * M_PI / 180, 0.0})
-		: frame_(origin)
+	    : frame_(origin)
 	{
 		ctx_.frame = &frame_;
 		ctx_.omega_ie_n = frame_.earthRate();
@@ -179,7 +181,7 @@ class TestContext
 	const FilterContext& ctx() const { return ctx_; }
 	const earth::TangentFrame& frame() const { return frame_; }
 
-   private:
+ private:
 	earth::TangentFrame frame_;
 	FilterContext ctx_;
 };
@@ -199,10 +201,11 @@ inline std::string coordinateName(int i)
 inline ::testing::AssertionResult NavStateNear(const NavState& a, const NavState& b, double tol)
 {
 	if (!a.allFinite() || !b.allFinite())
-		return ::testing::AssertionFailure() << "state not finite (first: " << a.allFinite()
-											 << ", second: " << b.allFinite() << ")";
+		return ::testing::AssertionFailure()
+		       << "state not finite (first: " << a.allFinite() << ", second: " << b.allFinite() << ")";
 	if (a.dim() != b.dim())
-		return ::testing::AssertionFailure() << "states of " << a.dim() << " and " << b.dim() << " coordinates";
+		return ::testing::AssertionFailure()
+		       << "states of " << a.dim() << " and " << b.dim() << " coordinates";
 	const TangentVector d = a.boxminus(b);
 	std::ostringstream bad;
 	int count = 0;
@@ -212,7 +215,8 @@ inline ::testing::AssertionResult NavStateNear(const NavState& a, const NavState
 			if (count++ < 6) bad << " " << coordinateName(i) << "=" << d[i];
 		}
 	if (count == 0) return ::testing::AssertionSuccess();
-	return ::testing::AssertionFailure() << count << " coordinate(s) of a ⊟ b exceed " << tol << ":" << bad.str();
+	return ::testing::AssertionFailure()
+	       << count << " coordinate(s) of a ⊟ b exceed " << tol << ":" << bad.str();
 }
 
 /** Bit-for-bit equal states (e.g. "a refused update leaves the state
@@ -221,29 +225,33 @@ inline ::testing::AssertionResult NavStateNear(const NavState& a, const NavState
 inline ::testing::AssertionResult NavStateIdentical(const NavState& a, const NavState& b)
 {
 	if (a.dim() != b.dim())
-		return ::testing::AssertionFailure() << "states of " << a.dim() << " and " << b.dim() << " coordinates";
+		return ::testing::AssertionFailure()
+		       << "states of " << a.dim() << " and " << b.dim() << " coordinates";
 	if (a.R_nb == b.R_nb && a.euclidean() == b.euclidean()) return ::testing::AssertionSuccess();
 	const TangentVector d = a.euclidean() - b.euclidean();
 	std::ostringstream bad;
 	if (a.R_nb != b.R_nb) bad << " attitude (|ΔR| = " << (a.R_nb - b.R_nb).cwiseAbs().maxCoeff() << ")";
 	for (int i = idx::att + 3; i < d.size(); ++i)
-		if (!(d[i] == 0)) bad << " " << coordinateName(i) << " " << b.euclidean()[i] << " -> " << a.euclidean()[i];
+		if (!(d[i] == 0))
+			bad << " " << coordinateName(i) << " " << b.euclidean()[i] << " -> " << a.euclidean()[i];
 	return ::testing::AssertionFailure() << "states differ:" << bad.str();
 }
 
 /** `(x ⊞ δ) ⊟ x == δ` for a random δ (attitude angle < 3 rad, others ~`scale`). */
 inline ::testing::AssertionResult BoxplusRoundTrip(const NavState& x, uint32_t seed, double scale = 1.0,
-												   double tol = 1e-9)
+                                                   double tol = 1e-9)
 {
 	const TangentVector delta = RandomTangent(seed, scale, 3.0, x.dim());
 	const NavState y = x.boxplus(delta);
 	const TangentVector back = y.boxminus(x);
 	const double err = (back - delta).cwiseAbs().maxCoeff();
 	if (!(err <= tol * (1 + scale)))
-		return ::testing::AssertionFailure() << "(x ⊞ δ) ⊟ x differs from δ by " << err << " (seed " << seed << ")";
+		return ::testing::AssertionFailure()
+		       << "(x ⊞ δ) ⊟ x differs from δ by " << err << " (seed " << seed << ")";
 	// The rotation must stay orthonormal.
 	const double ortho = (y.R_nb * y.R_nb.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-	if (!(ortho <= 1e-12)) return ::testing::AssertionFailure() << "x ⊞ δ is not a rotation (|RRᵀ − I| = " << ortho << ")";
+	if (!(ortho <= 1e-12))
+		return ::testing::AssertionFailure() << "x ⊞ δ is not a rotation (|RRᵀ − I| = " << ortho << ")";
 	return ::testing::AssertionSuccess();
 }
 
@@ -251,10 +259,10 @@ inline ::testing::AssertionResult BoxplusRoundTrip(const NavState& x, uint32_t s
 
 struct WellFormedOptions
 {
-	uint32_t seed = 1;				 //!< random perturbations
-	double undeclared_scale = 10.0;	 //!< 1σ of the perturbation of undeclared Euclidean blocks
-	double tol = 1e-12;				 //!< relative tolerance of "unchanged" / "zero"
-	bool accept_skip = true;		 //!< a Skip from prepare passes (else fails)
+	uint32_t seed = 1;               //!< random perturbations
+	double undeclared_scale = 10.0;  //!< 1σ of the perturbation of undeclared Euclidean blocks
+	double tol = 1e-12;              //!< relative tolerance of "unchanged" / "zero"
+	bool accept_skip = true;         //!< a Skip from prepare passes (else fails)
 };
 
 namespace detail
@@ -291,15 +299,16 @@ inline std::string vec(const Eigen::VectorXd& v)
  *    differences along every coordinate the filter asks them for.
  *  `prepare` is called once (models may keep per-sensor state in it). */
 inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mrpt::obs::CObservation& obs,
-											   const FilterContext& ctx, const NavState& x,
-											   const WellFormedOptions& opt = {})
+                                               const FilterContext& ctx, const NavState& x,
+                                               const WellFormedOptions& opt = {})
 {
 	using ::testing::AssertionFailure;
 	const uint32_t mask = model.uses();
 	if (mask == 0 || (mask & ~static_cast<uint32_t>(kAllBlocks)) != 0)
 		return AssertionFailure() << "uses() = 0x" << std::hex << mask << " is empty or has unknown bits";
 	const double gate = model.gateProbability();
-	if (!(gate > 0 && gate <= 1)) return AssertionFailure() << "gateProbability() = " << gate << " not in (0, 1]";
+	if (!(gate > 0 && gate <= 1))
+		return AssertionFailure() << "gateProbability() = " << gate << " not in (0, 1]";
 	if (!x.allFinite()) return AssertionFailure() << "test state is not finite";
 
 	std::vector<Measurement> out;
@@ -309,7 +318,8 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 	if (st == PrepareStatus::Skip)
 	{
 		if (!opt.accept_skip) return AssertionFailure() << "prepare returned Skip: " << why;
-		if (!out.empty()) return AssertionFailure() << "prepare returned Skip with " << out.size() << " measurement(s)";
+		if (!out.empty())
+			return AssertionFailure() << "prepare returned Skip with " << out.size() << " measurement(s)";
 		return ::testing::AssertionSuccess() << "skipped: " << why;
 	}
 
@@ -333,7 +343,8 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 	{
 		if (out[k].skipped) continue;  // a part counted but not applied (e.g. an ADCP cell in the seabed)
 		const Measurement& m = out[k];
-		const auto fail = [&]() { return AssertionFailure() << "measurement " << k << " '" << m.label << "': "; };
+		const auto fail = [&]()
+		{ return AssertionFailure() << "measurement " << k << " '" << m.label << "': "; };
 		const Eigen::Index dim = m.z.size();
 		if (dim == 0) return fail() << "empty z";
 		if (!m.z.allFinite()) return fail() << "z not finite: " << detail::vec(m.z);
@@ -343,7 +354,8 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 		const double asym = (m.R - m.R.transpose()).cwiseAbs().maxCoeff();
 		if (!(asym <= 1e-12 * (1 + m.R.cwiseAbs().maxCoeff()))) return fail() << "R not symmetric:\n" << m.R;
 		const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(m.R, Eigen::EigenvaluesOnly);
-		if (!(es.eigenvalues().minCoeff() > 0)) return fail() << "R not positive definite, eigenvalues " << detail::vec(es.eigenvalues());
+		if (!(es.eigenvalues().minCoeff() > 0))
+			return fail() << "R not positive definite, eigenvalues " << detail::vec(es.eigenvalues());
 
 		Eigen::VectorXd h(dim), h2(dim), h_far(dim), r(dim);
 		h.setConstant(std::nan(""));
@@ -375,7 +387,7 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 				for (Eigen::Index i = 0; i < dim; ++i)
 					if (!(r[i] == diff[i]))
 						return fail() << "residualIsDifference() but residual(a, h) = " << detail::vec(r)
-									  << " is not a − h = " << detail::vec(diff);
+						              << " is not a − h = " << detail::vec(diff);
 			}
 		}
 
@@ -384,27 +396,27 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 			h_far.setConstant(std::nan(""));
 			if (!model.predict(x_far, m, ctx, h_far))
 				return fail() << "predict failed after perturbing undeclared blocks ("
-							  << blockNames(~mask & kAllBlocks) << ")";
+				              << blockNames(~mask & kAllBlocks) << ")";
 			if (!detail::nearlyEqual(h, h_far, opt.tol))
 				return fail() << "h changed when undeclared blocks (" << blockNames(~mask & kAllBlocks)
-							  << ") were perturbed: " << detail::vec(h) << " -> " << detail::vec(h_far)
-							  << "; uses() = " << blockNames(mask);
+				              << ") were perturbed: " << detail::vec(h) << " -> " << detail::vec(h_far)
+				              << "; uses() = " << blockNames(mask);
 		}
 		if (affine)
 		{
 			Eigen::VectorXd hp(dim), hm(dim), h2x(dim), rp(dim), rm(dim), r2(dim);
 			if (!model.predict(x_plus, m, ctx, hp) || !model.predict(x_minus, m, ctx, hm) ||
-				!model.predict(x_twice, m, ctx, h2x))
+			    !model.predict(x_twice, m, ctx, h2x))
 				return fail() << "predict failed along the affine blocks (" << blockNames(affine) << ")";
 			model.residual(hp, h, rp);
 			model.residual(hm, h, rm);
 			model.residual(h2x, h, r2);
 			const double size = 1 + rp.cwiseAbs().maxCoeff() + h.cwiseAbs().maxCoeff();
 			if (!((rp + rm).cwiseAbs().maxCoeff() <= opt.tol * size) ||
-				!((r2 - 2 * rp).cwiseAbs().maxCoeff() <= opt.tol * size))
+			    !((r2 - 2 * rp).cwiseAbs().maxCoeff() <= opt.tol * size))
 				return fail() << "h is not affine in the blocks affineIn() declares (" << blockNames(affine)
-							  << "): steps +d, -d, +2d move h by " << detail::vec(rp) << ", " << detail::vec(rm)
-							  << ", " << detail::vec(r2);
+				              << "): steps +d, -d, +2d move h by " << detail::vec(rp) << ", "
+				              << detail::vec(rm) << ", " << detail::vec(r2);
 			// The filter asks for slopes past the last non-affine block.
 			const int from = tangentPrefix(mask & ~affine, x.dim()), to = tangentPrefix(mask, x.dim());
 			Eigen::MatrixXd At = Eigen::MatrixXd::Zero(to - from, dim);
@@ -420,8 +432,8 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 					const double size_i = 1 + slope.cwiseAbs().maxCoeff() + h.cwiseAbs().maxCoeff();
 					if (!((At.row(i - from).transpose() - slope).cwiseAbs().maxCoeff() <= opt.tol * size_i))
 						return fail() << "affineSlopes() along coordinate " << i << " gives "
-									  << detail::vec(At.row(i - from).transpose()) << ", h's difference "
-									  << detail::vec(slope);
+						              << detail::vec(At.row(i - from).transpose()) << ", h's difference "
+						              << detail::vec(slope);
 				}
 		}
 	}
@@ -437,27 +449,28 @@ struct ApplyResult
 {
 	PrepareStatus status = PrepareStatus::Invalid;
 	std::string why;
-	std::vector<UpdateResult> updates;	//!< one per measurement, in order
+	std::vector<UpdateResult> updates;  //!< one per measurement, in order
 };
 
 /** prepare, then ManifoldUkf::update for every measurement (as the host does,
  *  without the host's recovery logic). */
-inline ApplyResult ApplyObservation(ManifoldUkf& ukf, MeasurementModel& model, const mrpt::obs::CObservation& obs,
-									const FilterContext& ctx)
+inline ApplyResult ApplyObservation(ManifoldUkf& ukf, MeasurementModel& model,
+                                    const mrpt::obs::CObservation& obs, const FilterContext& ctx)
 {
 	ApplyResult res;
 	std::vector<Measurement> out;
 	res.status = model.prepare(obs, ctx, out, res.why);
 	if (res.status != PrepareStatus::Ok) return res;
 	for (const auto& m : out)
-		if (!m.skipped) res.updates.push_back(ukf.update(model, m, ctx));	// as the host: skipped parts are counted only
+		if (!m.skipped)
+			res.updates.push_back(ukf.update(model, m, ctx));  // as the host: skipped parts are counted only
 	return res;
 }
 
 /** h(x) for a prepared measurement, for hand-computed comparisons; NaN if
  *  predict fails. */
 inline Eigen::VectorXd Predict(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
-							   const NavState& x)
+                               const NavState& x)
 {
 	Eigen::VectorXd h(m.z.size());
 	if (!model.predict(x, m, ctx, h)) h.setConstant(std::nan(""));

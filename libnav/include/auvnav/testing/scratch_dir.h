@@ -34,13 +34,13 @@ namespace auvnav::testing
 {
 class ScratchDir
 {
-   public:
+ public:
 	explicit ScratchDir(const std::string& name)
 	{
 		static std::atomic<unsigned> counter{0};
 		path_ = std::filesystem::temp_directory_path() /
-				("auvnav_" + name + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-		std::filesystem::remove_all(path_);	 // a folder left by a crashed run with the same pid
+		        ("auvnav_" + name + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+		std::filesystem::remove_all(path_);  // a folder left by a crashed run with the same pid
 		std::filesystem::create_directories(path_);
 	}
 	~ScratchDir() { release(); }
@@ -65,7 +65,7 @@ class ScratchDir
 	std::filesystem::path operator/(const std::filesystem::path& rel) const&& = delete;
 	std::string string() const&& = delete;
 
-   private:
+ private:
 	void release() noexcept
 	{
 		if (path_.empty()) return;

@@ -27,7 +27,7 @@ struct SyntheticScene
 };
 
 inline cv::Mat renderPolarFrame(const sonar::PolarGeometry& g, const std::vector<SyntheticPole>& poles,
-								unsigned seed, const SyntheticScene& s = {})
+                                unsigned seed, const SyntheticScene& s = {})
 {
 	std::mt19937 rng(seed);
 	std::uniform_real_distribution<double> u(1e-12, 1.0);
@@ -39,18 +39,21 @@ inline cv::Mat renderPolarFrame(const sonar::PolarGeometry& g, const std::vector
 		const double theta = g.bearingOfColumn(c);
 		double shadow_from = 1e9;
 		for (const auto& p : poles)
-			if (std::abs(theta - p.bearing_rad) < std::asin(p.radius_m / (p.range_m + p.radius_m)) + 0.5 * g.bearingStep_rad())
+			if (std::abs(theta - p.bearing_rad) <
+			    std::asin(p.radius_m / (p.range_m + p.radius_m)) + 0.5 * g.bearingStep_rad())
 				shadow_from = std::min(shadow_from, p.range_m + 0.2);
 		for (int r = 0; r < g.range_bins; ++r)
 		{
 			const double rho = g.rangeOfRow(r);
-			double level = s.water_level + (rho >= s.seabed_from_m ? s.seabed_level : 0.0) * (rho >= shadow_from ? s.shadow_factor : 1.0);
+			double level = s.water_level + (rho >= s.seabed_from_m ? s.seabed_level : 0.0) *
+			                                   (rho >= shadow_from ? s.shadow_factor : 1.0);
 			for (const auto& p : poles)
 			{
 				const double half = std::asin(p.radius_m / (p.range_m + p.radius_m));
 				const double a = (theta - p.bearing_rad) / std::hypot(s.beamwidth_rad / 2.355, half);
 				const double b = (rho - p.range_m) / sigma_rho;
-				if (std::abs(a) < 5 && std::abs(b) < 5) level += s.pole_level * std::exp(-0.5 * (a * a + b * b));
+				if (std::abs(a) < 5 && std::abs(b) < 5)
+					level += s.pole_level * std::exp(-0.5 * (a * a + b * b));
 			}
 			level *= rayleigh * std::sqrt(-2.0 * std::log(u(rng)));
 			img.at<uchar>(r, c) = static_cast<uchar>(std::clamp(level, 0.0, 255.0));
