@@ -2,7 +2,7 @@
 #include <auvnav/smoother.h>
 #include <auvnav/so3.h>
 
-#include "column_kernels.h"
+#include "covariance_kernels.h"
 
 #include <Eigen/Cholesky>
 #include <array>
@@ -121,13 +121,11 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 	}
 	if (transport_pending_)
 	{
-		// P⁻¹ E = L⁻ᵀ L⁻¹ E by forward and back substitution
-		// (column_kernels.h: axpys down L's columns, then dots with them; the
-		// row-by-row Eigen products this replaced cost ~8 k a tick on the
-		// cut).
+		// P⁻¹ E = L⁻ᵀ L⁻¹ E by forward and back substitution (covariance_kernels.h).
 		Eigen::Matrix<double, Eigen::Dynamic, 6, 0, idx::max_dim, 6> S = E_;
-		solveLeftLower(S.data(), n, S.outerStride(), 6, L.data(), L.outerStride());
-		solveLeftLowerTransposed(S.data(), n, S.outerStride(), 6, L.data(), L.outerStride());
+		const kernels::ConstColumnsMap L_n = kernels::columns(L.data(), n, n, L.outerStride());
+		kernels::solveLeftLower(kernels::columns(S.data(), n, 6, S.outerStride()), L_n);
+		kernels::solveLeftLowerTransposed(kernels::columns(S.data(), n, 6, S.outerStride()), L_n);
 		// P's rows at the six columns, from L (row c of L has c + 1 entries).
 		Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, idx::max_dim> P_rows(6, n);
 		for (int j = 0; j < 6; ++j)
@@ -136,28 +134,25 @@ void RtsStretchRecorder::onPredict(const Covariance& L, bool full, const Eigen::
 			P_rows.row(j).noalias() = L.row(c).head(c + 1) * L.leftCols(c + 1).transpose();
 		}
 		// X_mean += (X_mean P⁻¹ E) P_{cols,:}: two products of rank six, as
-		// column axpys (Eigen's blocked products spent ~3 instructions a
-		// multiply-add at these shapes).
+		// column combinations (Eigen's blocked products spend their set-up
+		// on these shapes).
 		ME_.resize(n, 6);
 		double* X_mean = XX_.data() + n;  // rows n… of XX
 		const Eigen::Index xs = XX_.outerStride();
-		for (int j = 0; j < 6; ++j)
-			subtractAllColumns<false, true>(ME_.col(j).data(), 0, n, X_mean, xs, n,
-			                                [&](Eigen::Index l) { return -S(l, j); });
-		for (int c = 0; c < n; ++c)
-			subtractAllColumns(X_mean + c * xs, 0, n, ME_.data(), ME_.outerStride(), 6,
-			                   [&](Eigen::Index j) { return -P_rows(j, c); });
+		kernels::ColumnsMap X_mean_n = kernels::columns(X_mean, n, n, xs);
+		for (int j = 0; j < 6; ++j) kernels::assignCombination(ME_.col(j), X_mean_n, S.col(j));
+		for (int c = 0; c < n; ++c) kernels::subtractCombination(X_mean_n.col(c), ME_, -P_rows.col(c));
 		transport_pending_ = false;
 	}
 	// [X; X_mean] ← [X; X_mean] Fᵀ, F = [D L11⁻¹, 0; 0, diag(a)] (ukf.h
 	// StepObserver): the first k columns times L11⁻ᵀ Dᵀ, the others scaled.
 	// F L11 = D by columns from the last: F_c = (D_c − Σ_{l>c} F_l L_lc) / L_cc,
-	// as column axpys (column_kernels.h: AVX where the CPU has it; Eigen's
-	// blocked solver and product run these odd shapes at SSE2 width).
+	// as column combinations (covariance_kernels.h).
 	Eigen::Matrix<double, kNonlinearStates, kNonlinearStates> F = D;
-	solveRightLower(F.data(), k, k, k, L);
-	// X_{:,1:k} ← X_{:,1:k} Fᵀ in place (eight-row panels, column_kernels.h).
-	rightMultiplyTransposed<kNonlinearStates>(XX_.data(), 2 * n, XX_.outerStride(), F.data());
+	kernels::solveRightLower(kernels::columns(F.data(), k, k, k), L);
+	// X_{:,1:k} ← X_{:,1:k} Fᵀ in place (eight-row panels).
+	kernels::rightMultiplyTransposed<kNonlinearStates>(
+	    kernels::columns(XX_.data(), 2 * n, XX_.cols(), XX_.outerStride()), F);
 	TangentVector a = TangentVector::Ones(n);
 	model.applyLinearRows(a, step);  // rows k… only scale: their factors
 	XX_.rightCols(n - k) *= a.tail(n - k).asDiagonal();
@@ -179,18 +174,15 @@ void RtsStretchRecorder::onUpdate(const Eigen::Ref<const Eigen::MatrixXd>& B,
 	// X_now = X − MW_p W_pᵀ (this tick's earlier updates, not yet applied).
 	// m is small (3 for most sensors): a column kernel per column of B.
 	auto MW = MW_pending_.middleCols(pending_, m);
-	for (int j = 0; j < m; ++j)
-		subtractAllColumns<false, true>(MW.col(j).data(), 0, 2 * n, XX_.data(), XX_.outerStride(), k,
-		                                [&](Eigen::Index l) { return -B(l, j); });
+	for (int j = 0; j < m; ++j) kernels::assignCombination(MW.col(j), XX_.leftCols(k), B.col(j));
 	if (pending_ > 0)
 	{
-		// Coefficient-wise and by column axpys: Eigen's blocked products
-		// cost more in set-up than these few multiply-adds.
+		// Coefficient-wise and by column combinations: Eigen's blocked
+		// products cost more in set-up than these few multiply-adds.
 		const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPending, kMaxPending> C =
 		    W_pending_.topLeftCorner(k, pending_).transpose().lazyProduct(B);
 		for (int j = 0; j < m; ++j)
-			subtractAllColumns(MW.col(j).data(), 0, 2 * n, MW_pending_.data(), MW_pending_.outerStride(),
-			                   pending_, [&](Eigen::Index l) { return C(l, j); });
+			kernels::subtractCombination(MW.col(j), MW_pending_.leftCols(pending_), C.col(j));
 	}
 	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
 	W_pending_.middleCols(pending_, m) = W;
@@ -205,7 +197,7 @@ void RtsStretchRecorder::applyWideUpdate(const Eigen::Ref<const Eigen::MatrixXd>
 	const int k = static_cast<int>(B.rows()), n = static_cast<int>(W.rows());
 	const Eigen::MatrixXd MW = XX_.leftCols(k) * B;
 	current_.sum_dx.noalias() += MW.bottomRows(n) * u;
-	downdateSymmetric(current_.sum_dP, MW.topRows(n));  // − Σ M ΔP Mᵀ while open (flushDp)
+	kernels::downdateSymmetric(current_.sum_dP, MW.topRows(n));  // − Σ M ΔP Mᵀ while open (flushDp)
 	XX_.noalias() -= MW * W.transpose();
 }
 
@@ -220,8 +212,8 @@ void RtsStretchRecorder::flushUpdates()
 	dP_pending_ += pending_;
 	// XX −= MW Wᵀ column by column (r ≈ 5 columns of MW per column of XX).
 	for (int c = 0; c < n; ++c)
-		subtractAllColumns(XX_.col(c).data(), 0, XX_.rows(), MW_pending_.data(), MW_pending_.outerStride(),
-		                   pending_, [&](Eigen::Index l) { return W_pending_(c, l); });
+		kernels::subtractCombination(XX_.col(c), MW_pending_.leftCols(pending_),
+		                             W_pending_.row(c).head(pending_).transpose());
 	pending_ = 0;
 }
 
@@ -229,10 +221,9 @@ void RtsStretchRecorder::flushDp()
 {
 	if (dP_pending_ == 0) return;
 	// While the stretch is open, sum_dP holds −Σ M ΔP Mᵀ, so that the rank
-	// update is the filter's symmetric downdate kernel (column_kernels.h:
-	// AVX where the CPU has it; Eigen's rankUpdate ran it at SSE2 width and
-	// ~3 instructions a multiply-add). close() turns the sign back.
-	downdateSymmetric(current_.sum_dP, MW_dP_.leftCols(dP_pending_));
+	// update is the filter's symmetric downdate kernel. close() turns the
+	// sign back.
+	kernels::downdateSymmetric(current_.sum_dP, MW_dP_.leftCols(dP_pending_));
 	dP_pending_ = 0;
 }
 

@@ -1,7 +1,7 @@
 #include <auvnav/so3.h>
 #include <auvnav/ukf.h>
 
-#include "column_kernels.h"
+#include "covariance_kernels.h"
 
 #include <boost/math/distributions/chi_squared.hpp>
 #include <limits>
@@ -46,21 +46,13 @@ void symmetrize(Covariance& P)
 		}
 }
 
-/** Columns [from, to) of the lower Cholesky factor of P over its first
- *  `rows` rows (all with rows < 0), the columns before `from` already in L
- *  over those rows; left-looking: column j is P's column less the axpys of
- *  the columns before it (contiguous column operations without a blocked
- *  solver's set-up, which dominated at these sizes). Rows above the
- *  diagonal are zeroed (sigma points read whole columns). False if P is not
- *  positive definite there (columns of L partly written). */
+/** Columns [from, to) of P's lower Cholesky factor over its first `rows`
+ *  rows (all with rows < 0): kernels::choleskyColumns. Left-looking
+ *  (contiguous column operations without a blocked solver's set-up, which
+ *  dominates at these sizes); sigma points read whole columns. */
 bool choleskyColumns(const Covariance& P, int from, int to, Covariance& L, int rows = -1)
 {
-	const Eigen::Index n = rows < 0 ? P.rows() : rows;
-#if AUVNAV_AVX_KERNELS
-	if (g_wide_kernels.load(std::memory_order_relaxed))
-		return choleskyColumnsAvx(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
-#endif
-	return choleskyColumnsFused(P.data(), P.outerStride(), from, to, L.data(), L.outerStride(), n);
+	return kernels::choleskyColumns(P, from, to, L, rows < 0 ? P.rows() : rows);
 }
 
 /** One prediction step of the first kNonlinear coordinates along departures
@@ -128,25 +120,7 @@ class InertialStepMap
 	Eigen::Vector2d shear0_;
 };
 
-/** Every one of the `count` contiguous entries at `a` finite (no NaN, no
- *  ±Inf): x · 0 is ±0 for a finite x and NaN otherwise, so the sum of those
- *  is 0 exactly when all are. Two entries a step (a sum the compiler may
- *  not split itself): at the update's sizes (a few dozen entries) Eigen's
- *  allFinite cost 3.3 M instructions more on the benchmark cut, an entry
- *  a step 4.5 M more. */
-bool allFiniteEntries(const double* a, Eigen::Index count)
-{
-	Eigen::Index i = 0;
-	double s = 0;
-#if defined(__SSE2__)
-	const __m128d zero = _mm_setzero_pd();
-	__m128d s2 = zero;
-	for (; i + 2 <= count; i += 2) s2 = _mm_add_pd(s2, _mm_mul_pd(_mm_loadu_pd(a + i), zero));
-	s = _mm_cvtsd_f64(_mm_add_sd(s2, _mm_unpackhi_pd(s2, s2)));
-#endif
-	for (; i < count; ++i) s += a[i] * 0.0;
-	return s == 0;
-}
+using kernels::allFiniteEntries;
 template <typename Derived>
 bool allFiniteEntries(const Eigen::PlainObjectBase<Derived>& a)
 {
@@ -229,17 +203,6 @@ bool affineSlopes(const MeasurementModel& model, const Residuals& residuals, con
 }
 
 }  // namespace
-
-bool wideKernels()
-{
-	return g_wide_kernels.load();
-}
-
-bool setWideKernels(bool on)
-{
-	g_wide_kernels.store(on && detail::cpuHasAvx());
-	return wideKernels();
-}
 
 double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_rad)
 {
@@ -574,7 +537,7 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// currents), and J L_j above the rows J reaches from L_j's diagonal on:
 	// each block column skips the zeros it finds there.
 	assert((Dc.block<4, rows - 1 - points>(0, points).array() == 0).all());
-	lowerBlockGramDispatch<kp, rows>(DWc.data(), Dc.data(), P_NN.data(), points, rows - 1);
+	kernels::lowerBlockGram<kp, rows>(DWc, Dc, P_NN, points, rows - 1);
 	// The q q term of both currents (their lower triangle).
 	for (int r : {idx::current_vehicle, idx::current_far})
 		for (int c : {idx::current_vehicle, idx::current_far})
@@ -595,8 +558,8 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	step_map.apply(P_NL);
 	const Eigen::Matrix<double, k, ks> D_less_JL = D_turn - JL_turn;
 	// Column axpys (a blocked product's set-up costs more here).
-	addColumnCombinations(P_NL.data(), k, P_NL.outerStride(), nl, D_less_JL.data(), k, ks, &L_(k, 0),
-	                      L_.outerStride(), a.data());
+	kernels::addCombinationsThenScale(kernels::columns(P_NL.data(), k, nl, P_NL.outerStride()), D_less_JL,
+	                                  kernels::columns(&L_(k, 0), nl, ks, L_.outerStride()), a.head(nl));
 	Eigen::Matrix<double, k, k> D_pairs;  // for an observer and P_cross: every column's pair difference
 	if (observer_ || P_cross)
 	{
@@ -618,13 +581,13 @@ void ManifoldUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector
 	// symmetrise it; every step writes both triangles alike), and a_i a_j =
 	// a_j a_i, so it stays so.
 	const double speed_through_water = (x_.v_n.head<2>() - x_.current_vehicle_ne).norm();
-	scaleByOuterProduct(&P_(k, k), P_.outerStride(), nl, a.data());
+	kernels::scaleByOuterProduct(P_.bottomRightCorner(nl, nl), a.head(nl));
 	// P_NN into P's top-left block as whole fixed-size columns, then its
 	// strictly upper part and the bottom-left block as mirrors, by transposed
 	// tiles (copies: the same values as entry by entry).
 	for (int j = 0; j < k; ++j) P_.col(j).head<k>() = P_NN.col(j).head<k>();
-	mirrorLowerToUpper(P_.data(), P_.outerStride(), k);
-	copyTransposed(&P_(0, k), P_.outerStride(), k, nl, &P_(k, 0), P_.outerStride());
+	kernels::mirrorLowerToUpper(P_.topLeftCorner<k, k>());
+	P_.bottomLeftCorner(nl, k) = P_.topRightCorner(k, nl).transpose();
 	model_.addNoiseCovariance(P_, dt, speed_through_water, x_.v_n.z());
 	if (observer_) observer_->onPredict(L_, full_factor, D_pairs, model_, step);
 	applySigmaLimits(false);  // part of the prediction's P⁻: process noise to an observer
@@ -830,8 +793,8 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 				}
 				int end = l;
 				while (end < nk && a[end] != 0) ++end;
-				subtractAllColumns(&Pxz(0, i), 0, n, &P_(0, kn + l), P_.outerStride(), end - l,
-				                   [&](Eigen::Index c) { return -c_lin * a[l + c]; });
+				kernels::subtractCombination(Pxz.col(i), P_.middleCols(kn + l, end - l),
+				                             (-c_lin) * Eigen::Map<const Eigen::VectorXd>(a + l, end - l));
 				l = end;
 			}
 		}
@@ -853,8 +816,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// (kn = 0: h affine in all it reads, no sigma point; M has no storage.)
 	if (kn > 0)
 		for (int i = 0; i < m; ++i)  // axpys of L's columns (a gemv's set-up costs more at these sizes)
-			subtractAllColumns(&Pxz(0, i), 0, n, L_.data(), L_.outerStride(), kn,
-			                   [&](Eigen::Index j) { return -M(i, j); });
+			kernels::subtractCombination(Pxz.col(i), L_.leftCols(kn), -M.row(i).transpose());
 
 	MapV nu = takeV(m);
 	residuals.into(meas.z.data(), z_mean.data(), nu.data());
@@ -921,15 +883,15 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	// W Lᵀ = Pxz column by column (forward substitution as axpys: the
 	// blocked triangular solver packs its operands, costly for m ≤ 6).
 	const auto& L_S = llt.matrixLLT();  // L in its lower triangle
-	solveRightLowerTransposed(W.data(), n, W.outerStride(), m, L_S);
+	kernels::solveRightLowerTransposed(kernels::columns(W.data(), n, m, n), L_S);
 	MapV u = takeV(m);
 	u = nu;
 	llt.matrixL().solveInPlace(u);
 	TangentVector dx = TangentVector::Zero(n);
-	subtractAllColumns(dx.data(), 0, n, W.data(), W.outerStride(), m, [&](Eigen::Index l) { return -u[l]; });
+	kernels::subtractCombination(dx, W, -u);
 	x_ = x_.boxplus(dx);
 	x_.R_nb = so3::normalized(x_.R_nb);
-	downdateSymmetric(P_, W);
+	kernels::downdateSymmetric(P_, W);
 	if (observer_)
 	{
 		// P⁻¹ W = P⁻¹ Pxz L_S⁻ᵀ with Pxz = L_{:,0:kn} Mᵀ + c P_{:,kn:k} Aᵀ
@@ -943,12 +905,13 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		// widened together, B is the same expression: exactly so for an h
 		// linear over the spread (u = H dx then), else to first order.
 		// In the update's arena, by the same solve as W (B L_Sᵀ = that), then
-		// L11ᵀ B_top = that by back substitution (column_kernels.h).
+		// L11ᵀ B_top = that by back substitution.
 		MapM B = takeM(k, m);
 		B.topRows(kn) = M.transpose();
 		if (kn < k) B.bottomRows(k - kn) = c_lin * Eigen::Map<const Eigen::MatrixXd>(At_data, k - kn, m);
-		solveRightLowerTransposed(B.data(), k, B.outerStride(), m, L_S);
-		solveLeftLowerTransposed(B.data(), kn, B.outerStride(), m, L_.data(), L_.outerStride());
+		kernels::solveRightLowerTransposed(kernels::columns(B.data(), k, m, k), L_S);
+		kernels::solveLeftLowerTransposed(kernels::columns(B.data(), kn, m, k),
+		                                  kernels::columns(L_.data(), kn, kn, L_.outerStride()));
 		observer_->onUpdate(B, u, W);
 	}
 	applySigmaLimits();

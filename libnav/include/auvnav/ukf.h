@@ -68,19 +68,6 @@ double attitudeSpreadScale(const Eigen::Ref<const TangentVector>& c, double max_
 /** The same from the step's attitude part alone (no full step formed). */
 double attitudeTurnScale(const Eigen::Vector3d& turn_rad, double max_rad);
 
-/** Whether the covariance kernels (the update's downdate and column
- *  products, the factor, the prediction's Gram matrix) run 256-bit AVX
- *  packets: on when the CPU has AVX and FMA, checked at run time. The
- *  results are the same bit for bit either way (the same operations in the
- *  same order; where a kernel fuses a product and a sum, the FMA
- *  instruction on the wide path and std::fma on the baseline round once
- *  alike); for tests and diagnostics. */
-bool wideKernels();
-/** Turns the AVX path on (only where the CPU has AVX and FMA) or off;
- *  returns wideKernels(). Not meant to be called while a filter runs
- *  elsewhere. */
-bool setWideKernels(bool on);
-
 /** Sigma-point weights for dimension n. */
 struct UtWeights
 {

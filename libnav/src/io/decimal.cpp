@@ -11,43 +11,76 @@ namespace auvnav::io
 {
 namespace
 {
-__extension__ typedef unsigned __int128 u128;  // GCC and Clang on 64-bit targets
-
 constexpr int kMaxFastPrecision = 17;
 
-/** 10^k for k in [0, 38] (10^38 < 2^127). */
-u128 pow10(int k)
+/** 10^k for k in [0, 19] (10^19 < 2^64). */
+constexpr uint64_t kPow10[20] = {1,
+                                 10,
+                                 100,
+                                 1000,
+                                 10000,
+                                 100000,
+                                 1000000,
+                                 10000000,
+                                 100000000,
+                                 1000000000,
+                                 10000000000,
+                                 100000000000,
+                                 1000000000000,
+                                 10000000000000,
+                                 100000000000000,
+                                 1000000000000000,
+                                 10000000000000000,
+                                 100000000000000000,
+                                 1000000000000000000,
+                                 10000000000000000000u};
+
+int bitLength(uint64_t x)
 {
-	u128 p = 1;
-	for (; k >= 19; k -= 19) p *= UINT64_C(10000000000000000000);
-	static constexpr uint64_t kSmall[19] = {1,
-	                                        10,
-	                                        100,
-	                                        1000,
-	                                        10000,
-	                                        100000,
-	                                        1000000,
-	                                        10000000,
-	                                        100000000,
-	                                        1000000000,
-	                                        10000000000,
-	                                        100000000000,
-	                                        1000000000000,
-	                                        10000000000000,
-	                                        100000000000000,
-	                                        1000000000000000,
-	                                        10000000000000000,
-	                                        100000000000000000,
-	                                        1000000000000000000};
-	return p * kSmall[k];
+	return x ? 64 - __builtin_clzll(x) : 0;
 }
 
-int bitLength(u128 x)
+/** An unsigned 128-bit value as two 64-bit words (portable: no compiler
+ *  extension, the same on 32- and 64-bit targets). */
+struct Wide
 {
-	const auto hi = static_cast<uint64_t>(x >> 64);
-	if (hi) return 128 - __builtin_clzll(hi);
-	const auto lo = static_cast<uint64_t>(x);
-	return lo ? 64 - __builtin_clzll(lo) : 0;
+	uint64_t hi = 0, lo = 0;
+};
+
+/** a · b exactly, by 32-bit halves. */
+Wide multiply(uint64_t a, uint64_t b)
+{
+	const uint64_t mask = 0xFFFFFFFFu;
+	const uint64_t ll = (a & mask) * (b & mask), lh = (a & mask) * (b >> 32);
+	const uint64_t hl = (a >> 32) * (b & mask), hh = (a >> 32) * (b >> 32);
+	const uint64_t mid = (ll >> 32) + (lh & mask) + (hl & mask);
+	return {hh + (lh >> 32) + (hl >> 32) + (mid >> 32), (mid << 32) | (ll & mask)};
+}
+
+/** x / 2^s for s in [1, 127]: the quotient (`fits`: below 2^64) and how
+ *  the remainder compares with half of 2^s (−1, 0, +1). */
+struct Shifted
+{
+	uint64_t q = 0;
+	bool fits = false;
+	int rest_vs_half = 0;
+};
+
+Shifted shiftDown(Wide x, int s)
+{
+	Shifted out;
+	const uint64_t q_hi = s >= 64 ? 0 : x.hi >> s;
+	out.q = s >= 64 ? x.hi >> (s - 64) : (x.lo >> s) | (x.hi << (64 - s));
+	out.fits = q_hi == 0;
+	const int h = s - 1;  // the half's bit; the rest lies in bits [0, s)
+	const bool half_bit = h >= 64 ? (x.hi >> (h - 64)) & 1 : (x.lo >> h) & 1;
+	bool below = false;  // any bit under the half's
+	if (h >= 64)
+		below = x.lo != 0 || (h > 64 && (x.hi & ((UINT64_C(1) << (h - 64)) - 1)) != 0);
+	else if (h > 0)
+		below = (x.lo & ((UINT64_C(1) << h) - 1)) != 0;
+	out.rest_vs_half = !half_bit ? -1 : (below ? 1 : 0);
+	return out;
 }
 
 /** |v| = m·2^e exactly; m < 2^53. */
@@ -71,53 +104,22 @@ Binary decompose(double v)
 	return b;
 }
 
-/** num / 2^s rounded half to even; 1 <= s <= 127. */
-u128 shiftRound(u128 num, int s)
+/** round(m·2^e·10^k) half to even into `n`, for k in [0, 19]; false where
+ *  that is not a 64-bit integer (the library then prints the value). */
+bool scaledDigits(const Binary& b, int k, uint64_t& n)
 {
-	const u128 q = num >> s;
-	const u128 r = num - (q << s);
-	const u128 half = u128(1) << (s - 1);
-	return (r > half || (r == half && (q & 1))) ? q + 1 : q;
-}
-
-/** num / den rounded half to even; den < 2^127. */
-u128 divRound(u128 num, u128 den)
-{
-	const u128 q = num / den;
-	const u128 r = num - q * den;
-	return (2 * r > den || (2 * r == den && (q & 1))) ? q + 1 : q;
-}
-
-/** round(m·2^e·10^k) half to even into `n`; false if it does not fit the
- *  fast path's 128-bit arithmetic. */
-bool scaledDigits(const Binary& b, int k, u128& n)
-{
-	if (k >= 0)
-	{
-		if (k > 22) return false;  // m·10^k < 2^53·2^74
-		const u128 num = u128(b.m) * pow10(k);
-		if (b.e >= 0)
-		{
-			if (bitLength(num) + b.e > 127) return false;
-			n = num << b.e;
-		}
-		else if (-b.e > 127)
-			return false;
-		else
-			n = shiftRound(num, -b.e);
-		return true;
-	}
-	const int j = -k;
-	if (j > 38) return false;
-	const u128 den = pow10(j);
+	if (k < 0 || k > 19) return false;
+	const Wide num = multiply(b.m, kPow10[k]);
 	if (b.e >= 0)
 	{
-		if (bitLength(b.m) + b.e > 127) return false;
-		n = divRound(u128(b.m) << b.e, den);
+		if (num.hi != 0 || bitLength(num.lo) + b.e > 63) return false;
+		n = num.lo << b.e;
 		return true;
 	}
-	if (bitLength(den) - b.e > 127) return false;
-	n = divRound(b.m, den << -b.e);
+	if (-b.e > 127) return false;
+	const Shifted d = shiftDown(num, -b.e);
+	if (!d.fits || d.q == UINT64_MAX) return false;
+	n = d.q + ((d.rest_vs_half > 0 || (d.rest_vs_half == 0 && (d.q & 1))) ? 1 : 0);
 	return true;
 }
 
@@ -166,7 +168,7 @@ int decimalDigits(uint64_t x)
 	if (x == 0) return 1;
 	const int bits = 64 - __builtin_clzll(x);
 	const int guess = (bits * 1233) >> 12;
-	return guess + (x >= static_cast<uint64_t>(pow10(guess)) ? 1 : 0);
+	return guess + (guess < 20 && x >= kPow10[guess] ? 1 : 0);
 }
 
 void appendWithLibrary(std::string& out, double v, std::chars_format format, int precision)
@@ -208,15 +210,13 @@ void appendFixed(std::string& out, double v, int precision)
 		// Past 2^-120, |v|·10^17 < 2^-10: the decimals round to zero.
 		if (s <= 120)
 		{
-			const u128 num = u128(fraction) * pow10(precision);
-			decimals = static_cast<uint64_t>(num >> s);
-			const u128 rest = num - (u128(decimals) << s);
-			const u128 half = u128(1) << (s - 1);
+			const Shifted d = shiftDown(multiply(fraction, kPow10[precision]), s);
+			decimals = d.q;  // below 10^precision: fraction < 2^s
 			// A tie goes to the even last digit: with no decimals, the whole part's.
 			const uint64_t last = precision > 0 ? decimals : whole;
-			if (rest > half || (rest == half && (last & 1))) ++decimals;
+			if (d.rest_vs_half > 0 || (d.rest_vs_half == 0 && (last & 1))) ++decimals;
 		}
-		if (decimals == static_cast<uint64_t>(pow10(precision)))
+		if (decimals == kPow10[precision])
 		{
 			++whole;
 			decimals = 0;
@@ -253,8 +253,8 @@ void appendGeneral(std::string& out, double v, int precision)
 	// (78913 / 2^18 is log10(2) to 1e-7, exact over the double range).
 	const int log2_v = bitLength(b.m) - 1 + b.e;
 	int x = (log2_v * 78913) >> 18;
-	const auto top = static_cast<uint64_t>(pow10(precision));
-	u128 n = 0;
+	const uint64_t top = kPow10[precision];
+	uint64_t n = 0;
 	if (!scaledDigits(b, precision - 1 - x, n))
 		return appendWithLibrary(out, v, std::chars_format::general, precision);
 	while (n >= top)  // x was one low, or rounding carried to one more digit
@@ -264,7 +264,7 @@ void appendGeneral(std::string& out, double v, int precision)
 			return appendWithLibrary(out, v, std::chars_format::general, precision);
 	}
 	char digits[kMaxFastPrecision];
-	writeDigits(digits, static_cast<uint64_t>(n), precision);
+	writeDigits(digits, n, precision);
 	int used = precision;  // significant digits left once trailing zeros go
 	if (x < -4 || x >= precision)
 	{

@@ -2,18 +2,18 @@
 /** @file decimal.h
  *  printf's "%.<precision>f" and "%.<precision>g" for a double, appended to
  *  a string: the same bytes as std::to_chars with chars_format::fixed /
- *  general and that precision (and as printf in the C locale), at a fraction
- *  of the cost. std::to_chars with a precision spends ~500-750 instructions
- *  a value; the run's CSV rows (~110 values a states.csv row, ~25 updates.csv
- *  rows per IMU tick) made that ~10 k instructions per IMU tick (issue 16).
+ *  general and that precision (and as printf in the C locale), at a small
+ *  fraction of its cost, which matters for the run's CSV rows (a hundred
+ *  values a row, a row an IMU tick).
  *
  *  How: |v| = m·2^e exactly (m < 2^53), and the wanted digits are
- *  round(|v|·10^k) for one integer k, computed in 128-bit integers and
- *  rounded half to even on the exact remainder, as the C library rounds.
- *  Values whose product would not fit in 128 bits (|v| above 2^63 in fixed
- *  form, extreme exponents in general form), NaN, infinities and
- *  precisions above 17 are handed to std::to_chars itself. The oracle test
- *  (tests/io/test_decimal.cpp) compares both on millions of values.
+ *  round(|v|·10^k) for one integer k ≤ 19, formed exactly in a two-word
+ *  (128-bit) product and rounded half to even on the exact remainder, as
+ *  the C library rounds. Other values (digits that are not a 64-bit
+ *  integer: |v| above 2^63 in fixed form, |v| ≥ 10^precision or tiny in
+ *  general form), NaN, infinities and precisions above 17 are handed to
+ *  std::to_chars itself. The oracle test (tests/io/test_decimal.cpp)
+ *  compares both on millions of values.
  */
 #include <string>
 
