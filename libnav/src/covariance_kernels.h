@@ -6,14 +6,12 @@
  *  the symmetric downdate P −= W Wᵀ, the lower blocks of a Gram matrix and
  *  the prediction's block operations.
  *
- *  Each is an Eigen expression over maps of the caller's column-major
- *  storage: lazy (coefficient-based) products, which Eigen vectorises down
- *  the rows with whatever vector unit the build targets (SSE2 on the
- *  x86-64 baseline, AVX and FMA with AUVNAV_MARCH=x86-64-v3, NEON on
- *  aarch64), without the packing and blocking set-up that its general
- *  products spend at these small, odd shapes. Whether a product and a sum
- *  are fused is the compiler's choice for the target: results agree with
- *  the dense reference to rounding, not bit for bit across targets.
+ *  Written as plain loops over contiguous columns and Eigen block
+ *  expressions, with no intrinsics: the compiler vectorises them for
+ *  whatever the build targets (SSE2 on the x86-64 baseline, AVX and FMA with
+ *  AUVNAV_MARCH=x86-64-v3, NEON on aarch64). Whether a product and a sum are
+ *  fused is the compiler's choice for the target: results agree with the
+ *  dense reference to rounding, not bit for bit across targets.
  *
  *  Contract shared by every kernel: pointers address column-major storage
  *  with the stride given; the ranges named are read or written, nothing
@@ -24,8 +22,13 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
+// Internal linkage: each including file gets its own copies, inlined where
+// they are used, not exported from the library and called through its PLT.
 namespace auvnav::kernels
+{
+namespace
 {
 using ColumnsMap = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
 using ConstColumnsMap = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
@@ -41,19 +44,162 @@ inline ConstColumnsMap columns(const double* data, Eigen::Index rows, Eigen::Ind
 	return ConstColumnsMap(data, rows, cols, Eigen::OuterStride<>(stride));
 }
 
-/** y −= X c: the column combination Σ_l c_l X_l taken row by row, so that
- *  y is read and written once. */
+namespace detail
+{
+/** y[i] (=|+=) Σ_{c<C} a[c] x_c[i] for i < rows (x_c = X + c·xs): one pass
+ *  over y for C ≤ 4 columns, y read and written once. A plain loop over
+ *  contiguous arrays, which the compiler vectorises for the target: Eigen's
+ *  expression evaluators, at these short and odd lengths, spent more
+ *  spilling their state than computing. */
+template <int C, bool kAssign>
+inline void combinationPass(double* __restrict y, const double* __restrict X, Eigen::Index xs,
+                            Eigen::Index rows, const double* a)
+{
+	const double a0 = a[0], a1 = C > 1 ? a[1] : 0.0, a2 = C > 2 ? a[2] : 0.0, a3 = C > 3 ? a[3] : 0.0;
+	const double* __restrict x0 = X;
+	const double* __restrict x1 = X + (C > 1 ? xs : 0);
+	const double* __restrict x2 = X + (C > 2 ? 2 * xs : 0);
+	const double* __restrict x3 = X + (C > 3 ? 3 * xs : 0);
+	for (Eigen::Index i = 0; i < rows; ++i)
+	{
+		double s = x0[i] * a0;
+		if constexpr (C > 1) s += x1[i] * a1;
+		if constexpr (C > 2) s += x2[i] * a2;
+		if constexpr (C > 3) s += x3[i] * a3;
+		y[i] = kAssign ? s : y[i] + s;
+	}
+}
+
+/** y (=|+=) sign · X c over X's columns in passes of four. y: a contiguous
+ *  vector; X: column-major with contiguous columns; c: any vector
+ *  expression of X's column count. */
+template <bool kAssign, typename Y, typename X, typename Coef>
+inline void combination(Y& y, const X& x, const Coef& c, double sign)
+{
+	static_assert(!X::IsRowMajor, "combination: X must be column-major");
+	eigen_assert(x.innerStride() == 1 && y.innerStride() == 1 && x.rows() == y.size() &&
+	             c.size() == x.cols());
+	const Eigen::Index m = x.cols(), rows = x.rows(), xs = x.outerStride();
+	if (m == 0)
+	{
+		if constexpr (kAssign) y.setZero();
+		return;
+	}
+	double* out = y.data();
+	bool assign = kAssign;
+	for (Eigen::Index l = 0; l < m; l += 4)
+	{
+		const int width = static_cast<int>(std::min<Eigen::Index>(4, m - l));
+		double a[4] = {0, 0, 0, 0};
+		for (int k = 0; k < width; ++k) a[k] = sign * c[l + k];
+		const double* X_l = x.data() + l * xs;
+		switch (width * 2 + (assign ? 1 : 0))
+		{
+			case 9:
+				combinationPass<4, true>(out, X_l, xs, rows, a);
+				break;
+			case 8:
+				combinationPass<4, false>(out, X_l, xs, rows, a);
+				break;
+			case 7:
+				combinationPass<3, true>(out, X_l, xs, rows, a);
+				break;
+			case 6:
+				combinationPass<3, false>(out, X_l, xs, rows, a);
+				break;
+			case 5:
+				combinationPass<2, true>(out, X_l, xs, rows, a);
+				break;
+			case 4:
+				combinationPass<2, false>(out, X_l, xs, rows, a);
+				break;
+			case 3:
+				combinationPass<1, true>(out, X_l, xs, rows, a);
+				break;
+			default:
+				combinationPass<1, false>(out, X_l, xs, rows, a);
+				break;
+		}
+		assign = false;
+	}
+}
+}  // namespace detail
+
+/** y −= X c: the column combination Σ_l c_l X_l (X rows × m, c m). */
 template <typename Y, typename X, typename C>
 inline void subtractCombination(Y&& y, const X& x, const C& c)
 {
-	y.noalias() -= x.lazyProduct(c);
+	detail::combination<false>(y, x, c, -1.0);
+}
+
+/** y += X c. */
+template <typename Y, typename X, typename C>
+inline void addCombination(Y&& y, const X& x, const C& c)
+{
+	detail::combination<false>(y, x, c, 1.0);
 }
 
 /** y = X c. */
 template <typename Y, typename X, typename C>
 inline void assignCombination(Y&& y, const X& x, const C& c)
 {
-	y.noalias() = x.lazyProduct(c);
+	detail::combination<true>(y, x, c, 1.0);
+}
+
+namespace detail
+{
+/** y0[i] −= Σ_{c<C} a[c] x_c[i], y1[i] −= Σ_{c<C} b[c] x_c[i] for i < rows
+ *  (x_c = X + c·xs): two columns in one pass, each x_c[i] loaded once. */
+template <int C>
+inline void pairSubtractPass(double* __restrict y0, double* __restrict y1, const double* __restrict X,
+                             Eigen::Index xs, Eigen::Index rows, const double* a, const double* b)
+{
+	double ac[4], bc[4];
+	for (int c = 0; c < 4; ++c) ac[c] = c < C ? a[c] : 0.0, bc[c] = c < C ? b[c] : 0.0;
+	const double* __restrict x0 = X;
+	const double* __restrict x1 = X + (C > 1 ? xs : 0);
+	const double* __restrict x2 = X + (C > 2 ? 2 * xs : 0);
+	const double* __restrict x3 = X + (C > 3 ? 3 * xs : 0);
+	for (Eigen::Index i = 0; i < rows; ++i)
+	{
+		double s0 = x0[i] * ac[0], s1 = x0[i] * bc[0];
+		if constexpr (C > 1) s0 += x1[i] * ac[1], s1 += x1[i] * bc[1];
+		if constexpr (C > 2) s0 += x2[i] * ac[2], s1 += x2[i] * bc[2];
+		if constexpr (C > 3) s0 += x3[i] * ac[3], s1 += x3[i] * bc[3];
+		y0[i] -= s0;
+		y1[i] -= s1;
+	}
+}
+}  // namespace detail
+
+/** y0 −= X a and y1 −= X b in passes of four of X's columns (X rows × m,
+ *  column-major with stride xs; a and b m entries each, contiguous). */
+inline void subtractPairOfCombinations(double* y0, double* y1, const double* X, Eigen::Index xs,
+                                       Eigen::Index rows, Eigen::Index m, const double* a,
+                                       Eigen::Index a_stride, const double* b, Eigen::Index b_stride)
+{
+	for (Eigen::Index l = 0; l < m; l += 4)
+	{
+		const int width = static_cast<int>(std::min<Eigen::Index>(4, m - l));
+		double al[4], bl[4];
+		for (int k = 0; k < width; ++k) al[k] = a[(l + k) * a_stride], bl[k] = b[(l + k) * b_stride];
+		const double* X_l = X + l * xs;
+		switch (width)
+		{
+			case 4:
+				detail::pairSubtractPass<4>(y0, y1, X_l, xs, rows, al, bl);
+				break;
+			case 3:
+				detail::pairSubtractPass<3>(y0, y1, X_l, xs, rows, al, bl);
+				break;
+			case 2:
+				detail::pairSubtractPass<2>(y0, y1, X_l, xs, rows, al, bl);
+				break;
+			default:
+				detail::pairSubtractPass<1>(y0, y1, X_l, xs, rows, al, bl);
+				break;
+		}
+	}
 }
 
 /** Columns [from, to) of the lower Cholesky factor of P over its first
@@ -135,21 +281,57 @@ void solveLeftLowerTransposed(ColumnsMap B, const Lower& L)
 	}
 }
 
-/** A(j, i) = A(i, j) for i > j: the strictly upper triangle from the lower. */
+/** A(j, i) = A(i, j) for i > j: the strictly upper triangle from the
+ *  lower, four columns at a time: each row of the lower block column is
+ *  stored as four entries of one column of the upper triangle. */
 template <typename Square>
 void mirrorLowerToUpper(Square&& A)
 {
-	for (Eigen::Index j = 0; j + 1 < A.cols(); ++j)
-		A.row(j).tail(A.cols() - 1 - j) = A.col(j).tail(A.rows() - 1 - j).transpose();
+	const Eigen::Index n = A.cols(), as = A.outerStride();
+	double* a = A.data();
+	Eigen::Index jb = 0;
+	for (; jb + 4 <= n; jb += 4)
+	{
+		const double* __restrict c0 = a + jb * as;
+		const double* __restrict c1 = c0 + as;
+		const double* __restrict c2 = c1 + as;
+		const double* __restrict c3 = c2 + as;
+		a[jb + (jb + 1) * as] = c0[jb + 1];
+		a[jb + (jb + 2) * as] = c0[jb + 2];
+		a[jb + 1 + (jb + 2) * as] = c1[jb + 2];
+		a[jb + (jb + 3) * as] = c0[jb + 3];
+		a[jb + 1 + (jb + 3) * as] = c1[jb + 3];
+		a[jb + 2 + (jb + 3) * as] = c2[jb + 3];
+		for (Eigen::Index i = jb + 4; i < n; ++i)
+		{
+			double* __restrict row = a + jb + i * as;
+			row[0] = c0[i];
+			row[1] = c1[i];
+			row[2] = c2[i];
+			row[3] = c3[i];
+		}
+	}
+	for (; jb < n; ++jb)
+		for (Eigen::Index i = jb + 1; i < n; ++i) a[jb + i * as] = a[i + jb * as];
 }
 
 /** P −= W Wᵀ for a symmetric P (n × n, W n × m), exactly symmetric after:
- *  the lower triangle column by column, then mirrored. */
+ *  the lower triangle two columns at a time (W's rows read once for both),
+ *  then mirrored. */
 inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::MatrixXd>& W)
 {
-	const Eigen::Index n = P.rows();
-	for (Eigen::Index j = 0; j < n; ++j)
-		subtractCombination(P.col(j).tail(n - j), W.bottomRows(n - j), W.row(j).transpose());
+	const Eigen::Index n = P.rows(), m = W.cols(), ps = P.outerStride(), ws = W.outerStride();
+	double* p = P.data();
+	const double* w = W.data();
+	Eigen::Index j = 0;
+	for (; j + 2 <= n; j += 2)
+	{
+		// Row j of column j; then rows j + 1… of both columns.
+		P(j, j) -= W.row(j).squaredNorm();
+		subtractPairOfCombinations(p + j + 1 + j * ps, p + j + 1 + (j + 1) * ps, w + j + 1, ws, n - j - 1, m,
+		                           w + j, ws, w + j + 1, ws);
+	}
+	if (j < n) P(j, j) -= W.row(j).squaredNorm();
 	mirrorLowerToUpper(P);
 }
 
@@ -173,8 +355,11 @@ void lowerBlockGram(const Eigen::Matrix<double, kp, R>& X, const Eigen::Matrix<d
 		auto G_block = G.template middleCols<4>(jb).bottomRows(below);
 		const auto X_rows = X.bottomRows(below);
 		const auto Y_rows = Y.template middleRows<4>(jb);
-		G_block.noalias() = X_rows.leftCols(from).lazyProduct(Y_rows.leftCols(from).transpose());
-		G_block.noalias() += X_rows.rightCols(after).lazyProduct(Y_rows.rightCols(after).transpose());
+		for (int c = 0; c < 4; ++c)
+		{
+			assignCombination(G_block.col(c), X_rows.leftCols(from), Y_rows.row(c).head(from).transpose());
+			addCombination(G_block.col(c), X_rows.rightCols(after), Y_rows.row(c).tail(after).transpose());
+		}
 	}
 }
 
@@ -182,8 +367,11 @@ void lowerBlockGram(const Eigen::Matrix<double, kp, R>& X, const Eigen::Matrix<d
 template <typename Xs, typename Cs, typename Scale>
 void addCombinationsThenScale(ColumnsMap Y, const Xs& X, const Cs& C, const Scale& scale)
 {
-	Y.noalias() += X.lazyProduct(C.transpose());
-	Y *= scale.asDiagonal();
+	for (Eigen::Index c = 0; c < Y.cols(); ++c)
+	{
+		addCombination(Y.col(c), X, C.row(c).transpose());
+		Y.col(c) *= scale[c];
+	}
 }
 
 /** B(i, j) ← B(i, j) · (a_i a_j): A B Aᵀ for a diagonal A = diag(a); a
@@ -223,4 +411,5 @@ inline bool allFiniteEntries(const double* a, Eigen::Index count)
 	return count == 0 || (Eigen::Map<const Eigen::ArrayXd>(a, count) * 0.0).sum() == 0;
 }
 
+}  // namespace
 }  // namespace auvnav::kernels
