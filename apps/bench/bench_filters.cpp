@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "reference_ukf.h"
+#include <auvnav/testing/reference_ukf.h>
 
 namespace
 {

@@ -1,4 +1,5 @@
 #include <auvnav/navigator.h>
+#include <auvnav/process_model_config.h>
 #include <auvnav/rejection_streak.h>
 #include <auvnav/so3.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -156,7 +157,7 @@ Navigator::Navigator(const config::Node& cfg, PluginHost& host)
 	put23(prior_mean_, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(prior_mean_, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
 	put23(prior_mean_, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));
-	ProcessModel pm = ProcessModel::fromConfig(f.child("process_noise"), prior_mean_);
+	ProcessModel pm = processModelFromConfig(f.child("process_noise"), prior_mean_);
 	UtParams ut;
 	if (f.has("unscented"))
 	{

@@ -11,7 +11,7 @@
 #include <cmath>
 #include <map>
 
-#include "reference_ukf.h"
+#include <auvnav/testing/reference_ukf.h>
 
 using namespace auvnav;
 

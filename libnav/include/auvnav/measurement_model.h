@@ -8,16 +8,11 @@
  *  measurement, `predict` once per sigma point (h(x), a pure function: no
  *  shared mutable state, no allocation), and `residual` to compare.
  *
- *  Contract (checked by auvnav/testing/model_checks.h and by the host):
- *  - `uses()` lists every state block h reads. The filter evaluates h only on
- *    sigma points that move those blocks; reading an undeclared block gives
- *    wrong results (the checks perturb undeclared blocks to catch it).
- *  - z, R and h(x) are finite; R is symmetric positive definite; a NaN/Inf
- *    anywhere is rejected by the host and counted as invalid.
- *  - residual(z, z) = 0 and residual is the boxminus of the measurement space
- *    (wrap angles there).
- *  - No exception may leave a plugin: derive from SafeMeasurementModel, which
- *    turns exceptions into `Invalid`.
+ *  Contract: that of measurement_function.h (what h reads, h pure and
+ *  finite, the residual a boxminus), and: R is symmetric positive definite;
+ *  a NaN/Inf anywhere is rejected by the host and counted as invalid; no
+ *  exception may leave a plugin (derive from SafeMeasurementModel, which
+ *  turns exceptions into `Invalid`).
  *
  *  Plugin-owned states (ABI 4): a model may declare blocks of extra states
  *  (`stateBlocks()`: a DVL scale factor, a USBL bias, a magnetometer's hard
@@ -28,131 +23,15 @@
  *  reads them declares kPluginStates in uses() and reads
  *  `x.extra[first + i]` in h. Models without states change nothing.
  */
-#include <auvnav/earth.h>
-#include <auvnav/state.h>
+#include <auvnav/measurement_function.h>
 #include <mrpt/obs/CObservation.h>
 
 #include <Eigen/Core>
-#include <array>
-#include <cstddef>
-#include <new>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 namespace auvnav
 {
-/** What the filter knows besides the state when a measurement arrives. */
-struct FilterContext
-{
-	double t_s = 0;  //!< filter time [s, Unix epoch]
-	//! When the measurement was taken [s, Unix epoch] (measurementTime()).
-	//! The navigator applies it at t_s ≤ t_measurement_s, the last IMU sample
-	//! before it, re-filtering if it arrived late (navigator.h).
-	double t_measurement_s = 0;
-	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();      //!< latest raw gyro sample [rad/s], IMU axes
-	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();      //!< Earth rate in the navigation frame
-	Eigen::Vector3d imu_position_b = Eigen::Vector3d::Zero();  //!< IMU lever arm in the body frame [m]
-	const earth::TangentFrame* frame = nullptr;  //!< navigation frame (origin), never null in updates
-	//! Body angular acceleration [rad/s²] from the low-pass filtered derivative
-	//! of the gyro (the state has no angular acceleration).
-	Eigen::Vector3d alpha_b = Eigen::Vector3d::Zero();
-	//! The filter's current mean (for decisions in `prepare`, e.g. near the
-	//! surface); never use it inside h, which must depend on its argument only.
-	const NavState* mean = nullptr;
-	//! Distance below the vehicle [m] that NavState::current_far_ne refers to
-	//! (the navigator's ProcessModel::current_far_distance_m); 0 = not fixed by
-	//! the navigator (a current-profile model then uses its own range).
-	double current_far_distance_m = 0;
-	//! The filter's covariance (tangent order, state.h), for decisions in
-	//! `prepare` such as data association gates; never use it inside h.
-	const Covariance* covariance = nullptr;
-};
-
-/** Typed, plugin-private data that travels with one Measurement from
- *  `prepare` to `predict` (a lever arm, a beam direction, a landmark).
- *
- *  Contract: fixed storage inside the Measurement (kCapacity bytes, aligned
- *  for double and Eigen's fixed-size types): no heap allocation, copied with
- *  the Measurement. T must be trivially copyable, fit, and be no more aligned
- *  than the storage (static_assert). The plugin writes it in `prepare` with
- *  `m.setPayload(T{...})` (or `m.payload<T>() = ...`) and reads it in
- *  `predict` with `m.payload<T>()`; reading a T that was not written gives
- *  the bytes of a zero-initialised or previously written payload, so a
- *  plugin uses one T per measurement kind (the tag can tell kinds apart). */
-class MeasurementPayload
-{
- public:
-	static constexpr std::size_t kCapacity = 128;  //!< bytes: 16 doubles
-	static constexpr std::size_t kAlignment = 16;
-
-	template <class T>
-	static constexpr void check()
-	{
-		static_assert(std::is_trivially_copyable_v<T>, "a measurement payload must be trivially copyable");
-		static_assert(sizeof(T) <= kCapacity, "a measurement payload must fit MeasurementPayload::kCapacity");
-		static_assert(alignof(T) <= kAlignment,
-		              "a measurement payload must not need more than 16-byte alignment");
-	}
-	template <class T>
-	T& as() noexcept
-	{
-		check<T>();
-		return *std::launder(reinterpret_cast<T*>(bytes_));
-	}
-	template <class T>
-	const T& as() const noexcept
-	{
-		check<T>();
-		return *std::launder(reinterpret_cast<const T*>(bytes_));
-	}
-	template <class T>
-	T& set(const T& value) noexcept
-	{
-		check<T>();
-		return *::new (static_cast<void*>(bytes_)) T(value);
-	}
-
- private:
-	alignas(kAlignment) unsigned char bytes_[kCapacity] = {};
-};
-
-/** One measurement for the filter. Sized by the plugin in `prepare`. */
-struct Measurement
-{
-	Eigen::VectorXd z;  //!< measured value, dimension m
-	Eigen::MatrixXd R;  //!< noise covariance (m × m), SPD
-	int tag = 0;        //!< plugin-private (e.g. ADCP cell index)
-	//! Deprecated: untyped numbers for h. No plugin of this project uses it
-	//! (all use the typed payload below); it stays so that plugins written
-	//! before the payload existed build and run unchanged under this ABI, and
-	//! goes at the next ABI bump.
-	std::array<double, 8> aux{};
-	//! Plugin-private typed data for h (see MeasurementPayload): e.g.
-	//! `struct Pole { double north_m, east_m; };` written with
-	//! `m.setPayload(Pole{n, e})` in prepare, read with `m.payload<Pole>()` in predict.
-	MeasurementPayload payload_storage;
-	template <class T>
-	T& payload() noexcept
-	{
-		return payload_storage.as<T>();
-	}
-	template <class T>
-	const T& payload() const noexcept
-	{
-		return payload_storage.as<T>();
-	}
-	template <class T>
-	T& setPayload(const T& value) noexcept
-	{
-		return payload_storage.set(value);
-	}
-	std::string label;  //!< optional sub-name for statistics (e.g. "cell")
-	//! A part of the observation that is not applied (e.g. an ADCP cell below
-	//! the seabed): counted as skipped; z and R may be empty.
-	bool skipped = false;
-};
-
 /** A position fix to start the filter from (position: gps in the config):
  *  where the sensor point (antenna, transponder) is, and where it sits on the
  *  body; the navigator moves it to the IMU with the initial attitude. */
@@ -170,28 +49,12 @@ enum class PrepareStatus
 	Invalid  //!< bad observation (NaN, wrong class, …): rejected and counted
 };
 
-class MeasurementModel
+class MeasurementModel : public MeasurementFunction
 {
  public:
-	virtual ~MeasurementModel() = default;
-	/** Bit mask of StateBlock values h reads. */
-	virtual uint32_t uses() const noexcept = 0;
 	/** Observation → measurements. `why` explains Invalid/Skip (short). */
 	virtual PrepareStatus prepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                              std::vector<Measurement>& out, std::string& why) noexcept = 0;
-	/** h(x) into `z_pred` (pre-sized to m). Returns false if it cannot. */
-	virtual bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-	                     Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept = 0;
-	/** r = z ⊟ z_pred; default plain difference. */
-	virtual void residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-	                      const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-	                      Eigen::Ref<Eigen::VectorXd> r) const noexcept
-	{
-		r = z - z_pred;
-	}
-	/** Gate probability; the filter gates at the χ² quantile of the
-	 *  measurement's own dimension. 1.0 disables the gate. */
-	virtual double gateProbability() const noexcept { return 0.999; }
 	/** The fix in `obs` as measured, with no rate limit and no state (false:
 	 *  this observation gives none). Called before initialisation for the
 	 *  sensor named by filter.initial.gps_label (the start waits for a
@@ -224,37 +87,6 @@ class MeasurementModel
 	 *  east [m] of a point in the navigation frame (a GNSS or acoustic fix):
 	 *  the host records them (position_fixes.csv) and the viewers draw them. */
 	virtual bool reportsPositionFix() const noexcept { return false; }
-	/** Blocks of uses() in which h is affine, h = A y + b, while the other
-	 *  blocks are held (ABI 5). The attitude never is (it is ignored here).
-	 *  The filter then evaluates h only on the sigma points along the
-	 *  Cholesky columns of the blocks before the last non-affine one; the
-	 *  other pairs are exactly ±γ A L_j about the centre's h, so their share
-	 *  of S and Pxz is taken from P and A (A by differences of h at the
-	 *  mean): the same numbers as evaluating them, at a fraction of the
-	 *  cost. Declaring a block h is not affine in gives wrong updates
-	 *  (auvnav/testing/model_checks.h checks it). 0: no such block. */
-	virtual uint32_t affineIn() const noexcept { return 0; }
-	/** Optionally (ABI 6), h's slopes along the tangent coordinates
-	 *  [from, to) at x, for an h affine in every block of uses() past
-	 *  `from` (the filter asks only then): At.row(i − from) = ∂h/∂x_i along
-	 *  the retraction of state.h (h(x ⊞ t e_i) = h(x) + t At.row(i − from)ᵀ).
-	 *  `At` is (to − from) × m and zero; rows of coordinates h does not read
-	 *  stay zero. False (the default): the filter takes the slopes by
-	 *  differences of h, one evaluation per coordinate, which is exact for
-	 *  an affine h; closed-form slopes save those evaluations and must equal
-	 *  them (auvnav/testing/model_checks.h checks it). */
-	virtual bool affineSlopes(const NavState& /*x*/, const Measurement& /*m*/, const FilterContext& /*ctx*/,
-	                          int /*from*/, int /*to*/, Eigen::Ref<Eigen::MatrixXd> /*At*/) const noexcept
-	{
-		return false;
-	}
-	/** True if residual(z, z_pred) is exactly z − z_pred, entry by entry
-	 *  (the default residual, not overridden): the filter then forms the
-	 *  update's residuals itself instead of calling residual once per sigma
-	 *  point (ABI 7). False (the default, always safe): residual is called.
-	 *  Declaring it for a residual that wraps angles gives wrong updates;
-	 *  auvnav/testing/model_checks.h checks the claim bit for bit. */
-	virtual bool residualIsDifference() const noexcept { return false; }
 };
 
 /** Base class for plugin authors: implement the do* methods; exceptions they

@@ -32,8 +32,10 @@
 // state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix, config::Node's
 // access record (layout), Measurement's typed payload (layout); 5: MeasurementModel::affineIn
 // (a virtual at the end of the table); 6: MeasurementModel::affineSlopes (another);
-// 7: MeasurementModel::residualIsDifference (another)
-#define AUVNAV_PLUGIN_ABI_VERSION 7u
+// 7: MeasurementModel::residualIsDifference (another); 8: MeasurementModel derives from
+// MeasurementFunction (the filter's part, measurement_function.h: vtable order), Measurement::aux
+// removed (layout)
+#define AUVNAV_PLUGIN_ABI_VERSION 8u
 #define AUVNAV_PLUGIN_API_VERSION 1u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 

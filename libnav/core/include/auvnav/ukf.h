@@ -45,7 +45,7 @@
  *
  *  A Cholesky failure is repaired (symmetrise, clip eigenvalues) and counted.
  */
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <auvnav/process_model.h>
 #include <auvnav/state.h>
 
@@ -191,10 +191,10 @@ class ManifoldUkf
 
 	/** One measurement update; `recovery` says how one failing the gate is
 	 *  applied anyway (see Recovery). */
-	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
+	UpdateResult update(const MeasurementFunction& model, const Measurement& m, const FilterContext& ctx,
 	                    Recovery recovery = Recovery::None);
 	//! `true`: Recovery::Noise (the older form).
-	UpdateResult update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx,
+	UpdateResult update(const MeasurementFunction& model, const Measurement& m, const FilterContext& ctx,
 	                    bool recovery)
 	{
 		return update(model, m, ctx, recovery ? Recovery::Noise : Recovery::None);

@@ -6,7 +6,6 @@
  *  Gauss–Markov discretisation for biases, currents and model parameters for
  *  any dt, and process noise that scales with dt (not dt²).
  */
-#include <auvnav/config.h>
 #include <auvnav/state.h>
 
 #include <Eigen/Core>
@@ -141,8 +140,6 @@ struct ProcessModel
 	 *  in order (dim() − idx::adcp_bias of them), so that A P Aᵀ over that
 	 *  block is P_ij · a_i a_j (applyLinearRows on those rows does the same). */
 	TangentVector diagonalTailFactors(const StepDecay& step) const;
-
-	static ProcessModel fromConfig(const config::Node& process_noise, const TangentVector& prior_mean);
 
  private:
 	/** Calls add(i, j, q) once for every non-zero entry q of the process noise. */

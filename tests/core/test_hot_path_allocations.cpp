@@ -5,7 +5,7 @@
 // scope, so the calls from libauvnav_nav.so, libstdc++'s operator new and
 // Eigen's aligned_malloc all land here) and forwards to glibc's own.
 // Not built under the sanitizers, which bring their own malloc.
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 
@@ -62,16 +62,11 @@ long allocationsIn(F&& f)
 }
 
 /** Accelerometer-like: R_nbᵀ (a_n − g e_D) + b_a, affine in all but the attitude. */
-class Accel final : public MeasurementModel
+class Accel final : public MeasurementFunction
 {
  public:
 	uint32_t uses() const noexcept override { return kAttitude | kAcceleration | kGravity | kAccelBias; }
 	uint32_t affineIn() const noexcept override { return kAcceleration | kGravity | kAccelBias; }
-	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>&,
-	                      std::string&) noexcept override
-	{
-		return PrepareStatus::Skip;
-	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
@@ -81,15 +76,10 @@ class Accel final : public MeasurementModel
 };
 
 /** Body velocity and a heading-free nonlinear read of every block. */
-class Velocity final : public MeasurementModel
+class Velocity final : public MeasurementFunction
 {
  public:
 	uint32_t uses() const noexcept override { return kAllBlocks & ~kPluginStates; }
-	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>&,
-	                      std::string&) noexcept override
-	{
-		return PrepareStatus::Skip;
-	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
@@ -139,7 +129,7 @@ Counts hotPathAllocations(double heading_sigma_deg, int steps, int warm)
 		fv.z += Eigen::Vector4d(0.02, 0.01, -0.01, 0.1);
 		long u = 0;
 		int updates = 0;
-		auto apply = [&](const MeasurementModel& model, const Measurement& m)
+		auto apply = [&](const MeasurementFunction& model, const Measurement& m)
 		{
 			UpdateStatus status = UpdateStatus::Invalid;
 			u += allocationsIn([&] { status = ukf.update(model, m, ctx).status; });

@@ -3,7 +3,7 @@
 //
 // Differences are scale-free: means in standard deviations, max_i |(a ⊟ b)_i|/√P_ii,
 // covariances in correlation units, max_ij |ΔP_ij|/√(P_ii P_jj).
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <auvnav/smoother.h>
 #include <auvnav/smoother_stream.h>
 #include <auvnav/so3.h>
@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
+#include <auvnav/testing/reference_ukf.h>
 #include "filter_test_util.h"
-#include "reference_ukf.h"
 
 using namespace auvnav;
 using auvnav::test::kDeg;
@@ -34,18 +34,18 @@ namespace
 constexpr double kTol = 1e-9;
 
 // ------------------------------------------------------------ test models
-class TestModel : public MeasurementModel
+/** A lever arm or a beacon position for h: the measurement's payload. */
+struct Point
+{
+	double x, y, z;
+	Eigen::Vector3d vector() const { return {x, y, z}; }
+};
+
+class TestModel : public MeasurementFunction
 {
  public:
 	explicit TestModel(uint32_t mask) : mask_(mask) {}
 	uint32_t uses() const noexcept override { return mask_; }
-	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-	                      std::string& why) noexcept override
-	{
-		out.clear();
-		why = "test model";
-		return PrepareStatus::Skip;
-	}
 	double gateProbability() const noexcept override { return 1.0; }  // never gate: the reference does not
 	virtual std::string name() const = 0;
 	virtual Eigen::MatrixXd noise() const = 0;
@@ -54,7 +54,7 @@ class TestModel : public MeasurementModel
 	uint32_t mask_;
 };
 
-/** DVL-like: body-frame velocity of a point at lever arm aux[0..2]:
+/** DVL-like: body-frame velocity of a point at lever arm r_b (the payload):
  *  R_nbᵀ v_n + (ω_ib_b − b_w) × r. */
 class DvlModel : public TestModel
 {
@@ -63,7 +63,7 @@ class DvlModel : public TestModel
 	bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
-		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
+		const Eigen::Vector3d r = m.payload<Point>().vector();
 		z = x.R_nb.transpose() * x.v_n + (ctx.omega_ib_b - x.b_w).cross(r);
 		return true;
 	}
@@ -71,7 +71,7 @@ class DvlModel : public TestModel
 	Eigen::MatrixXd noise() const override { return Eigen::Matrix3d::Identity() * 0.01 * 0.01; }
 };
 
-/** Position only: range to a beacon at aux[0..2], and depth. */
+/** Position only: range to a beacon at b_n (the payload), and depth. */
 class RangeDepthModel : public TestModel
 {
  public:
@@ -79,7 +79,7 @@ class RangeDepthModel : public TestModel
 	bool predict(const NavState& x, const Measurement& m, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
-		const Eigen::Vector3d b(m.aux[0], m.aux[1], m.aux[2]);
+		const Eigen::Vector3d b = m.payload<Point>().vector();
 		z << (x.p_n - b).norm(), x.p_n.z();
 		return true;
 	}
@@ -137,7 +137,7 @@ class PluginStateDvlModel : public TestModel
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		if (x.extra.size() < 6) return false;
-		const Eigen::Vector3d r(m.aux[0], m.aux[1], m.aux[2]);
+		const Eigen::Vector3d r = m.payload<Point>().vector();
 		const Eigen::Vector3d v = x.R_nb.transpose() * x.v_n + (ctx.omega_ib_b - x.b_w).cross(r);
 		z = (1 + x.extra[0]) * (so3::Exp(x.extra.segment<3>(1)).transpose() * v);
 		return true;
@@ -163,7 +163,7 @@ class BiasedFixModel : public TestModel
 };
 
 /** The models above that are affine in some blocks, declaring it
- *  (MeasurementModel::affineIn): the fast filter then evaluates only the
+ *  (MeasurementFunction::affineIn): the fast filter then evaluates only the
  *  sigma points of the leading non-affine blocks; the reference ignores it. */
 template <class Base>
 class DeclaredAffine : public Base
@@ -263,8 +263,7 @@ Measurement makeMeasurement(const TestModel& model, const NavState& truth, const
 {
 	Measurement m;
 	m.R = model.noise();
-	m.aux = {0.4, -0.1, 0.3, 0, 0, 0, 0, 0};
-	if (model.name() == "range_depth") m.aux = {100, -20, 0, 0, 0, 0, 0, 0};
+	m.setPayload(model.name() == "range_depth" ? Point{100, -20, 0} : Point{0.4, -0.1, 0.3});
 	m.z.resize(m.R.rows());
 	model.predict(truth, m, ctx, m.z);
 	std::normal_distribution<double> nd;

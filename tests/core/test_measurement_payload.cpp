@@ -1,7 +1,7 @@
-// Measurement's typed payload (measurement_model.h): what a plugin writes in
+// Measurement's typed payload (measurement_function.h): what a plugin writes in
 // prepare is what h reads, it travels with copies of the Measurement, and it
 // lives inside the Measurement (no allocation; checked at compile time).
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <gtest/gtest.h>
 
 #include <cstdint>

@@ -6,7 +6,7 @@
 // tolerances leave room for that and for the UT's own (fourth-order) error,
 // and are checked to reject a wrong weighting (uniform weights 1/(2n+1) on the
 // same sigma points).
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <auvnav/so3.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
@@ -16,8 +16,8 @@
 #include <cstdio>
 #include <random>
 
+#include <auvnav/testing/reference_ukf.h>
 #include "filter_test_util.h"
-#include "reference_ukf.h"
 
 using namespace auvnav;
 using auvnav::test::kDeg;
@@ -27,16 +27,10 @@ namespace
 constexpr int kSamples = 200000;
 
 /** h(x) = R_nbᵀ v_n: body-frame velocity, nonlinear in the attitude. */
-class BodyVelocity : public MeasurementModel
+class BodyVelocity : public MeasurementFunction
 {
  public:
 	uint32_t uses() const noexcept override { return kAttitude | kVelocity; }
-	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-	                      std::string&) noexcept override
-	{
-		out.clear();
-		return PrepareStatus::Skip;
-	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
@@ -349,16 +343,10 @@ TEST(Unscented, UnknownHeadingKeepsItsSigmaThroughPrediction)
 namespace
 {
 /** h(x) = the azimuth of the body x axis [rad], wrapped residual. */
-class Heading : public MeasurementModel
+class Heading : public MeasurementFunction
 {
  public:
 	uint32_t uses() const noexcept override { return kAttitude; }
-	PrepareStatus prepare(const mrpt::obs::CObservation&, const FilterContext&, std::vector<Measurement>& out,
-	                      std::string&) noexcept override
-	{
-		out.clear();
-		return PrepareStatus::Skip;
-	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{

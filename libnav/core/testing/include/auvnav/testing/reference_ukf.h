@@ -9,7 +9,7 @@
  *  point, iterated manifold means. Only UtWeights::make, attitudeSpreadScale,
  *  the process model and the state's ⊞/⊟ are shared with the code under test.
  */
-#include <auvnav/measurement_model.h>
+#include <auvnav/measurement_function.h>
 #include <auvnav/process_model.h>
 #include <auvnav/state.h>
 #include <auvnav/ukf.h>
@@ -47,7 +47,7 @@ struct UtResult
 	Eigen::MatrixXd Pzz;  // Σ Wc r rᵀ, r = z_i ⊟ z̄
 	Eigen::MatrixXd Pxz;  // Σ Wc (X_i ⊟ x)(z_i ⊟ z̄)ᵀ
 };
-bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
+bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementFunction& h,
                         const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
                         double max_spread_rad = UtParams{}.max_attitude_spread_rad);
 
@@ -71,7 +71,7 @@ class ReferenceUkf
 	void predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vector3d& omega_ie_n, double dt_s,
 	             Covariance* P_cross = nullptr);
 	/** Ungated update; false if h could not be evaluated or S is not PD. */
-	bool update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx);
+	bool update(const MeasurementFunction& model, const Measurement& m, const FilterContext& ctx);
 
  private:
 	ProcessModel model_;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <set>
 #include <string>
@@ -207,6 +208,25 @@ TEST(So3, NormalizedRepairsDrift)
 
 // ---------------------------------------------------------------- NavState
 
+namespace
+{
+/** Equal to within four units in the last place of the larger magnitude
+ *  (1 for values below 1): what two evaluations of the same sum may differ
+ *  by when one fuses a multiply and an add and the other does not. */
+bool sameToRounding(double a, double b)
+{
+	return std::abs(a - b) <=
+	       4 * std::numeric_limits<double>::epsilon() * std::max({1.0, std::abs(a), std::abs(b)});
+}
+bool sameToRounding(const TangentVector& a, const TangentVector& b)
+{
+	if (a.size() != b.size()) return false;
+	for (Eigen::Index i = 0; i < a.size(); ++i)
+		if (!sameToRounding(a[i], b[i])) return false;
+	return true;
+}
+}  // namespace
+
 TEST(NavStateManifold, BoxplusZeroIsIdentity)
 {
 	std::mt19937 rng(7);
@@ -235,9 +255,11 @@ TEST(NavStateManifold, BoxplusCoordinateIsBoxplusOfThatVector)
 			TangentVector d = TangentVector::Zero(idx::core_dim);
 			d[i] = h;
 			const NavState a = x.boxplusCoordinate(i, h), b = x.boxplus(d);
-			// The same members, bit for bit (the general form adds zeros).
-			EXPECT_EQ(a.R_nb, b.R_nb) << i;
-			EXPECT_EQ(a.euclidean(), b.euclidean()) << i;
+			// The same members to rounding: the general form adds zeros, and
+			// the compiler may fuse a product and a sum in one form and not
+			// the other (as GCC does on aarch64).
+			EXPECT_LT((a.R_nb - b.R_nb).cwiseAbs().maxCoeff(), 4e-16) << i;
+			EXPECT_TRUE(sameToRounding(a.euclidean(), b.euclidean())) << i;
 		}
 	}
 }
@@ -284,7 +306,7 @@ TEST(NavStateManifold, BoxplusPairIsTwoBoxplusCallsBitForBit)
 	EXPECT_THROW(plus.boxplusPair(TangentVector::Zero(idx::core_dim), minus, minus), std::invalid_argument);
 }
 
-TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksBitForBitAndNothingElse)
+TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksAndNothingElse)
 {
 	std::mt19937 rng(23);
 	std::normal_distribution<double> nd;
@@ -310,8 +332,11 @@ TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksBitForBitAndN
 		x.boxplusPairBlocks(d, step, blocks, plus, minus);
 		const TangentVector delta = step * d;
 		x.boxplusPair(delta, full_plus, full_minus);
-		EXPECT_EQ(plus.R_nb, full_plus.R_nb) << k;  // the attitude always
-		EXPECT_EQ(minus.R_nb, full_minus.R_nb) << k;
+		// The asked blocks as the full pair gives them, to rounding (a
+		// product and a sum may be fused in one and not the other); the rest
+		// untouched, bit for bit.
+		EXPECT_LT((plus.R_nb - full_plus.R_nb).cwiseAbs().maxCoeff(), 4e-16) << k;  // the attitude always
+		EXPECT_LT((minus.R_nb - full_minus.R_nb).cwiseAbs().maxCoeff(), 4e-16) << k;
 		const TangentVector e_plus = plus.euclidean(), e_minus = minus.euclidean(),
 		                    e_before = before.euclidean(), e_full_plus = full_plus.euclidean(),
 		                    e_full_minus = full_minus.euclidean();
@@ -319,8 +344,8 @@ TEST(NavStateManifold, BoxplusPairBlocksOfAStepWritesTheAskedBlocksBitForBitAndN
 		for (int i = idx::gyro_bias; i < x.dim(); ++i)
 			if (blocks & blockOfCoordinate(i, x.dim()))
 			{
-				EXPECT_EQ(e_plus[i], e_full_plus[i]) << k << " coordinate " << i;
-				EXPECT_EQ(e_minus[i], e_full_minus[i]) << k << " coordinate " << i;
+				EXPECT_TRUE(sameToRounding(e_plus[i], e_full_plus[i])) << k << " coordinate " << i;
+				EXPECT_TRUE(sameToRounding(e_minus[i], e_full_minus[i])) << k << " coordinate " << i;
 				++asked;
 			}
 			else

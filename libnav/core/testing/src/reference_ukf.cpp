@@ -1,5 +1,5 @@
 // The plain dense reference UKF (see reference_ukf.h). Deliberately simple.
-#include "reference_ukf.h"
+#include <auvnav/testing/reference_ukf.h>
 
 #include <Eigen/Cholesky>
 #include <stdexcept>
@@ -124,7 +124,7 @@ void unscentedPredict(const ProcessModel& model, const NavState& x, const Covari
 	P_out = 0.5 * (Pn + Pn.transpose());
 }
 
-bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementModel& h,
+bool unscentedTransform(const NavState& x, const Covariance& P, const MeasurementFunction& h,
                         const Measurement& m, const FilterContext& ctx, const SigmaWeights& w, UtResult& out,
                         double max_spread_rad)
 {
@@ -213,7 +213,7 @@ void ReferenceUkf::predict(const Eigen::Vector3d& omega_ib_b, const Eigen::Vecto
 	unscentedPredict(model_, x_, P_, omega_ib_b, omega_ie_n, dt, w_, x_, P_, max_spread_rad_, P_cross);
 }
 
-bool ReferenceUkf::update(const MeasurementModel& model, const Measurement& m, const FilterContext& ctx)
+bool ReferenceUkf::update(const MeasurementFunction& model, const Measurement& m, const FilterContext& ctx)
 {
 	UtResult ut;
 	if (!unscentedTransform(x_, P_, model, m, ctx, w_, ut, max_spread_rad_)) return false;

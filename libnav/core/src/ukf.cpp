@@ -139,7 +139,7 @@ bool allFiniteEntries(const Eigen::Map<Plain, Options, Stride>& a)
 class Residuals
 {
  public:
-	Residuals(const MeasurementModel& model, int m)
+	Residuals(const MeasurementFunction& model, int m)
 	    : model_(model), plain_(model.residualIsDifference()), m_(m)
 	{
 	}
@@ -158,17 +158,17 @@ class Residuals
 		model_.residual(ConstMapV(a, m_), ConstMapV(b, m_), Eigen::Map<Eigen::VectorXd>(out, m_));
 	}
 
-	const MeasurementModel& model_;
+	const MeasurementFunction& model_;
 	const bool plain_;
 	const int m_;
 };
 
 /** Aᵀ ((k − kn) × m): h's slope along tangent coordinates kn..k−1 of x, the
- *  model's own (MeasurementModel::affineSlopes) or else by a difference at
+ *  model's own (MeasurementFunction::affineSlopes) or else by a difference at
  *  the sigma points' step γσᵢ (exact for h affine there), zero for
  *  coordinates of blocks h does not read. z0 = h(x); z_scratch and dz are
  *  overwritten. False, with `why`, if h fails or is not finite. */
-bool affineSlopes(const MeasurementModel& model, const Residuals& residuals, const Measurement& meas,
+bool affineSlopes(const MeasurementFunction& model, const Residuals& residuals, const Measurement& meas,
                   const FilterContext& ctx, const NavState& x, const Covariance& P, double gamma, int kn,
                   int k, const Eigen::Ref<const Eigen::VectorXd>& z0, Eigen::Ref<Eigen::VectorXd> z_scratch,
                   Eigen::Ref<Eigen::VectorXd> dz, Eigen::Ref<Eigen::MatrixXd> At, const char*& why)
@@ -618,7 +618,7 @@ double inflationAlongCorrection(const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>>& l
 }
 }  // namespace
 
-UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measurement& meas,
+UpdateResult ManifoldUkf::update(const MeasurementFunction& model, const Measurement& meas,
                                  const FilterContext& ctx, Recovery recovery)
 {
 	UpdateResult res;
@@ -641,7 +641,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 		res.why = "model declares no state dependence";
 		return res;
 	}
-	// Blocks h is affine in (measurement_model.h): sigma points only along
+	// Blocks h is affine in (measurement_function.h): sigma points only along
 	// the first kn Cholesky columns (those that move a non-affine block);
 	// the pairs along columns kn..k−1 are ±γ A L_j about z₀, taken from P.
 	const uint32_t affine = model.affineIn() & model.uses() & ~static_cast<uint32_t>(kAttitude);
@@ -677,7 +677,7 @@ UpdateResult ManifoldUkf::update(const MeasurementModel& model, const Measuremen
 	}
 	// Attitude-heavy columns are evaluated at a shorter step (ukf.h).
 	std::array<double, 3> scale{1.0, 1.0, 1.0};
-	// Only the blocks h reads are perturbed (its contract, measurement_model.h);
+	// Only the blocks h reads are perturbed (its contract, measurement_function.h);
 	// the rest of both points holds x's values.
 	const uint32_t read_blocks = model.uses();
 	if (kn > 0)

@@ -1,0 +1,25 @@
+# cmake -DLIBRARY=<shared library> -P check_needed.cmake
+# Fails unless LIBRARY's dynamic section (readelf -d) has NEEDED entries and
+# none of them names MRPT, OpenCV, ROS, yaml or TCLAP: the filter core must
+# build and run where only Eigen, Boost and GeographicLib are.
+find_program(READELF NAMES readelf aarch64-linux-gnu-readelf REQUIRED)
+execute_process(COMMAND ${READELF} -d ${LIBRARY} OUTPUT_VARIABLE dyn RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "readelf -d ${LIBRARY} failed (${rc})")
+endif()
+string(REGEX MATCHALL "\\(NEEDED\\)[^\n]*\\[([^]\n]+)\\]" needed_lines "${dyn}")
+set(needed "")
+foreach(line IN LISTS needed_lines)
+  string(REGEX REPLACE ".*\\[([^]]+)\\].*" "\\1" lib "${line}")
+  list(APPEND needed ${lib})
+endforeach()
+if(NOT needed)
+  message(FATAL_ERROR "${LIBRARY}: no NEEDED entries found in readelf -d output")
+endif()
+message(STATUS "${LIBRARY} needs: ${needed}")
+foreach(lib IN LISTS needed)
+  string(TOLOWER "${lib}" lower)
+  if(lower MATCHES "mrpt|opencv|ros|yaml|tclap|sqlite")
+    message(FATAL_ERROR "${LIBRARY} links ${lib}: the core must not depend on it")
+  endif()
+endforeach()
