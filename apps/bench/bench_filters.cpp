@@ -1,5 +1,5 @@
 // auvnav-bench, BM_FastVsDenseFilter: the fast ManifoldUkf against the plain
-// dense reference UKF (tests/libnav/reference_ukf.h, 87 sigma points, full
+// dense reference UKF (auvnav/testing/reference_ukf.h, 87 sigma points, full
 // propagation and h on every point) on the same recorded filter steps, timed
 // in one run so that their ratio does not depend on the machine.
 //

@@ -1,4 +1,4 @@
-// The fast ManifoldUkf against the plain dense reference UKF (tests/libnav)
+// The fast ManifoldUkf against the plain dense reference UKF (auvnav::core_testing)
 // on a real stretch of the sample mission, with the real sensor plugins:
 // IMU prediction + accelerometer, DVL, pressure, ADCP cells and model aiding.
 #include <auvnav/config.h>

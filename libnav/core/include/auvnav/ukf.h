@@ -22,7 +22,7 @@
  *     87;
  *   - update: a model whose h reads only the first k coordinates (from its
  *     `uses()` mask) needs 2k+1 evaluations and the first k Cholesky columns.
- *  Both give the same numbers as the dense 87-point UKF (tests/libnav keeps
+ *  Both give the same numbers as the dense 87-point UKF (auvnav::core_testing keeps
  *  a plain dense implementation as the oracle).
  *
  *  Large attitude uncertainty. A sigma point turned by π or more about any
