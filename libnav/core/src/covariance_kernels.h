@@ -335,6 +335,30 @@ inline void downdateSymmetric(Covariance& P, const Eigen::Ref<const Eigen::Matri
 	mirrorLowerToUpper(P);
 }
 
+namespace detail
+{
+/** G's 4 × 4 block at rows ib, columns jb ← Σ_r X(ib.., r) Y(jb.., r)ᵀ over
+ *  r in [0, from) and [zero_to, R) (X, Y column-major, `ld` rows): sixteen
+ *  sums held in registers while X's and Y's columns stream past. */
+template <typename Gram>
+inline void gramTile(const double* X, const double* Y, int ld, int R, int ib, int jb, int from, int zero_to,
+                     Gram& G)
+{
+	double acc[4][4] = {};
+	auto term = [&](int r)
+	{
+		const double* x = X + ib + r * ld;
+		const double* y = Y + jb + r * ld;
+		for (int c = 0; c < 4; ++c)
+			for (int i = 0; i < 4; ++i) acc[c][i] += x[i] * y[c];
+	};
+	for (int r = 0; r < from; ++r) term(r);
+	for (int r = zero_to; r < R; ++r) term(r);
+	for (int c = 0; c < 4; ++c)
+		for (int i = 0; i < 4; ++i) G(ib + i, jb + c) = acc[c][i];
+}
+}  // namespace detail
+
 /** G = X Yᵀ on the blocks of four columns of G on and below its diagonal
  *  (G, X, Y kp × kp, kp × R, kp × R; above those blocks G is not written).
  *  Y's columns [zero_from, zero_to) are where the caller expects zeros: each
@@ -351,15 +375,8 @@ void lowerBlockGram(const Eigen::Matrix<double, kp, R>& X, const Eigen::Matrix<d
 	{
 		int from = zero_to;
 		while (from > zero_from && (Y.template block<4, 1>(jb, from - 1).array() == 0).all()) --from;
-		const int below = kp - jb, after = R - zero_to;
-		auto G_block = G.template middleCols<4>(jb).bottomRows(below);
-		const auto X_rows = X.bottomRows(below);
-		const auto Y_rows = Y.template middleRows<4>(jb);
-		for (int c = 0; c < 4; ++c)
-		{
-			assignCombination(G_block.col(c), X_rows.leftCols(from), Y_rows.row(c).head(from).transpose());
-			addCombination(G_block.col(c), X_rows.rightCols(after), Y_rows.row(c).tail(after).transpose());
-		}
+		for (int ib = jb; ib < kp; ib += 4)
+			detail::gramTile(X.data(), Y.data(), kp, R, ib, jb, from, zero_to, G);
 	}
 }
 
