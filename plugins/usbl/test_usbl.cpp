@@ -79,7 +79,7 @@ TEST(Usbl, RejectsBadConfigNamingTheKey)
 	EXPECT_THROW(UsblModel(pt::configText("position_m: [0, 0, 1e6]"), "USBL"), config::ConfigError);
 	EXPECT_THROW(UsblModel(pt::configText("states: {bais: {sigma: 1}}"), "USBL"), config::ConfigError);
 	EXPECT_THROW(UsblModel(pt::configText("states: {bias: {sigma: -1}}"), "USBL"), config::ConfigError);
-	EXPECT_TRUE(pt::ModuleRefuses("sigma_mm: 3", "sigma_m"));  // unknown key, with the suggestion
+	EXPECT_TRUE(pt::ModuleRefuses("sigma_cm: 3", "sigma_m"));  // unknown key, with the suggestion
 }
 
 TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
