@@ -46,6 +46,28 @@ inline ConstColumnsMap columns(const double* data, Eigen::Index rows, Eigen::Ind
 
 namespace detail
 {
+/** f(std::integral_constant<int, width>) for a pass width of 1 to 4: the
+ *  passes below take their column count as a template argument. */
+template <typename F>
+inline void withWidth(int width, F&& f)
+{
+	switch (width)
+	{
+		case 4:
+			f(std::integral_constant<int, 4>{});
+			break;
+		case 3:
+			f(std::integral_constant<int, 3>{});
+			break;
+		case 2:
+			f(std::integral_constant<int, 2>{});
+			break;
+		default:
+			f(std::integral_constant<int, 1>{});
+			break;
+	}
+}
+
 /** y[i] (=|+=) Σ_{c<C} a[c] x_c[i] for i < rows (x_c = X + c·xs): one pass
  *  over y for C ≤ 4 columns, y read and written once. A plain loop over
  *  contiguous arrays, which the compiler vectorises for the target: Eigen's
@@ -93,33 +115,14 @@ inline void combination(Y& y, const X& x, const Coef& c, double sign)
 		double a[4] = {0, 0, 0, 0};
 		for (int k = 0; k < width; ++k) a[k] = sign * c[l + k];
 		const double* X_l = x.data() + l * xs;
-		switch (width * 2 + (assign ? 1 : 0))
-		{
-			case 9:
-				combinationPass<4, true>(out, X_l, xs, rows, a);
-				break;
-			case 8:
-				combinationPass<4, false>(out, X_l, xs, rows, a);
-				break;
-			case 7:
-				combinationPass<3, true>(out, X_l, xs, rows, a);
-				break;
-			case 6:
-				combinationPass<3, false>(out, X_l, xs, rows, a);
-				break;
-			case 5:
-				combinationPass<2, true>(out, X_l, xs, rows, a);
-				break;
-			case 4:
-				combinationPass<2, false>(out, X_l, xs, rows, a);
-				break;
-			case 3:
-				combinationPass<1, true>(out, X_l, xs, rows, a);
-				break;
-			default:
-				combinationPass<1, false>(out, X_l, xs, rows, a);
-				break;
-		}
+		withWidth(width,
+		          [&](auto w)
+		          {
+			          if (assign)
+				          combinationPass<decltype(w)::value, true>(out, X_l, xs, rows, a);
+			          else
+				          combinationPass<decltype(w)::value, false>(out, X_l, xs, rows, a);
+		          });
 		assign = false;
 	}
 }
@@ -173,7 +176,8 @@ inline void pairSubtractPass(double* __restrict y0, double* __restrict y1, const
 }  // namespace detail
 
 /** y0 −= X a and y1 −= X b in passes of four of X's columns (X rows × m,
- *  column-major with stride xs; a and b m entries each, contiguous). */
+ *  column-major with stride xs; a and b m entries each, at strides
+ *  a_stride and b_stride). */
 inline void subtractPairOfCombinations(double* y0, double* y1, const double* X, Eigen::Index xs,
                                        Eigen::Index rows, Eigen::Index m, const double* a,
                                        Eigen::Index a_stride, const double* b, Eigen::Index b_stride)
@@ -184,21 +188,8 @@ inline void subtractPairOfCombinations(double* y0, double* y1, const double* X, 
 		double al[4], bl[4];
 		for (int k = 0; k < width; ++k) al[k] = a[(l + k) * a_stride], bl[k] = b[(l + k) * b_stride];
 		const double* X_l = X + l * xs;
-		switch (width)
-		{
-			case 4:
-				detail::pairSubtractPass<4>(y0, y1, X_l, xs, rows, al, bl);
-				break;
-			case 3:
-				detail::pairSubtractPass<3>(y0, y1, X_l, xs, rows, al, bl);
-				break;
-			case 2:
-				detail::pairSubtractPass<2>(y0, y1, X_l, xs, rows, al, bl);
-				break;
-			default:
-				detail::pairSubtractPass<1>(y0, y1, X_l, xs, rows, al, bl);
-				break;
-		}
+		detail::withWidth(width, [&](auto w)
+		                  { detail::pairSubtractPass<decltype(w)::value>(y0, y1, X_l, xs, rows, al, bl); });
 	}
 }
 
