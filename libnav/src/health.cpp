@@ -97,9 +97,9 @@ void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s)
 	else
 		w.bad_since_s = -1;
 	// Significant (χ² quantile) and large enough to matter: a 100 Hz aid
-	// makes a 5 % excess significant within seconds. The ratio first: the
-	// quantile of a window's every new dim_sum is a root search (~12 k
-	// instructions a call), needed only when the ratio is exceeded.
+	// makes a 5 % excess significant within seconds. The cheap ratio first:
+	// the quantile of a window's every new dim_sum is a root search, needed
+	// only when the ratio is exceeded.
 	const bool nis_high =
 	    w.dim_sum > 0 && w.nis_sum > limits_.inconsistent_nis_ratio * w.dim_sum &&
 	    w.nis_sum > ManifoldUkf::chiSquareQuantile(w.dim_sum, limits_.inconsistent_probability);

@@ -173,8 +173,8 @@ TEST(HotPathAllocations, UnknownHeadingScaledPairsAllocateOnlyTheResult)
 {
 	// Heading σ 180°: the attitude pairs are evaluated at the 90° limit and
 	// rescaled (ukf.h) at every update, as on a vehicle without a heading
-	// source; their deviations come from the update's arena too (they were
-	// nine allocations an update before: measured).
+	// source; their deviations come from the update's arena too, not from
+	// the heap.
 	const Counts c = hotPathAllocations(180, 60, 10);
 	EXPECT_TRUE(c.all_accepted);
 	EXPECT_EQ(0, c.predict);

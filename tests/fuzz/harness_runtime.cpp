@@ -4,10 +4,10 @@
 // glibc's backtrace() replaced by one that records nothing. MRPT captures a
 // call stack in each exception it throws and formats it (dladdr, demangling)
 // whenever what() is called, which its own readers do when they wrap an
-// error: under ASan ~40 ms per refused input, and nearly every fuzz input is
-// refused (the fuzzers ran at 25 executions/s). The executable's definition
-// takes precedence over libc's for MRPT's libraries too; the sanitizers and
-// libFuzzer unwind with their own code.
+// error: slow, above all under ASan, and nearly every fuzz input is refused,
+// so the fuzzers spent their time formatting call stacks. The executable's
+// definition takes precedence over libc's for MRPT's libraries too; the
+// sanitizers and libFuzzer unwind with their own code.
 extern "C" int backtrace(void** buffer, int size)
 {
 	(void)buffer;

@@ -690,8 +690,8 @@ TEST(RawlogHardening, ForeignClassIsRefusedBeforeItIsBuilt)
 
 TEST(RawlogHardening, HugeLabelLengthOfAnAuvnavClassIsRefusedInPlainAndGzipFiles)
 {
-	// 4 GiB label length: one allocation of that size before (auvnav-info
-	// took 4.26 GB and 27 s on a 10 KB file); now a refusal naming the class.
+	// 4 GiB label length: a few damaged bytes used to make the reader
+	// allocate that much; now a refusal naming the class.
 	TempDir tmp;
 	auto bytes = objectBytes(*makeDvl(1));
 	const std::size_t label_at = 1 + (bytes[0] & 0x7F) + 1 + 8;  // header, timestamp

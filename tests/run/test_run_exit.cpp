@@ -124,9 +124,9 @@ std::vector<std::string> runArgs(const fs::path& dir, const std::string& rawlog,
 }
 
 /** runNavigator with `args` (writing to dir/out) killed after kill_s; where
- *  the whole run takes less than that here (the navigator runs the repeated
- *  sample at several hundred times real time, and our machines differ ~3×),
- *  again, dir/out emptied first, killed at half its time. */
+ *  the whole run takes less than that here (how soon the navigator gets
+ *  through the repeated sample depends on the machine), again, dir/out
+ *  emptied first, killed at half its time. */
 Outcome runKilledMidway(const std::vector<std::string>& args, const fs::path& dir, double kill_s)
 {
 	Outcome o = runNavigator(args, dir, kill_s);
@@ -141,7 +141,7 @@ Outcome runKilledMidway(const std::vector<std::string>& args, const fs::path& di
 }
 
 // Under AddressSanitizer (the sanitizer pass, .ci/sanitize) auvnav-run starts
-// and runs tens of times slower: at 2 s it has written nothing yet, so the
+// and runs much slower: at 2 s it has written nothing yet, so the
 // short kills come later there, still mid-run, and the limits on a run's wall
 // time are wider (still far below blind prediction through an hour).
 #if defined(__SANITIZE_ADDRESS__)
@@ -186,8 +186,8 @@ std::size_t writeEditedSample(const fs::path& out, double span_s, const Edit& ed
 
 /** The sample played `copies` times, each copy right after the one before
  *  (its stamps shifted by the sample's span plus one IMU period): ~14 minutes
- *  of data per copy, so that a run is still going when killed (the sample
- *  alone takes ~5 s on a fast machine). */
+ *  of data per copy, so that a run is still going when killed (on a fast
+ *  machine the sample alone can end first). */
 void writeSampleRepeated(const fs::path& out, int copies)
 {
 	auvnav::obs::registerAllClasses();
@@ -530,9 +530,9 @@ TEST(RunKill, SigkillLeavesWholeLinesAndAValidSummary)
 	expectKilledRunLeftWholeOutputs(base, twice, 5.0 * kKillDelayScale, true);
 }
 
-// The same at ~30 s, on the sample played 12 times (~2.8 h of data, ~25 s of
-// run on a fast machine: then at half of that): buffers that fill and files
-// that grow past their first megabytes are cut whole too.
+// The same at ~30 s, on the sample played 12 times (~2.8 h of data; sooner
+// where the run would end first): buffers that fill and files that grow past
+// their first megabytes are cut whole too.
 TEST(RunKill, SigkillAfterHalfAMinuteLeavesWholeLinesAndAValidSummary)
 {
 	const auto base = workDir();
@@ -819,8 +819,8 @@ TEST(RunSmooth, AKilledRunSmoothsWhatWasRecorded)
 	const auto dir = workDir();
 	const fs::path twice = dir / "sample_twice.rawlog";
 	writeSampleRepeated(twice, 2);
-	// (The sample twice with --smooth takes about 4 s here: a kill at 4 s can
-	// come after the end, so a run that ends first is killed at half its time.)
+	// (On a fast machine the sample twice with --smooth can end before a kill
+	// at 4 s, so a run that ends first is killed at half its time.)
 	const Outcome o = runKilledMidway(runArgs(dir, twice.string(), {"--smooth"}), dir, 4.0 * kKillDelayScale);
 	ASSERT_EQ(o.signal, SIGKILL) << "the run ended before the kill; " << o.output;
 	const Outcome s = runProgram(AUVNAV_SMOOTH_EXE, {(dir / "out").string()}, dir);

@@ -93,8 +93,8 @@ TangentVector ProcessModel::diagonalTailFactors(const StepDecay& step) const
 namespace
 {
 /** A Gauss–Markov state relaxed to its prior mean over a step: φx + (1 − φ)μ.
- *  (Always inlined: a call per member and sigma point cost 3.9 M on the
- *  benchmark cut.) */
+ *  (Always inlined: it runs per member and sigma point, where a call's
+ *  overhead outweighs these few multiply-adds.) */
 template <typename V, typename M>
 [[gnu::always_inline]] inline auto relaxToPriorMean(const V& v, double phi, const M& mu)
 {

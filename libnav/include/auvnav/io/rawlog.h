@@ -46,9 +46,9 @@ class RawlogError : public std::runtime_error
 };
 
 /** A gzip (or plain) file read through CFileGZInputStream in 4 KiB blocks.
- *  MRPT's readers ask for a few bytes at a time, and every gzread call costs
- *  ~90 instructions of set-up before it copies one byte (issue 16: ~4 k
- *  instructions per IMU tick on the benchmark cut).
+ *  MRPT's readers ask for a few bytes at a time, and every gzread call pays
+ *  its set-up before it copies one byte: the block turns those many small
+ *  reads into few large ones (issue 16).
  *  Positions count the uncompressed bytes handed out. Read() never returns
  *  more than asked (zlib's error, -1, reads as no bytes). checkEOF() is true
  *  only after a read found the real end of the file, not after a zlib error.
