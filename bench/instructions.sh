@@ -18,7 +18,7 @@
 #   process start-up  everything outside main() (dynamic loading, static
 #                   constructors); and the whole program less that
 # then, unless --no-sensors, one callgrind run per sensor with collection on
-# only inside that sensor's updates (AUVNAV_CALLGRIND_SENSOR, navigator.cpp).
+# only inside that sensor's updates (AUVNAV_CALLGRIND_SENSOR, apps/run/main.cpp).
 # Each figure is divided by the run's IMU predictions (summary.json).
 # Needs valgrind (Debian: valgrind); ~1 min per callgrind run.
 set -euo pipefail

@@ -16,6 +16,31 @@
 #include "run_outputs.h"
 #include "smooth_outputs.h"
 
+#if AUVNAV_HAVE_CALLGRIND_H
+#include <valgrind/callgrind.h>
+#endif
+
+namespace
+{
+/** bench/instructions.sh counts one sensor's instructions: run under
+ *  `valgrind --tool=callgrind --collect-atstart=no` with
+ *  AUVNAV_CALLGRIND_SENSOR=<label>, collection is on only while that sensor's
+ *  observations are prepared and applied. */
+void profileSensorForBench(auvnav::Navigator& nav)
+{
+#if AUVNAV_HAVE_CALLGRIND_H
+	const char* sensor = std::getenv("AUVNAV_CALLGRIND_SENSOR");
+	if (!sensor) return;
+	nav.on_sensor_work = [label = std::string(sensor)](const std::string& l, bool)
+	{
+		if (l == label) CALLGRIND_TOGGLE_COLLECT;
+	};
+#else
+	(void)nav;
+#endif
+}
+}  // namespace
+
 namespace
 {
 volatile std::sig_atomic_t g_stop = 0;  // the signal that asked the run to stop, or 0
@@ -142,6 +167,7 @@ int main(int argc, char** argv)
 
 	const bool progress = !quiet.getValue() && isatty(STDERR_FILENO);
 	nav->on_predict = [&](const auvnav::Navigator& n) { outputs->onState(n); };
+	profileSensorForBench(*nav);
 	// Position fixes of any sensor (GPS, USBL, …), for position_fixes.csv and the view.
 	std::set<std::string> fix_labels;
 	for (const auto& label : nav->positionFixLabels()) fix_labels.insert(label);
