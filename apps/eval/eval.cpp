@@ -1,5 +1,6 @@
 #include "eval.h"
 
+#include <auvnav/angles.h>
 #include <auvnav/io/csv_table.h>
 #include <auvnav/io/trajectory.h>
 #include <auvnav/so3.h>
@@ -96,8 +97,7 @@ Sample sampleOf(const io::CsvTable& c, const StateColumns& k, const io::Trajecto
 	s.P_att = symmetric(sq(c.number(k.san)), sq(c.number(k.sae)), sq(c.number(k.sad)), c.number(k.cane),
 	                    c.number(k.cand), c.number(k.caed));
 	s.att_err = so3::Log(R * R_true.transpose());
-	s.heading_err_rad =
-	    std::remainder(std::atan2(R(1, 0), R(0, 0)) - std::atan2(R_true(1, 0), R_true(0, 0)), 2 * M_PI);
+	s.heading_err_rad = wrapAngle(std::atan2(R(1, 0), R(0, 0)) - std::atan2(R_true(1, 0), R_true(0, 0)));
 	s.heading_sigma_rad = c.number(k.sad);
 	s.current_est = {c.number(k.curn), c.number(k.cure)};
 	s.current_sigma = {c.number(k.scn), c.number(k.sce)};

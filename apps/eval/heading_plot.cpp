@@ -11,6 +11,7 @@
 // with the filter's attitude at that time, plus declination_deg. Its error
 // therefore includes the filter's roll/pitch error (small here) but not its
 // heading.
+#include <auvnav/angles.h>
 #include <auvnav/cli.h>
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
@@ -34,11 +35,6 @@ namespace
 {
 constexpr double kDeg = M_PI / 180;
 const cv::Scalar kBlue(200, 90, 30), kRed(40, 40, 220), kGrey(150, 150, 150), kGreen(60, 160, 40);
-
-double wrap180(double d)
-{
-	return std::remainder(d, 360.0);
-}
 
 /** A CSV with a header row, as columns by name. */
 std::map<std::string, std::vector<std::string>> readCsv(const std::string& path)
@@ -131,7 +127,7 @@ int main(int argc, char** argv)
 		std::vector<double> tt, psi, lo, hi, zero, s3lo, s3hi;
 		for (std::size_t i = 0; i < t.size(); ++i)
 		{
-			const double y = i == 0 ? yaw[0] : psi.back() + wrap180(yaw[i] - psi.back());
+			const double y = i == 0 ? yaw[0] : psi.back() + auvnav::wrapAngleDeg(yaw[i] - psi.back());
 			tt.push_back(t[i] - t0);
 			psi.push_back(y);
 			const double s3 = 3 * sig[i] / kDeg;
@@ -164,7 +160,8 @@ int main(int argc, char** argv)
 			    Eigen::Quaterniond(qw[k], qx[k], qy[k], qz[k]).normalized().toRotationMatrix();
 			const Eigen::Vector3d m_n = R_nb * (R_bs * (S_inv * (100.0 * raw - b)));
 			const double alpha = std::atan2(m_n.y(), m_n.x()) / kDeg;
-			const double d = wrap180(decl_deg - alpha);  // magnetometer − filter (the plugin's residual)
+			const double d =
+			    auvnav::wrapAngleDeg(decl_deg - alpha);  // magnetometer − filter (the plugin's residual)
 			tm.push_back(to - t0);
 			psi_m.push_back(psi[k] + d);
 			res.push_back(d);

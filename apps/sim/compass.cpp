@@ -1,4 +1,5 @@
 #include "compass.h"
+#include <auvnav/angles.h>
 
 #include <cmath>
 
@@ -7,12 +8,6 @@ namespace auvnav::sim
 namespace
 {
 constexpr double kDeg = M_PI / 180;
-double wrapPi(double a)
-{
-	double w = std::remainder(a, 2 * M_PI);
-	if (w <= -M_PI) w += 2 * M_PI;
-	return w;
-}
 }  // namespace
 
 CompassSim::CompassSim(const config::Node& n, double declination_rad, uint32_t seed)
@@ -38,8 +33,8 @@ mrpt::obs::CObservationIMU::Ptr CompassSim::sample(const Truth& t)
 	obs->timestamp = t.stamp;
 	obs->sensorLabel = label_;
 	obs->sensorPose = mount_.nominalPose();
-	obs->set(mrpt::obs::IMU_YAW,
-	         wrapPi(psi_true - declination_rad_ + bias_rad_ + sigma_rad_ * rng_.drawGaussian1D_normalized()));
+	obs->set(mrpt::obs::IMU_YAW, wrapAngle(psi_true - declination_rad_ + bias_rad_ +
+	                                       sigma_rad_ * rng_.drawGaussian1D_normalized()));
 	return obs;
 }
 }  // namespace auvnav::sim

@@ -1,4 +1,5 @@
 #include "guidance.h"
+#include <auvnav/angles.h>
 
 #include <Eigen/QR>
 #include <algorithm>
@@ -9,10 +10,6 @@ namespace auvnav::sim
 {
 namespace
 {
-double wrapPi(double a)
-{
-	return std::atan2(std::sin(a), std::cos(a));
-}
 double yawOf(const Eigen::Matrix3d& R_nb)
 {
 	return std::atan2(R_nb(1, 0), R_nb(0, 0));
@@ -164,7 +161,7 @@ Vector6d Controller::wrench(const VehicleState& x, double dt_s)
 	                  vehicle_.D_q(0, 0) * speed_demand_mps_ * std::abs(speed_demand_mps_);
 	tau[0] = ff + k_.speed_kp * u_err + k_.speed_ki * speed_integral_;
 	tau[1] = -k_.sway_kp * v_b.y();
-	tau[5] = k_.heading_kp * wrapPi(heading_demand - yaw) - k_.heading_kd * r;
+	tau[5] = k_.heading_kp * wrapAngle(heading_demand - yaw) - k_.heading_kd * r;
 	// Pitch hold: the weak metacentric restoring alone lets the Munk moment
 	// pitch the vehicle steeply while diving.
 	const double pitch = -std::asin(std::clamp(R_nb(2, 0), -1.0, 1.0));

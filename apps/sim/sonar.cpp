@@ -55,7 +55,7 @@ mrpt::obs::CObservationImage::Ptr SonarSim::sample(const Truth& truth, const Env
 		const Eigen::Vector2d d = pole.ne_m - p_s.head<2>();
 		const double dist = d.norm();
 		if (dist <= pole.radius_m) continue;
-		const double bearing = sonar::wrapAngle(std::atan2(d.y(), d.x()) - psi);
+		const double bearing = auvnav::wrapAngle(std::atan2(d.y(), d.x()) - psi);
 		const double range = dist - pole.radius_m;
 		// Rendered when any of it can reach the image; counted "in view" when
 		// its centre is inside the aperture and the range window.
@@ -77,7 +77,7 @@ mrpt::obs::CObservationImage::Ptr SonarSim::sample(const Truth& truth, const Env
 		// Shadow onset in this beam (nearest pole covering it).
 		double shadow_from = std::numeric_limits<double>::infinity();
 		for (const auto& v : visible)
-			if (std::abs(sonar::wrapAngle(theta - v.bearing)) < v.half_angle + 0.5 * geom_.bearingStep_rad())
+			if (std::abs(auvnav::wrapAngle(theta - v.bearing)) < v.half_angle + 0.5 * geom_.bearingStep_rad())
 				shadow_from = std::min(shadow_from, v.range + 0.2);
 		for (int r = 0; r < N; ++r)
 		{
@@ -100,7 +100,7 @@ mrpt::obs::CObservationImage::Ptr SonarSim::sample(const Truth& truth, const Env
 			double pole = 0;
 			for (const auto& v : visible)
 			{
-				const double a = sonar::wrapAngle(theta - v.bearing) / std::hypot(sigma_theta, v.half_angle);
+				const double a = auvnav::wrapAngle(theta - v.bearing) / std::hypot(sigma_theta, v.half_angle);
 				const double b = (rho - v.range) / sigma_rho;
 				if (std::abs(a) < 5 && std::abs(b) < 5)
 					pole += pole_level_ * std::exp(-0.5 * (a * a + b * b));

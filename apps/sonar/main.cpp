@@ -232,7 +232,7 @@ int main(int argc, char** argv)
 				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,%.4f,%.4f,%.4f,%.4f\n", f.t,
 				              f.name.c_str(), r.detections.size(), r.associations.size(), ids.c_str(),
 				              r.heading->heading_rad / kDeg, r.heading->sigma_rad / kDeg, nav_heading / kDeg,
-				              sonar::wrapAngle(r.heading->heading_rad - nav_heading) / kDeg);
+				              auvnav::wrapAngle(r.heading->heading_rad - nav_heading) / kDeg);
 			}
 			else
 				std::snprintf(line, sizeof line, "%.3f,%s,%zu,%zu,%s,,,%.4f,\n", f.t, f.name.c_str(),

@@ -79,7 +79,8 @@ void scoreFrame(const TruthFrame& truth, const std::vector<sonar::Detection>& de
 		for (std::size_t j = 0; j < truth.in_view.size(); ++j)
 		{
 			if (used[j]) continue;
-			const double db = std::abs(sonar::wrapAngle(d.bearing_rad - truth.in_view[j].bearing_rad)) / kDeg;
+			const double db =
+			    std::abs(auvnav::wrapAngle(d.bearing_rad - truth.in_view[j].bearing_rad)) / kDeg;
 			const double dr = std::abs(d.range_m - truth.in_view[j].range_m);
 			if (db > bearing_tol_deg || dr > range_tol_m) continue;
 			const double cost = db / bearing_tol_deg + dr / range_tol_m;
@@ -101,7 +102,7 @@ void scoreFrame(const TruthFrame& truth, const std::vector<sonar::Detection>& de
 	}
 	if (heading_rad)
 	{
-		const double e = sonar::wrapAngle(*heading_rad - truth.vehicle_yaw_rad);
+		const double e = auvnav::wrapAngle(*heading_rad - truth.vehicle_yaw_rad);
 		++s.heading_frames;
 		s.heading_sq_sum += e * e;
 		s.heading_max_abs = std::max(s.heading_max_abs, std::abs(e));

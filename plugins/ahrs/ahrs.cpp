@@ -67,7 +67,7 @@ void AhrsModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
                          Eigen::Ref<Eigen::VectorXd> r) const noexcept
 {
 	if (heading_only_)
-		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapPi(z[i] - z_pred[i]);
+		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
 	else
 		r = z - z_pred;  // z = 0, h = −r: already a rotation vector in one chart
 }

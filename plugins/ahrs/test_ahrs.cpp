@@ -289,8 +289,8 @@ TEST(Ahrs, FullUpdateCorrectsEveryAxisHeadingOnlyJustTheHeading)
 			EXPECT_NEAR(pitchOf(ukf.state().R_nb), pitchOf(prior.R_nb), 1e-9);
 			const Eigen::Vector3d u_b = plugins::levelReferenceDirection_b(prior.R_nb);
 			EXPECT_NEAR(
-			    plugins::wrapPi(plugins::azimuthOf(ukf.state().R_nb, u_b) - plugins::azimuthOf(R_true, u_b)),
-			    0, 0.05 * kDeg);
+			    wrapAngle(plugins::azimuthOf(ukf.state().R_nb, u_b) - plugins::azimuthOf(R_true, u_b)), 0,
+			    0.05 * kDeg);
 		}
 	}
 	tc.ctx().mean = nullptr;
@@ -308,12 +308,12 @@ TEST(Ahrs, HeadingOnlyCarriesNoTiltInformationAndWraps)
 	{
 		TangentVector d = TangentVector::Zero(idx::core_dim);
 		d[idx::att + j] = 1e-6;
-		const double dh = plugins::wrapPi(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
-		                                  at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /
+		const double dh = wrapAngle(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
+		                            at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /
 		                  2e-6;
 		EXPECT_NEAR(dh, j == 2 ? 1.0 : 0.0, 1e-7) << j;
 	}
-	EXPECT_NEAR(plugins::wrapPi(m.z[0] - headingOf(x.R_nb)), 0, 1e-9);
+	EXPECT_NEAR(wrapAngle(m.z[0] - headingOf(x.R_nb)), 0, 1e-9);
 	// Across ±180°: truth −178°, prior 179°: the update goes +3° through 180°.
 	const Eigen::Matrix3d R_true = at::rotationYpr(-178 * kDeg, 5 * kDeg, 2 * kDeg);
 	NavState prior;
@@ -325,8 +325,7 @@ TEST(Ahrs, HeadingOnlyCarriesNoTiltInformationAndWraps)
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted);
 	// Gain 100/104: 3° · 4/104 left.
-	EXPECT_NEAR(plugins::wrapPi(headingOf(ukf.state().R_nb) - headingOf(R_true)), -3 * kDeg * 4 / 104,
-	            0.02 * kDeg);
+	EXPECT_NEAR(wrapAngle(headingOf(ukf.state().R_nb) - headingOf(R_true)), -3 * kDeg * 4 / 104, 0.02 * kDeg);
 	Eigen::VectorXd z(1), h(1), r(1);
 	z[0] = -179.5 * kDeg;
 	h[0] = 179.5 * kDeg;

@@ -15,18 +15,12 @@
  *  sigma points give equal values: the update cannot move roll or pitch
  *  except through correlations the covariance already holds.
  */
+#include <auvnav/angles.h>
 #include <Eigen/Core>
 #include <cmath>
 
 namespace auvnav::plugins
 {
-/** Angle wrapped to (-π, π]. */
-inline double wrapPi(double a_rad)
-{
-	const double w = std::remainder(a_rad, 2 * M_PI);  // [-π, π]
-	return w <= -M_PI ? w + 2 * M_PI : w;
-}
-
 /** Azimuth [rad, clockwise from north seen from above, (-π, π]] of the
  *  horizontal part of R_nb u_b. */
 inline double azimuthOf(const Eigen::Matrix3d& R_nb, const Eigen::Vector3d& u_b)

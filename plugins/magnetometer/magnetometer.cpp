@@ -110,7 +110,7 @@ void MagnetometerModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
                                  Eigen::Ref<Eigen::VectorXd> r) const noexcept
 {
 	if (mode_ == Mode::Heading)
-		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapPi(z[i] - z_pred[i]);
+		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
 	else
 		r = z - z_pred;
 }
@@ -212,7 +212,7 @@ PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, c
 		const double alpha = std::atan2(m_n_est.y(), m_n_est.x());  // measured field azimuth per the mean
 		const Eigen::Vector3d u_b = levelReferenceDirection_b(R_ref);
 		// The mean's heading turned by what the field says is missing (D − α).
-		m.z = Eigen::VectorXd::Constant(1, wrapPi(azimuthOf(R_ref, u_b) + declination_rad_ - alpha));
+		m.z = Eigen::VectorXd::Constant(1, wrapAngle(azimuthOf(R_ref, u_b) + declination_rad_ - alpha));
 		m.R = Eigen::MatrixXd::Constant(1, 1, heading_sigma_rad_ * heading_sigma_rad_);
 		m.setPayload(ReferenceDirection{u_b.x(), u_b.y(), u_b.z()});
 		m.label = "heading";

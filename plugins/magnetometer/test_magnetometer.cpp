@@ -262,14 +262,14 @@ TEST(Magnetometer, HeadingCarriesNoTiltInformation)
 		{
 			TangentVector d = TangentVector::Zero(idx::core_dim);
 			d[idx::att + j] = eps;
-			const double dh = plugins::wrapPi(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
-			                                  at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /
+			const double dh = wrapAngle(at::Predict(model, m, tc.ctx(), x.boxplus(d))[0] -
+			                            at::Predict(model, m, tc.ctx(), x.boxplus(-d))[0]) /
 			                  (2 * eps);
 			EXPECT_NEAR(dh, j == 2 ? 1.0 : 0.0, 1e-7) << "seed " << seed << ", axis " << j;
 		}
 		// At the truth, h equals z, which is the usual heading (Euler yaw) of x.
-		EXPECT_NEAR(plugins::wrapPi(m.z[0] - headingOf(x.R_nb)), 0.0, 1e-9);
-		EXPECT_NEAR(plugins::wrapPi(at::Predict(model, m, tc.ctx(), x)[0] - m.z[0]), 0.0, 1e-9);
+		EXPECT_NEAR(wrapAngle(m.z[0] - headingOf(x.R_nb)), 0.0, 1e-9);
+		EXPECT_NEAR(wrapAngle(at::Predict(model, m, tc.ctx(), x)[0] - m.z[0]), 0.0, 1e-9);
 	}
 	tc.ctx().mean = nullptr;
 }
@@ -299,13 +299,13 @@ TEST(Magnetometer, HeadingResidualIsTheHeadingError)
 		truth.R_nb = R_true;
 		model.residual(m.z, at::Predict(model, m, tc.ctx(), truth), r);
 		EXPECT_NEAR(r[0], 0.0, 1e-9) << yaw_deg;
-		EXPECT_NEAR(plugins::wrapPi(m.z[0] - yaw_deg * kDeg), 0.0, 1e-9);
+		EXPECT_NEAR(wrapAngle(m.z[0] - yaw_deg * kDeg), 0.0, 1e-9);
 		// Without the calibration the same reading is off (or gated out).
 		std::vector<Measurement> out;
 		std::string why;
 		if (prepare(uncalibrated, *o, tc.ctx(), out, why) == PrepareStatus::Ok)
 		{
-			EXPECT_GT(std::abs(plugins::wrapPi(out[0].z[0] - yaw_deg * kDeg)), 2 * kDeg) << yaw_deg;
+			EXPECT_GT(std::abs(wrapAngle(out[0].z[0] - yaw_deg * kDeg)), 2 * kDeg) << yaw_deg;
 		}
 	}
 	tc.ctx().mean = nullptr;
@@ -367,7 +367,7 @@ TEST(Magnetometer, HeadingAndVectorModesAgreeOnTheHeading)
 		const auto v = updateOnce(vector, prior, reading(R_true), c.sigma_deg * kDeg);
 		ASSERT_EQ(h.status, UpdateStatus::Accepted);
 		ASSERT_EQ(v.status, UpdateStatus::Accepted);
-		const double err_h = plugins::wrapPi(headingOf(h.x.R_nb) - headingOf(R_true));
+		const double err_h = wrapAngle(headingOf(h.x.R_nb) - headingOf(R_true));
 		EXPECT_NEAR(err_h, -c.error_deg * kDeg / (1 + c.sigma_deg * c.sigma_deg), 1e-3 * kDeg)
 		    << c.error_deg << "/" << c.sigma_deg << ": " << err_h / kDeg;
 		EXPECT_NEAR(rollOf(h.x.R_nb), rollOf(prior.R_nb), 1e-9);
@@ -418,7 +418,7 @@ TEST(Magnetometer, DisturbedDipPullsTiltOnlyInVectorMode)
 	EXPECT_LT(tilt_h, 1e-9);
 	EXPECT_GT(tilt_v, 1.0 * kDeg) << tilt_v / kDeg;
 	// The horizontal field keeps its direction, hence the heading mode its heading.
-	EXPECT_NEAR(plugins::wrapPi(headingOf(h.x.R_nb) - headingOf(R_true)), 0.0, 1e-6);
+	EXPECT_NEAR(wrapAngle(headingOf(h.x.R_nb) - headingOf(R_true)), 0.0, 1e-6);
 }
 
 TEST(Magnetometer, DisturbanceGateSkipsNormAndDipChanges)
@@ -487,7 +487,7 @@ TEST(Magnetometer, HeadingWrapsAcross180)
 	const auto u = updateOnce(model, prior, reading(R_true), 10 * kDeg);
 	ASSERT_EQ(u.status, UpdateStatus::Accepted);
 	// Gain 100/104: the heading lands at 178 + 5·100/104 = 182.8 ≡ −177.2°.
-	EXPECT_NEAR(plugins::wrapPi(headingOf(u.x.R_nb) - headingOf(R_true)), -5 * kDeg * 4 / 104, 0.05 * kDeg);
+	EXPECT_NEAR(wrapAngle(headingOf(u.x.R_nb) - headingOf(R_true)), -5 * kDeg * 4 / 104, 0.05 * kDeg);
 	// The measured heading itself is wrapped into (−180°, 180°].
 	NavState mean;
 	mean.R_nb = R_true;
@@ -613,7 +613,7 @@ TEST(Magnetometer, HeadingModeFromLargeInitialErrorsNeverClaimsAFalseHeading)
 				ASSERT_EQ(res.updates.size(), 1u) << res.why;
 				if (res.updates[0].status == UpdateStatus::Rejected) ++rejected;
 			}
-			const double err = plugins::wrapPi(headingOf(ukf.state().R_nb) - headingOf(R_true));
+			const double err = wrapAngle(headingOf(ukf.state().R_nb) - headingOf(R_true));
 			const double sigma = std::sqrt(ukf.covariance()(2, 2));
 			const bool converged =
 			    std::abs(err) < 0.1 * kDeg && std::abs(sigma - 3 * kDeg / std::sqrt(20.0)) < 1e-3 * kDeg;
@@ -656,7 +656,7 @@ TEST(Magnetometer, ForcedRecoveryAtHeadingSigma180NeverClaimsAFalseHeading)
 			ASSERT_EQ(model.prepare(*magObs(reading(R_true)), tc.ctx(), out, why), PrepareStatus::Ok) << why;
 			ukf.update(model, out[0], tc.ctx(), /*recovery=*/true);
 		}
-		const double err = plugins::wrapPi(headingOf(ukf.state().R_nb) - headingOf(R_true));
+		const double err = wrapAngle(headingOf(ukf.state().R_nb) - headingOf(R_true));
 		const double sigma = std::sqrt(ukf.covariance()(2, 2));
 		EXPECT_LE(std::abs(err), 3 * sigma)
 		    << error_deg << ": " << err / kDeg << " deg off with sigma " << sigma / kDeg;
@@ -687,9 +687,8 @@ TEST(MagnetometerStates, HeadingBiasAddsToTheHeadingAndIsDeclared)
 		tc.ctx().mean = &x;
 		const Measurement m = prepareOne(model, *magObs(reading(x.R_nb)), tc.ctx());
 		const Measurement mp = prepareOne(plain, *magObs(reading(x.R_nb)), tc.ctx());
-		EXPECT_NEAR(
-		    plugins::wrapPi(at::Predict(model, m, tc.ctx(), x)[0] - at::Predict(plain, mp, tc.ctx(), x)[0]),
-		    3 * kDeg, 1e-12);
+		EXPECT_NEAR(wrapAngle(at::Predict(model, m, tc.ctx(), x)[0] - at::Predict(plain, mp, tc.ctx(), x)[0]),
+		            3 * kDeg, 1e-12);
 		at::WellFormedOptions opt;
 		opt.seed = seed;
 		opt.accept_skip = false;

@@ -26,7 +26,7 @@ double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double 
 	const Eigen::Vector3d p_s = x.p_n + x.R_nb * r_s_b;
 	const Eigen::Vector3d x_s = x.R_nb * Eigen::Vector3d(std::cos(mount_yaw_rad), std::sin(mount_yaw_rad), 0);
 	const double psi_s = std::atan2(x_s.y(), x_s.x());
-	return sonar::wrapAngle(std::atan2(pole_ne.y() - p_s.y(), pole_ne.x() - p_s.x()) - psi_s);
+	return auvnav::wrapAngle(std::atan2(pole_ne.y() - p_s.y(), pole_ne.x() - p_s.x()) - psi_s);
 }
 
 SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& label) : label_(label)
@@ -55,7 +55,7 @@ void SonarHeadingModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
                                  const Eigen::Ref<const Eigen::VectorXd>& z_pred,
                                  Eigen::Ref<Eigen::VectorXd> r) const noexcept
 {
-	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = sonar::wrapAngle(z[i] - z_pred[i]);
+	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = auvnav::wrapAngle(z[i] - z_pred[i]);
 }
 
 PrepareStatus SonarHeadingModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -94,7 +94,8 @@ PrepareStatus SonarHeadingModel::doPrepare(const mrpt::obs::CObservation& obs, c
 		char line[256];
 		std::snprintf(line, sizeof line, "%.3f,%d,%.4f,%.4f,%.4f,%.4f,%.4f\n", ctx.t_s, r.heading->poles,
 		              r.heading->heading_rad / kDeg, r.heading->sigma_rad / kDeg, filter_heading / kDeg,
-		              sigma_heading / kDeg, sonar::wrapAngle(r.heading->heading_rad - filter_heading) / kDeg);
+		              sigma_heading / kDeg,
+		              auvnav::wrapAngle(r.heading->heading_rad - filter_heading) / kDeg);
 		*validation_ << line;
 		validation_->flush();
 	}

@@ -177,7 +177,7 @@ TEST(SonarHeading, UpdatePullsAWrongHeadingTowardTheTruth)
 		EXPECT_FALSE(r.updates.empty());
 	}
 	const auto yaw = [](const NavState& x) { return std::atan2(x.R_nb(1, 0), x.R_nb(0, 0)); };
-	const double err = std::abs(sonar::wrapAngle(yaw(ukf.state()) - yaw(truth)));
+	const double err = std::abs(auvnav::wrapAngle(yaw(ukf.state()) - yaw(truth)));
 	EXPECT_LT(err, 0.3 * kDeg) << "from 1.5°";
 	EXPECT_LT(std::sqrt(ukf.covariance()(idx::att + 2, idx::att + 2)), 0.5 * kDeg);
 }

@@ -18,10 +18,6 @@ double yawOf(const Eigen::Matrix3d& R)
 {
 	return std::atan2(R(1, 0), R(0, 0));
 }
-double wrapPi(double a)
-{
-	return std::atan2(std::sin(a), std::cos(a));
-}
 
 RunResult runNavigator(const std::string& config_file, const std::string& rawlog,
                        const std::vector<std::pair<std::string, std::string>>& overrides,

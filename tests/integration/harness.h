@@ -1,6 +1,7 @@
 #pragma once
 // End-to-end harness: simulate a mission, run the navigator on its rawlog
 // in-process, and line the estimate up with the ground truth.
+#include <auvnav/angles.h>
 #include <auvnav/config.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/io/trajectory.h>
@@ -58,7 +59,6 @@ RunResult runNavigator(const std::string& config_file, const std::string& rawlog
 
 /** Heading (yaw) of R_nb [rad] and the wrapped difference a − b. */
 double yawOf(const Eigen::Matrix3d& R);
-double wrapPi(double a);
 
 /** Indices of the first submerged truth row (the dive) and of the first
  *  surfaced row after it (resurfacing; truth.size() if none). */

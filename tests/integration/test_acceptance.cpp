@@ -71,7 +71,7 @@ SquareOutcome runSquare(unsigned seed)
 		out.two_sigma_m = e.two_sigma_m;
 		const auto& tr = truthAt(truth, n.time());
 		out.heading_err_deg =
-		    wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
+		    wrapAngle(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
 	runRawlog(nav, (dir / "square_5x50m.rawlog").string()).rethrow();
 	EXPECT_TRUE(recorded);
@@ -130,7 +130,7 @@ HeadingOutcome runHeading(const fs::path& dir, double offset_deg, double sigma_d
 	for (const auto& r : run.rows)
 	{
 		const Eigen::Matrix3d R_true = truthAt(truth, r.t_unix).q_nb.toRotationMatrix();
-		const double err = wrapPi(yawOf(r.R_nb) - yawOf(R_true));
+		const double err = wrapAngle(yawOf(r.R_nb) - yawOf(R_true));
 		if (r.t_unix - t0 > 60)
 			o.worst_ratio_after_1min = std::max(o.worst_ratio_after_1min, std::abs(err) / r.headingSigma());
 		if (r.t_unix - t0 > 60 && r.t_unix - t0 < 420)

@@ -352,7 +352,7 @@ Outcome runMode(const Mode& mode, unsigned seed)
 		out.two_sigma_m =
 		    2 * std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P).eigenvalues().maxCoeff());
 		out.heading_err_deg =
-		    wrapPi(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
+		    wrapAngle(yawOf(n.filter().state().R_nb) - yawOf(tr.q_nb.toRotationMatrix())) / kDeg;
 	};
 	RunCallbacks until_recorded;
 	until_recorded.stop = [&] { return recorded; };

@@ -89,7 +89,7 @@ MemsOutcome runMems(const fs::path& dir, const std::string& mission_name, bool w
 	{
 		const auto& tr = truthAt(truth, r.t_unix);
 		const Eigen::Matrix3d R_true = tr.q_nb.toRotationMatrix() * R_b_imu;
-		const double heading_err = wrapPi(yawOf(r.R_nb) - yawOf(R_true));
+		const double heading_err = wrapAngle(yawOf(r.R_nb) - yawOf(R_true));
 		o.min_heading_sigma_deg = std::min(o.min_heading_sigma_deg, r.headingSigma() / kDeg);
 		const Eigen::Vector2d e = (r.p_n - tr.p_n).head<2>();
 		const double major =

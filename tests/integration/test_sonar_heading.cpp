@@ -32,7 +32,7 @@ HeadingError headingError(const RunResult& r, const std::vector<TruthRow>& truth
 	{
 		if (row.t_unix - truth.front().t_unix < from_s) continue;
 		const double err =
-		    wrapPi(yawOf(row.R_nb) - yawOf(truthAt(truth, row.t_unix).q_nb.toRotationMatrix())) / kDeg;
+		    wrapAngle(yawOf(row.R_nb) - yawOf(truthAt(truth, row.t_unix).q_nb.toRotationMatrix())) / kDeg;
 		sq += err * err;
 		e.worst_deg = std::max(e.worst_deg, std::abs(err));
 		e.final_sigma_deg = row.headingSigma() / kDeg;

@@ -2,6 +2,7 @@
 // is the true heading minus the declination plus the deviation, wrapped, in
 // a CObservationIMU with IMU_YAW only; its noise has the configured sigma;
 // and the FlatFish sensors file keeps it off unless a mission enables it.
+#include <auvnav/angles.h>
 #include <auvnav/config.h>
 #include <gtest/gtest.h>
 
@@ -22,11 +23,6 @@ config::Node compassConfig(double noise_deg, double bias_deg)
 	    "rate_hz: 10\nposition_m: [0.4, 0, -0.1]\nnoise_sigma_deg: " + std::to_string(noise_deg) +
 	        "\nbias_deg: " + std::to_string(bias_deg) + "\n",
 	    "<compass>");
-}
-
-double wrap(double a)
-{
-	return std::remainder(a, 2 * M_PI);
 }
 
 struct AtYaw
@@ -58,7 +54,7 @@ TEST(CompassSim, HeadingIsTrueMinusDeclinationPlusDeviation)
 		const double psi = o->get(mrpt::obs::IMU_YAW);
 		EXPECT_GT(psi, -M_PI);
 		EXPECT_LE(psi, M_PI);
-		EXPECT_NEAR(wrap(psi - (yaw + 23 + 1.5) * kDeg), 0, 1e-12) << yaw;
+		EXPECT_NEAR(wrapAngle(psi - (yaw + 23 + 1.5) * kDeg), 0, 1e-12) << yaw;
 	}
 }
 
@@ -70,7 +66,7 @@ TEST(CompassSim, NoiseHasTheConfiguredSigma)
 	const int n = 4000;
 	for (int i = 0; i < n; ++i)
 	{
-		const double e = wrap(compass.sample(pose.t)->get(mrpt::obs::IMU_YAW) - 30 * kDeg);
+		const double e = wrapAngle(compass.sample(pose.t)->get(mrpt::obs::IMU_YAW) - 30 * kDeg);
 		sum += e;
 		sum2 += e * e;
 	}

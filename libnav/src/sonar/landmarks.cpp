@@ -9,11 +9,6 @@
 
 namespace auvnav::sonar
 {
-double wrapAngle(double a)
-{
-	return std::remainder(a, 2 * M_PI);
-}
-
 PoleMap PoleMap::fromConfig(const config::Node& n)
 {
 	PoleMap m;

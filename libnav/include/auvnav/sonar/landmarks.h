@@ -18,6 +18,7 @@
  *  cross-bearing uncertainty (σ_pos / range); with two or more poles the
  *  spread of the individual headings may raise σ.
  */
+#include <auvnav/angles.h>
 #include <auvnav/config.h>
 #include <auvnav/sonar/detector.h>
 
@@ -84,7 +85,5 @@ struct FrameHeading
 std::optional<FrameHeading> headingFromPoles(const std::vector<Detection>& dets,
                                              const std::vector<Association>& as, const PoleMap& map,
                                              const SonarPose& pose, double mount_yaw_rad);
-
-double wrapAngle(double a);
 
 }  // namespace auvnav::sonar
