@@ -5,7 +5,8 @@
 #   target_link_libraries(auvnav_import PRIVATE ${AUVNAV_BAG_LIBS})
 #
 # Sets
-#   AUVNAV_BAG_SOURCES  ros1_bag.cpp, ros2_bag.cpp, msg_definition.cpp (absolute paths)
+#   AUVNAV_BAG_SOURCES  the ROS 1 and ROS 2 readers, the message-definition parser
+#                       and decoder (absolute paths)
 #   AUVNAV_BAG_LIBS     auvnav_rosbag_storage;PkgConfig::AUVNAV_SQLITE3
 # and defines those two GLOBAL imported targets, so that tests can link them to
 # write bags:
@@ -71,6 +72,9 @@ pkg_check_modules(AUVNAV_SQLITE3 REQUIRED IMPORTED_TARGET GLOBAL sqlite3)
 
 set(AUVNAV_BAG_SOURCES
   ${CMAKE_CURRENT_LIST_DIR}/msg_definition.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/msg_decoder.cpp
   ${CMAKE_CURRENT_LIST_DIR}/ros1_bag.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/ros2_bag.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/ros1_bag_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/ros2_bag.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/ros2_bag_db.cpp)
 set(AUVNAV_BAG_LIBS auvnav_rosbag_storage PkgConfig::AUVNAV_SQLITE3)

@@ -31,6 +31,10 @@
 
 namespace auvnav::import::msg
 {
+/** Nested message depth: deeper is taken for a corrupt definition (by the
+ *  parser and, as a guard, by the decoder). */
+constexpr std::size_t kMaxNesting = 64;
+
 /** Which builtin names exist and what `byte` means (ROS 1: int8, ROS 2: uint8). */
 enum class Dialect : uint8_t
 {
