@@ -75,13 +75,11 @@ class AdcpModel final : public SafeMeasurementModel
 	}
 	/** h is linear in the gyro bias, velocity, currents and bias once the
 	 *  attitude is held (doPredict): only the attitude's sigma points are evaluated. */
-	uint32_t affineIn() const noexcept override
+	MeasurementStructure structure() const noexcept override
 	{
-		return kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
+		return {kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias};
 	}
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }

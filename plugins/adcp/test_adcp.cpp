@@ -130,7 +130,7 @@ class AppliedCellsOnly final : public MeasurementModel
 		m_.residual(z, z_pred, r);
 	}
 	double gateProbability() const noexcept override { return m_.gateProbability(); }
-	uint32_t affineIn() const noexcept override { return m_.affineIn(); }
+	MeasurementStructure structure() const noexcept override { return m_.structure(); }
 	bool affineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
 	                  Eigen::Ref<Eigen::MatrixXd> At) const noexcept override
 	{

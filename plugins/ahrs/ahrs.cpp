@@ -62,16 +62,6 @@ AhrsModel::AhrsModel(const config::Node& cfg, const std::string& label) : label_
 	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);
 }
 
-void AhrsModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-                         const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-                         Eigen::Ref<Eigen::VectorXd> r) const noexcept
-{
-	if (heading_only_)
-		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
-	else
-		r = z - z_pred;  // z = 0, h = −r: already a rotation vector in one chart
-}
-
 std::optional<Eigen::Matrix3d> AhrsModel::measuredAttitude(const mrpt::obs::CObservation& obs,
                                                            std::string& why) const
 {

@@ -52,8 +52,9 @@ class AhrsModel final : public SafeMeasurementModel
 
 	uint32_t uses() const noexcept override { return kAttitude; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+	//! heading_only: a heading [rad], the residual wraps; else z = 0 and h = −r
+	//! are already a rotation vector in one chart: a plain difference.
+	MeasurementStructure structure() const noexcept override { return {0, heading_only_ ? ~0u : 0u}; }
 
 	bool headingOnly() const { return heading_only_; }
 	//! R_nr: the AHRS reference frame's axes in NED (frame convention and declination).

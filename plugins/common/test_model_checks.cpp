@@ -26,8 +26,8 @@ enum class Flaw
 	NonDeterministic,
 	SkipWithMeasurements,
 	Invalid,
-	NotAffine,  //!< declares affineIn() = position + velocity, but h is quadratic in the position
-	WrapsButClaimsDifference  //!< residual wraps the second entry; residualIsDifference() says it does not
+	NotAffine,  //!< declares affine_in = position + velocity, but h is quadratic in the position
+	WrapsButClaimsDifference  //!< residual() wraps the second entry; structure() declares differences
 };
 
 /** z = north position + 0.1·north velocity (2 numbers), with injectable flaws. */
@@ -40,7 +40,11 @@ class TestModel final : public SafeMeasurementModel
 		return flaw_ == Flaw::UndeclaredVelocity ? kPosition : (kPosition | kVelocity | kAttitude);
 	}
 	//! h is linear in the position and velocity (true unless NotAffine).
-	uint32_t affineIn() const noexcept override { return kPosition | kVelocity; }
+	MeasurementStructure structure() const noexcept override
+	{
+		// ResidualOffset overrides residual() as its own (else the filter ignores it).
+		return {kPosition | kVelocity, 0u, flaw_ == Flaw::ResidualOffset};
+	}
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
 	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
@@ -48,8 +52,6 @@ class TestModel final : public SafeMeasurementModel
 		if (flaw_ == Flaw::ResidualOffset) r.array() += 1e-3;
 		if (flaw_ == Flaw::WrapsButClaimsDifference) r[1] = std::remainder(r[1], 2 * M_PI);
 	}
-	//! The residual above is z − zp (but for the flaws that change it).
-	bool residualIsDifference() const noexcept override { return true; }
 
  protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation&, const FilterContext&,
@@ -150,7 +152,7 @@ TEST(ModelChecks, CatchesAWrappingResidualDeclaredAsADifference)
 {
 	const auto r = check(Flaw::WrapsButClaimsDifference);
 	EXPECT_FALSE(r);
-	EXPECT_NE(message(r).find("residualIsDifference() but"), std::string::npos) << message(r);
+	EXPECT_NE(message(r).find("is not what structure() declares"), std::string::npos) << message(r);
 }
 
 TEST(ModelChecks, CatchesPrepareProblems)

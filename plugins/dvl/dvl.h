@@ -115,10 +115,8 @@ class DvlModel final : public SafeMeasurementModel
 	}
 	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
 	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
-	uint32_t affineIn() const noexcept override { return kGyroBias | kVelocity; }
+	MeasurementStructure structure() const noexcept override { return {kGyroBias | kVelocity}; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override;
 

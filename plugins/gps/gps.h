@@ -51,7 +51,10 @@ class GpsModel final : public SafeMeasurementModel
 		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
 	}
 	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
-	uint32_t affineIn() const noexcept override { return kPosition | (blocks_.empty() ? 0u : kPluginStates); }
+	MeasurementStructure structure() const noexcept override
+	{
+		return {kPosition | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates))};
+	}
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override
 	{
@@ -59,8 +62,6 @@ class GpsModel final : public SafeMeasurementModel
 	}
 	bool reportsPositionFix() const noexcept override { return true; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	/** The antenna's position from a valid GGA fix (no rate limit, no state). */

@@ -338,7 +338,7 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	    pt::configText("states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}"),
 	    "GPS");
 	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPosition | kPluginStates));
-	EXPECT_EQ(model.affineIn(), uint32_t(kPosition | kPluginStates));
+	EXPECT_EQ(model.structure().affine_in, uint32_t(kPosition | kPluginStates));
 	ASSERT_EQ(model.stateBlocks().size(), 1u);
 	const StateBlockSpec b = model.stateBlocks()[0];  // a copy: stateBlocks() returns by value
 	EXPECT_EQ(b.dimension(), 2);

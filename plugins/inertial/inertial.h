@@ -31,10 +31,11 @@ class InertialModel final : public SafeMeasurementModel
 
 	uint32_t uses() const noexcept override;
 	/** h = R_nbᵀ (a_n − g e_z + 2 Ω × v_n) + b_a: affine in all but the attitude. */
-	uint32_t affineIn() const noexcept override { return kAcceleration | kGravity | kAccelBias | kVelocity; }
+	MeasurementStructure structure() const noexcept override
+	{
+		return {kAcceleration | kGravity | kAccelBias | kVelocity};
+	}
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 
 	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */
 	double sigma_mps2() const { return sigma_mps2_; }

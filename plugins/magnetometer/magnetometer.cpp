@@ -105,16 +105,6 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);
 }
 
-void MagnetometerModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-                                 const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-                                 Eigen::Ref<Eigen::VectorXd> r) const noexcept
-{
-	if (mode_ == Mode::Heading)
-		for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
-	else
-		r = z - z_pred;
-}
-
 PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
                                            std::vector<Measurement>& out, std::string& why)
 {

@@ -95,8 +95,11 @@ class MagnetometerModel final : public SafeMeasurementModel
 	double gateProbability() const noexcept override { return gate_probability_; }
 	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+	//! Heading mode: z and h are headings [rad], the residual wraps.
+	MeasurementStructure structure() const noexcept override
+	{
+		return {0, mode_ == Mode::Heading ? ~0u : 0u};
+	}
 
 	Mode mode() const { return mode_; }
 	const Eigen::Vector3d& field_n_ut() const { return m_n_ut_; }

@@ -77,8 +77,6 @@ class ModelAidingModel final : public SafeMeasurementModel
 		       kDampingLinear | kDampingQuadratic;
 	}
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 
 	/** Wrench of thruster efforts u (in the configured unit). */
 	Vector6d thrustWrench(const std::vector<double>& effort) const;

@@ -37,8 +37,6 @@ class PressureModel final : public SafeMeasurementModel
 
 	uint32_t uses() const noexcept override { return kAttitude | kGravity | kPosition; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 
 	double density_kg_m3() const { return density_kg_m3_; }
 	double atmospheric_pressure_pa() const { return atmospheric_pa_; }

@@ -51,13 +51,6 @@ SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string&
 	}
 }
 
-void SonarHeadingModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-                                 const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-                                 Eigen::Ref<Eigen::VectorXd> r) const noexcept
-{
-	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = auvnav::wrapAngle(z[i] - z_pred[i]);
-}
-
 PrepareStatus SonarHeadingModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
                                            std::vector<Measurement>& out, std::string& why)
 {

@@ -45,8 +45,8 @@ class SonarHeadingModel final : public SafeMeasurementModel
 
 	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
+	//! Bearings [rad]: every residual component wraps.
+	MeasurementStructure structure() const noexcept override { return {0, ~0u}; }
 	bool validateOnly() const { return validate_only_; }
 	const sonar::SonarConfig& sonarConfig() const { return sonar_; }
 

@@ -41,8 +41,6 @@ class UsblModel final : public SafeMeasurementModel
 		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
 	}
 	double gateProbability() const noexcept override { return gate_probability_; }
-	//! The default residual, z − h: the filter may form it itself.
-	bool residualIsDifference() const noexcept override { return true; }
 	bool reportsPositionFix() const noexcept override { return true; }
 	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                InitialFix& out) noexcept override;

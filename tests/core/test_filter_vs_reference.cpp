@@ -163,14 +163,19 @@ class BiasedFixModel : public TestModel
 };
 
 /** The models above that are affine in some blocks, declaring it
- *  (MeasurementFunction::affineIn): the fast filter then evaluates only the
+ *  (MeasurementStructure::affine_in): the fast filter then evaluates only the
  *  sigma points of the leading non-affine blocks; the reference ignores it. */
 template <class Base>
 class DeclaredAffine : public Base
 {
  public:
 	explicit DeclaredAffine(uint32_t affine) : affine_(affine) {}
-	uint32_t affineIn() const noexcept override { return affine_; }
+	MeasurementStructure structure() const noexcept override
+	{
+		MeasurementStructure s = Base::structure();
+		s.affine_in = affine_;
+		return s;
+	}
 	std::string name() const override { return Base::name() + "_affine"; }
 
  private:
@@ -207,19 +212,33 @@ class WideVelocityModel : public TestModel
 class HeadingModel : public TestModel
 {
  public:
-	HeadingModel() : TestModel(kAttitude) {}
+	//! The residual wraps: declared (the filter wraps it) or the model's own.
+	explicit HeadingModel(bool own_residual = false) : TestModel(kAttitude), own_(own_residual) {}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{
 		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
 		return true;
 	}
+	MeasurementStructure structure() const noexcept override
+	{
+		MeasurementStructure s;
+		s.angle_components = own_ ? 0u : 1u;
+		s.custom_residual = own_;
+		return s;
+	}
 	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
 	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
 	{
-		r[0] = std::remainder(z[0] - zp[0], 2 * M_PI);
+		if (own_)
+			r[0] = std::remainder(z[0] - zp[0], 2 * M_PI);
+		else
+			MeasurementFunction::residual(z, zp, r);
 	}
-	std::string name() const override { return "heading_wrapped"; }
+	std::string name() const override { return own_ ? "heading_own_residual" : "heading_wrapped"; }
+
+ private:
+	bool own_;
 	Eigen::MatrixXd noise() const override
 	{
 		return Eigen::Matrix<double, 1, 1>::Constant(std::pow(2 * kDeg, 2));
@@ -422,6 +441,7 @@ std::vector<std::unique_ptr<TestModel>> allModels()
 	v.emplace_back(std::make_unique<AccelModel>());
 	v.emplace_back(std::make_unique<HydroModel>());
 	v.emplace_back(std::make_unique<HeadingModel>());
+	v.emplace_back(std::make_unique<HeadingModel>(true));
 	return v;
 }
 
@@ -524,6 +544,7 @@ std::vector<std::unique_ptr<TestModel>> affineModels(bool plugin_states)
 	v.emplace_back(std::make_unique<DeclaredAffine<AccelModel>>(kAcceleration | kGravity | kAccelBias));
 	v.emplace_back(std::make_unique<AccelModel>());
 	v.emplace_back(std::make_unique<HeadingModel>());
+	v.emplace_back(std::make_unique<HeadingModel>(true));
 	if (plugin_states)
 	{
 		v.emplace_back(std::make_unique<DeclaredAffine<BiasedFixModel>>(kPosition | kPluginStates));

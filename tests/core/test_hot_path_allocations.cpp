@@ -66,7 +66,10 @@ class Accel final : public MeasurementFunction
 {
  public:
 	uint32_t uses() const noexcept override { return kAttitude | kAcceleration | kGravity | kAccelBias; }
-	uint32_t affineIn() const noexcept override { return kAcceleration | kGravity | kAccelBias; }
+	MeasurementStructure structure() const noexcept override
+	{
+		return {kAcceleration | kGravity | kAccelBias};
+	}
 	bool predict(const NavState& x, const Measurement&, const FilterContext&,
 	             Eigen::Ref<Eigen::VectorXd> z) const noexcept override
 	{

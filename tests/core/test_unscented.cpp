@@ -353,11 +353,8 @@ class Heading : public MeasurementFunction
 		z[0] = std::atan2(x.R_nb(1, 0), x.R_nb(0, 0));
 		return true;
 	}
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
-	{
-		r[0] = std::remainder(a[0] - b[0], 2 * M_PI);
-	}
+	//! A heading: the residual wraps.
+	MeasurementStructure structure() const noexcept override { return {0, 1u}; }
 };
 
 struct RecoveryOutcome

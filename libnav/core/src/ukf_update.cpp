@@ -17,23 +17,25 @@ using namespace ukf_detail;
 
 namespace
 {
-/** r = a ⊟ b for an update's m-vectors: formed here when the model's
- *  residual is the plain difference (residualIsDifference(): the same
- *  subtractions, without a virtual call and three Refs per sigma point,
- *  which cost more than the arithmetic at m ≤ 3), else the model's own. */
+/** r = a ⊟ b for an update's m-vectors: formed here as the model's
+ *  structure() describes (differences, wrapped angles: no virtual call and
+ *  three Refs per sigma point, which cost more than the arithmetic at
+ *  m ≤ 3), or the model's own residual with structure().custom_residual. */
 class Residuals
 {
  public:
-	Residuals(const MeasurementFunction& model, int m)
-	    : model_(model), plain_(model.residualIsDifference()), m_(m)
+	Residuals(const MeasurementFunction& model, const MeasurementStructure& s, int m)
+	    : model_(model), custom_(s.custom_residual), angles_(s.angle_components), m_(m)
 	{
 	}
 	__attribute__((always_inline)) void into(const double* a, const double* b, double* out) const
 	{
-		if (plain_)
+		if (custom_)
+			modelResidual(a, b, out);
+		else if (angles_ == 0)
 			for (int q = 0; q < m_; ++q) out[q] = a[q] - b[q];
 		else
-			modelResidual(a, b, out);
+			structuredResidual(angles_, a, b, out, m_);
 	}
 
  private:
@@ -44,7 +46,8 @@ class Residuals
 	}
 
 	const MeasurementFunction& model_;
-	const bool plain_;
+	const bool custom_;
+	const uint32_t angles_;
 	const int m_;
 };
 
@@ -134,7 +137,8 @@ UpdateResult ManifoldUkf::update(const MeasurementFunction& model, const Measure
 	// Blocks h is affine in (measurement_function.h): sigma points only along
 	// the first kn Cholesky columns (those that move a non-affine block);
 	// the pairs along columns kn..k−1 are ±γ A L_j about z₀, taken from P.
-	const uint32_t affine = model.affineIn() & model.uses() & ~static_cast<uint32_t>(kAttitude);
+	const MeasurementStructure structure = model.structure();
+	const uint32_t affine = structure.affine_in & model.uses() & ~static_cast<uint32_t>(kAttitude);
 	const int kn = affine ? tangentPrefix(model.uses() & ~affine, n) : k;
 	leadingCholeskyColumns(kn);
 	const double g = w_.gamma;
@@ -197,7 +201,7 @@ UpdateResult ManifoldUkf::update(const MeasurementFunction& model, const Measure
 	// angles): z̄ = z₀ + Σ W_i (z_i ⊟ z₀), the weights summing to one. A
 	// scaled pair enters as deviations ±a/s + m from z₀ (no point of its own).
 	const double w_center_c = w_.wc0 + 2 * (n - kn) * w_.wi;
-	const Residuals residuals(model, m);
+	const Residuals residuals(model, structure, m);
 	const double* z0 = z_sigma.col(0).data();
 	MapV r = takeV(m), z_mean = takeV(m), acc = takeV(m);
 	z_mean = z_sigma.col(0);

@@ -12,8 +12,10 @@
  *  own `destroy`, so allocation and release stay on one side.
  *
  *  ABI version: changes when this entry layout or the MeasurementModel vtable
- *  changes (the host refuses other values). API version: grows when the
- *  interface gains backward-compatible features. Build fingerprint: compiler,
+ *  changes (the host refuses other values). API version: the version of the
+ *  source interface a plugin is written against; a plugin needing a newer one
+ *  than the host's is refused, and docs/plugin_sdk_changelog.md says what
+ *  each version asks of plugin authors. Build fingerprint: compiler,
  *  Eigen version and alignment, MRPT version, state dimension, sanitizers;
  *  must match the host's exactly (C++ objects cross the boundary).
  */
@@ -27,16 +29,11 @@
 #include <cstring>
 #include <memory>
 
-// 2: FilterContext::alpha_b/mean, Measurement::skipped; 3: current_far_distance_m, covariance;
-// 4 (plugin SDK v2): plugin-owned states (stateBlocks, bindStates, NavState::extra, a run-time
-// state dimension), FilterContext::t_measurement_s, MeasurementModel::initialFix, config::Node's
-// access record (layout), Measurement's typed payload (layout); 5: MeasurementModel::affineIn
-// (a virtual at the end of the table); 6: MeasurementModel::affineSlopes (another);
-// 7: MeasurementModel::residualIsDifference (another); 8: MeasurementModel derives from
-// MeasurementFunction (the filter's part, measurement_function.h: vtable order), Measurement::aux
-// removed (layout)
-#define AUVNAV_PLUGIN_ABI_VERSION 8u
-#define AUVNAV_PLUGIN_API_VERSION 1u
+// What each version changed for plugin authors: docs/plugin_sdk_changelog.md.
+// ABI 9 / API 2: MeasurementFunction::structure() replaces affineIn() and
+// residualIsDifference(); residual() is called only for a custom residual.
+#define AUVNAV_PLUGIN_ABI_VERSION 9u
+#define AUVNAV_PLUGIN_API_VERSION 2u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 
 #define AUVNAV_STR2(x) #x

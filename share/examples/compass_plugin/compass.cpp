@@ -35,23 +35,9 @@ CompassModel::CompassModel(const auvnav::config::Node& cfg, const std::string& l
 	}
 }
 
-double CompassModel::wrapAngle(double a)
-{
-	double w = std::remainder(a, 2 * M_PI);  // [−π, π]
-	if (w <= -M_PI) w += 2 * M_PI;
-	return w;
-}
-
 double CompassModel::yawOf(const Eigen::Matrix3d& R_nb)
 {
-	return wrapAngle(std::atan2(R_nb(1, 0), R_nb(0, 0)));
-}
-
-void CompassModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
-                            const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-                            Eigen::Ref<Eigen::VectorXd> r) const noexcept
-{
-	for (Eigen::Index i = 0; i < r.size(); ++i) r[i] = wrapAngle(z[i] - z_pred[i]);
+	return auvnav::wrapAngle(std::atan2(R_nb(1, 0), R_nb(0, 0)));
 }
 
 auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs,
@@ -85,7 +71,7 @@ auvnav::PrepareStatus CompassModel::doPrepare(const mrpt::obs::CObservation& obs
 		return auvnav::PrepareStatus::Invalid;
 	}
 	auvnav::Measurement m;
-	m.z = Eigen::VectorXd::Constant(1, wrapAngle(heading + declination_rad_));
+	m.z = Eigen::VectorXd::Constant(1, auvnav::wrapAngle(heading + declination_rad_));
 	m.R = Eigen::MatrixXd::Constant(1, 1, sigma_rad_ * sigma_rad_);
 	m.label = "heading";
 	out.push_back(std::move(m));
@@ -102,7 +88,7 @@ bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measuremen
 		if (x.extra.size() <= bias_at_) return false;  // declared, but not in this state
 		bias = x.extra[bias_at_];
 	}
-	z_pred[0] = wrapAngle(yawOf(x.R_nb) + bias);
+	z_pred[0] = auvnav::wrapAngle(yawOf(x.R_nb) + bias);
 	return true;
 }
 

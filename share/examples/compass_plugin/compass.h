@@ -11,7 +11,7 @@
  *
  *      z = wrap(heading + declination)          (1) [rad], true heading
  *      h = atan2(R_nb(1,0), R_nb(0,0)) + b       yaw of R_nb (Z-Y-X Euler angles)
- *      r = wrap(z − h)                           wrap to (−π, π]
+ *      r = wrap(z − h)                           wrap to (−π, π] (structure())
  *
  *  b is the plugin's own state "heading_bias" [rad] when the config has
  *  `states: {heading_bias: {sigma_deg: …}}` (auvnav/state_block_config.h;
@@ -24,6 +24,7 @@
  *  can be folded into declination_deg). Near ±90° pitch the yaw is
  *  ill-defined: real compasses are tilt-compensated and the sigma covers it.
  */
+#include <auvnav/angles.h>
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
 #include <auvnav/state.h>
@@ -45,12 +46,8 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	std::vector<auvnav::StateBlockSpec> stateBlocks() const override { return blocks_; }
 	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
 	double gateProbability() const noexcept override { return gate_probability_; }
-	/** r = wrap(z − z_pred) into (−π, π]: the boxminus of the circle. */
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_pred,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override;
-
-	/** An angle wrapped into (−π, π]. */
-	static double wrapAngle(double a);
+	/** z and h are angles: the filter wraps the residual, z − h, into (−π, π]. */
+	auvnav::MeasurementStructure structure() const noexcept override { return {0, 1u}; }
 	/** Heading (yaw) of a body-to-NED rotation [rad], in (−π, π]. */
 	static double yawOf(const Eigen::Matrix3d& R_nb);
 

@@ -109,8 +109,7 @@ TEST(Compass, PredictsTheYawOfTheAttitude)
 		{
 			auvnav::NavState x;
 			x.R_nb = at::rotationYpr(yaw_deg * kDeg, pitch_deg * kDeg, 17 * kDeg);
-			EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], CompassModel::wrapAngle(yaw_deg * kDeg),
-			            1e-12)
+			EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], auvnav::wrapAngle(yaw_deg * kDeg), 1e-12)
 			    << yaw_deg << " " << pitch_deg;
 		}
 }
@@ -122,11 +121,10 @@ TEST(Compass, ResidualWrapsIntoMinusPiPi)
 	EXPECT_NEAR(residual(m, -179 * kDeg, 179 * kDeg), 2 * kDeg, 1e-12);
 	EXPECT_NEAR(residual(m, 10 * kDeg, 5 * kDeg), 5 * kDeg, 1e-12);
 	EXPECT_DOUBLE_EQ(residual(m, M_PI, -M_PI), 0);
-	EXPECT_DOUBLE_EQ(CompassModel::wrapAngle(-M_PI), M_PI);  // (−π, π]: −π maps to π
-	EXPECT_DOUBLE_EQ(CompassModel::wrapAngle(M_PI), M_PI);
+	EXPECT_DOUBLE_EQ(residual(m, -M_PI, 0), M_PI);  // (−π, π]: −π maps to π
 	for (double a = -20; a <= 20; a += 0.37)
 	{
-		const double w = CompassModel::wrapAngle(a);
+		const double w = residual(m, a, 0);
 		EXPECT_GT(w, -M_PI);
 		EXPECT_LE(w, M_PI);
 		EXPECT_NEAR(std::cos(w), std::cos(a), 1e-12);
@@ -182,8 +180,7 @@ TEST(Compass, UpdateCorrectsHeadingAcrossTheWrap)
 	ASSERT_EQ(res.status, auvnav::PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, auvnav::UpdateStatus::Accepted) << res.updates[0].why;
-	const double err_after =
-	    std::abs(CompassModel::wrapAngle(CompassModel::yawOf(ukf.state().R_nb) - 179 * kDeg));
+	const double err_after = std::abs(auvnav::wrapAngle(CompassModel::yawOf(ukf.state().R_nb) - 179 * kDeg));
 	EXPECT_LT(err_after, 1.0 * kDeg) << "heading error 2 deg -> " << err_after / kDeg << " deg";
 	EXPECT_LT(ukf.covariance()(2, 2), std::pow(2 * kDeg, 2));
 	// Position untouched (uncorrelated in P0).

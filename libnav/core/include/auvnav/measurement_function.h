@@ -16,6 +16,7 @@
  *    (wrap angles there).
  *  - No exception may leave an implementation (every method is noexcept).
  */
+#include <auvnav/angles.h>
 #include <auvnav/earth.h>
 #include <auvnav/state.h>
 
@@ -134,6 +135,42 @@ struct Measurement
 	bool skipped = false;
 };
 
+/** What the filter may assume about h and its residual
+ *  (MeasurementFunction::structure). The default, {}, is always right: h in
+ *  general form, every residual component a plain difference. */
+struct MeasurementStructure
+{
+	/** Blocks of uses() in which h is affine, h = A y + b, while the other
+	 *  blocks are held. The attitude never is (it is ignored here). The
+	 *  filter then evaluates h only on the sigma points along the Cholesky
+	 *  columns of the blocks before the last non-affine one; the other pairs
+	 *  are exactly ±γ A L_j about the centre's h, so their share of S and Pxz
+	 *  is taken from P and A (A by differences of h at the mean, or
+	 *  affineSlopes): the same numbers as evaluating them. Declaring a block
+	 *  h is not affine in gives wrong updates (auvnav/testing/model_checks.h
+	 *  checks it). 0: no such block. */
+	uint32_t affine_in = 0;
+	/** Residual components that are angles [rad]: bit i set gives
+	 *  r_i = wrapAngle(z_i − h_i) in (−π, π] (angles.h), the others
+	 *  r_i = z_i − h_i. Components from 32 on are plain differences. */
+	uint32_t angle_components = 0;
+	/** True only when the residual is neither (a direction on the sphere, a
+	 *  quaternion): the filter then calls residual() once per sigma point,
+	 *  which the model overrides. */
+	bool custom_residual = false;
+};
+
+/** r = z ⊟ z_pred as `angle_components` describes (MeasurementStructure). */
+inline void structuredResidual(uint32_t angle_components, const double* z, const double* z_pred, double* r,
+                               int m) noexcept
+{
+	for (int q = 0; q < m; ++q)
+	{
+		const double d = z[q] - z_pred[q];
+		r[q] = q < 32 && ((angle_components >> q) & 1u) ? wrapAngle(d) : d;
+	}
+}
+
 /** h(x) and what the filter may assume about it. */
 class MeasurementFunction
 {
@@ -144,27 +181,27 @@ class MeasurementFunction
 	/** h(x) into `z_pred` (pre-sized to m). Returns false if it cannot. */
 	virtual bool predict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	                     Eigen::Ref<Eigen::VectorXd> z_pred) const noexcept = 0;
-	/** r = z ⊟ z_pred; default plain difference. */
+	/** What the filter may assume about h and the residual (the default:
+	 *  nothing, plain differences). Constant over the model's life. */
+	virtual MeasurementStructure structure() const noexcept { return {}; }
+	/** r = z ⊟ z_pred. The default is what structure() says (differences,
+	 *  wrapped angles); override it only with structure().custom_residual,
+	 *  the one case in which the filter calls it. */
 	virtual void residual(const Eigen::Ref<const Eigen::VectorXd>& z,
 	                      const Eigen::Ref<const Eigen::VectorXd>& z_pred,
 	                      Eigen::Ref<Eigen::VectorXd> r) const noexcept
 	{
-		r = z - z_pred;
+		const uint32_t angles = structure().angle_components;
+		for (Eigen::Index q = 0; q < z.size(); ++q)
+		{
+			const double d = z[q] - z_pred[q];
+			r[q] = q < 32 && ((angles >> q) & 1u) ? wrapAngle(d) : d;
+		}
 	}
 	/** Gate probability; the filter gates at the χ² quantile of the
 	 *  measurement's own dimension. 1.0 disables the gate. */
 	virtual double gateProbability() const noexcept { return 0.999; }
-	/** Blocks of uses() in which h is affine, h = A y + b, while the other
-	 *  blocks are held (ABI 5). The attitude never is (it is ignored here).
-	 *  The filter then evaluates h only on the sigma points along the
-	 *  Cholesky columns of the blocks before the last non-affine one; the
-	 *  other pairs are exactly ±γ A L_j about the centre's h, so their share
-	 *  of S and Pxz is taken from P and A (A by differences of h at the
-	 *  mean): the same numbers as evaluating them, at a fraction of the
-	 *  cost. Declaring a block h is not affine in gives wrong updates
-	 *  (auvnav/testing/model_checks.h checks it). 0: no such block. */
-	virtual uint32_t affineIn() const noexcept { return 0; }
-	/** Optionally (ABI 6), h's slopes along the tangent coordinates
+	/** Optionally, h's slopes in closed form along the tangent coordinates
 	 *  [from, to) at x, for an h affine in every block of uses() past
 	 *  `from` (the filter asks only then): At.row(i − from) = ∂h/∂x_i along
 	 *  the retraction of state.h (h(x ⊞ t e_i) = h(x) + t At.row(i − from)ᵀ).
@@ -178,13 +215,6 @@ class MeasurementFunction
 	{
 		return false;
 	}
-	/** True if residual(z, z_pred) is exactly z − z_pred, entry by entry
-	 *  (the default residual, not overridden): the filter then forms the
-	 *  update's residuals itself instead of calling residual once per sigma
-	 *  point (ABI 7). False (the default, always safe): residual is called.
-	 *  Declaring it for a residual that wraps angles gives wrong updates;
-	 *  auvnav/testing/model_checks.h checks the claim bit for bit. */
-	virtual bool residualIsDifference() const noexcept { return false; }
 };
 
 }  // namespace auvnav

@@ -287,13 +287,15 @@ inline std::string vec(const Eigen::VectorXd& v)
  *    symmetric and positive definite;
  *  - h(x) succeeds, is finite, has the right size and is deterministic;
  *  - residual(z, z) = 0 and residual(h(x), h(x)) = 0;
- *  - if residualIsDifference(): residual(a, h(x)) = a − h(x) bit for bit,
- *    for a = z and for a far from h(x) (a residual that wraps differs there);
+ *  - unless structure().custom_residual: residual(a, h(x)) is what
+ *    structure() says (differences, wrapped angle components) bit for bit,
+ *    for a = z and for a far from h(x): the filter forms it itself, so an
+ *    overridden residual() that differs would be ignored;
  *  - h is unchanged when every block NOT declared in uses() is perturbed by a
  *    large random tangent vector (a wrong uses() mask makes the filter skip
  *    sigma points that matter, silently);
  *  - (x ⊞ δ) ⊟ x = δ for a random δ;
- *  - h is affine in the blocks of affineIn(), the others held: along a random
+ *  - h is affine in the blocks of structure().affine_in, the others held: along a random
  *    δ in those blocks, h(x ⊞ δ) ⊟ h(x) = −(h(x ⊞ −δ) ⊟ h(x)) = ½ (h(x ⊞ 2δ) ⊟ h(x));
  *  - closed-form affineSlopes(), if the model gives them, equal h's unit
  *    differences along every coordinate the filter asks them for.
@@ -330,9 +332,11 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 	if (mask & kPluginStates) delta.tail(x.dim() - idx::core_dim).setZero();
 	const NavState x_far = x.boxplus(delta);
 	// A step in the declared affine blocks only (the attitude never is one).
-	const uint32_t affine = model.affineIn() & mask & ~static_cast<uint32_t>(kAttitude);
-	if ((model.affineIn() & ~static_cast<uint32_t>(kAllBlocks)) != 0)
-		return AssertionFailure() << "affineIn() = 0x" << std::hex << model.affineIn() << " has unknown bits";
+	const MeasurementStructure structure = model.structure();
+	const uint32_t affine = structure.affine_in & mask & ~static_cast<uint32_t>(kAttitude);
+	if ((structure.affine_in & ~static_cast<uint32_t>(kAllBlocks)) != 0)
+		return AssertionFailure() << "structure().affine_in = 0x" << std::hex << structure.affine_in
+		                          << " has unknown bits";
 	TangentVector step = RandomTangent(opt.seed * 104729u + 3u, 1.0, 3.0, x.dim());
 	for (const auto& b : stateBlocks())
 		if (!(affine & b.bit)) step.segment(b.begin, b.size).setZero();
@@ -373,21 +377,24 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 		model.residual(h, h, r);
 		if (!(r.cwiseAbs().array() <= opt.tol * (1 + h.cwiseAbs().array())).all())
 			return fail() << "residual(h, h) = " << detail::vec(r) << ", expected 0";
-		if (model.residualIsDifference())
+		if (!structure.custom_residual)
 		{
-			// The filter then forms a − b itself: residual must be that
-			// subtraction bit for bit, also far apart (where a residual that
-			// wraps angles differs from it).
+			// The filter then forms the residual itself from structure():
+			// residual() must be that bit for bit, also far apart (where a
+			// residual that wraps angles differs from a difference).
 			const Eigen::VectorXd far_up = h.array() + 4.0, far_down = h.array() - 7.5;
 			for (const Eigen::VectorXd* a : {&m.z, &far_up, &far_down})
 			{
 				r.setConstant(std::nan(""));
 				model.residual(*a, h, r);
-				const Eigen::VectorXd diff = *a - h;
+				Eigen::VectorXd expected(dim);
+				structuredResidual(structure.angle_components, a->data(), h.data(), expected.data(),
+				                   static_cast<int>(dim));
 				for (Eigen::Index i = 0; i < dim; ++i)
-					if (!(r[i] == diff[i]))
-						return fail() << "residualIsDifference() but residual(a, h) = " << detail::vec(r)
-						              << " is not a − h = " << detail::vec(diff);
+					if (!(r[i] == expected[i]))
+						return fail() << "residual(a, h) = " << detail::vec(r)
+						              << " is not what structure() declares, " << detail::vec(expected)
+						              << " (override residual() only with structure().custom_residual)";
 			}
 		}
 
@@ -414,9 +421,9 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 			const double size = 1 + rp.cwiseAbs().maxCoeff() + h.cwiseAbs().maxCoeff();
 			if (!((rp + rm).cwiseAbs().maxCoeff() <= opt.tol * size) ||
 			    !((r2 - 2 * rp).cwiseAbs().maxCoeff() <= opt.tol * size))
-				return fail() << "h is not affine in the blocks affineIn() declares (" << blockNames(affine)
-				              << "): steps +d, -d, +2d move h by " << detail::vec(rp) << ", "
-				              << detail::vec(rm) << ", " << detail::vec(r2);
+				return fail() << "h is not affine in the blocks structure().affine_in declares ("
+				              << blockNames(affine) << "): steps +d, -d, +2d move h by " << detail::vec(rp)
+				              << ", " << detail::vec(rm) << ", " << detail::vec(r2);
 			// The filter asks for slopes past the last non-affine block.
 			const int from = tangentPrefix(mask & ~affine, x.dim()), to = tangentPrefix(mask, x.dim());
 			Eigen::MatrixXd At = Eigen::MatrixXd::Zero(to - from, dim);
