@@ -41,11 +41,14 @@ Eigen::MatrixXd lowerFactor(int k, unsigned seed)
 	return L;
 }
 
-/** A symmetric positive definite n × n with unit-order entries. */
+/** A symmetric positive definite n × n with unit-order entries, exactly
+ *  symmetric (a product's fused multiply-adds may round (i, j) and (j, i)
+ *  differently). */
 Covariance spd(int n, unsigned seed)
 {
 	const Eigen::MatrixXd A = randomMatrix(n, n, seed);
-	return A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+	const Eigen::MatrixXd P = A * A.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+	return 0.5 * (P + P.transpose());
 }
 
 double relativeGap(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b)
