@@ -11,6 +11,10 @@ include(GoogleTest)
 # elsewhere (see the temporary-directory helpers in each test).
 set(AUVNAV_TEST_DATA_DIR "${PROJECT_SOURCE_DIR}/tests/data")
 
+# Helpers only tests use (auvnav/testing/scratch_dir.h): not SDK, not installed.
+add_library(auvnav_test_support INTERFACE)
+target_include_directories(auvnav_test_support INTERFACE ${PROJECT_SOURCE_DIR}/tests/support/include)
+
 # auvnav_add_gtest(<target> PREFIX <ctest name prefix> SOURCES <src...> LIBS <lib...>)
 # One GoogleTest executable; its tests are discovered when CTest runs
 # (PRE_TEST), not at build time, so a broken test binary cannot break the build
@@ -21,7 +25,7 @@ function(auvnav_add_gtest target)
     message(FATAL_ERROR "auvnav_add_gtest(${target}): no SOURCES")
   endif()
   add_executable(${target} ${ARG_SOURCES})
-  target_link_libraries(${target} PRIVATE GTest::gtest_main auvnav_warnings ${ARG_LIBS})
+  target_link_libraries(${target} PRIVATE GTest::gtest_main auvnav_warnings auvnav_test_support ${ARG_LIBS})
   target_compile_definitions(${target} PRIVATE
     AUVNAV_TEST_DATA_DIR="${AUVNAV_TEST_DATA_DIR}")
   # Test suites named *Slow (e.g. RunLongSlow) carry the ctest label `slow`:
