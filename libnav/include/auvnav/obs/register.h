@@ -1,8 +1,9 @@
 #pragma once
 /** @file register.h
  *  Registration of auvnav's observation classes with MRPT's class registry.
- *  Loading libauvnav_obs registers them automatically; calling this is only
- *  needed to force the library to be linked in (it is idempotent). */
+ *  Nothing to call: every target that links auvnav::obs compiles a small
+ *  source that calls this before main (link_registration.cpp), which also
+ *  keeps the library in a link made with --as-needed. Idempotent. */
 namespace auvnav::obs
 {
 void registerAllClasses();
