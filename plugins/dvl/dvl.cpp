@@ -187,7 +187,7 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 		while (!history.empty() && history.back().first > t) history.pop_back();
 		if (ctx.mean && ctx.mean->extra.size() >= extra_needed_)
 			history.emplace_back(t, sensorVelocity_b(*ctx.mean, r_s, ctx, misalignment_at_, frame));
-		// Kept for twice the lag plus re-filtering (≥ 10 s, navigator.h); at
+		// Kept for twice the lag plus re-filtering (≥ 10 s, filter_history.h); at
 		// most kMaxHistory entries if time stands still.
 		constexpr std::size_t kMaxHistory = 100000;
 		while (!history.empty() && (history.front().first < t - 2 * lag - 60 || history.size() > kMaxHistory))

@@ -23,7 +23,7 @@
  *  about their R⁻¹-weighted mean ν̄ within the χ² quantile of 2(n − 1)
  *  degrees of freedom, each whitened by its own noise R_k — then the state,
  *  not the sensor, is wrong by ν̄, and the navigator resets the horizontal
- *  position to the fixes (navigator.h). Scattered outliers do not agree; a
+ *  position to the fixes (aiding_policy.h). Scattered outliers do not agree; a
  *  sensor whose fixes are accepted in between never builds a run.
  */
 #include <auvnav/measurement_model.h>

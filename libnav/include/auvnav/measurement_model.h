@@ -61,7 +61,7 @@ class MeasurementModel : public MeasurementFunction
 	 *  consensus of these, fix_consensus.h), and afterwards for every
 	 *  observation of a sensor whose reportsPositionFix() is true (the
 	 *  re-initialisation rule checks its rejected fixes against all of them,
-	 *  navigator.h). */
+	 *  aiding_policy.h). */
 	virtual bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        InitialFix& out) noexcept
 	{

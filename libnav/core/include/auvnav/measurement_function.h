@@ -35,7 +35,7 @@ struct FilterContext
 	double t_s = 0;  //!< filter time [s, Unix epoch]
 	//! When the measurement was taken [s, Unix epoch] (measurementTime()).
 	//! The navigator applies it at t_s ≤ t_measurement_s, the last IMU sample
-	//! before it, re-filtering if it arrived late (navigator.h).
+	//! before it, re-filtering if it arrived late (filter_history.h).
 	double t_measurement_s = 0;
 	Eigen::Vector3d omega_ib_b = Eigen::Vector3d::Zero();      //!< latest raw gyro sample [rad/s], IMU axes
 	Eigen::Vector3d omega_ie_n = Eigen::Vector3d::Zero();      //!< Earth rate in the navigation frame

@@ -98,7 +98,7 @@ enum class Recovery
 	//! correction dx = K ν (P += β dx dxᵀ, β the smallest that puts the
 	//! innovation on the gate; closed form, ukf.cpp), then a normal update.
 	//! For rejections of an absolute attitude/position aid that agree with
-	//! each other (rejection_streak.h, navigator.cpp): an over-confident
+	//! each other (rejection_streak.h, aiding_policy.h): an over-confident
 	//! heading is pulled to the magnetometer however small its σ had become. Falls back to Noise when no β
 	//! can (the state cannot explain the innovation).
 	State
