@@ -191,12 +191,8 @@ class MeasurementFunction
 	                      const Eigen::Ref<const Eigen::VectorXd>& z_pred,
 	                      Eigen::Ref<Eigen::VectorXd> r) const noexcept
 	{
-		const uint32_t angles = structure().angle_components;
-		for (Eigen::Index q = 0; q < z.size(); ++q)
-		{
-			const double d = z[q] - z_pred[q];
-			r[q] = q < 32 && ((angles >> q) & 1u) ? wrapAngle(d) : d;
-		}
+		structuredResidual(structure().angle_components, z.data(), z_pred.data(), r.data(),
+		                   static_cast<int>(z.size()));
 	}
 	/** Gate probability; the filter gates at the χ² quantile of the
 	 *  measurement's own dimension. 1.0 disables the gate. */
