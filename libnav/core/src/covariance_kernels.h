@@ -11,7 +11,16 @@
  *  whatever the build targets (SSE2 on the x86-64 baseline, AVX and FMA with
  *  AUVNAV_MARCH=x86-64-v3, NEON on aarch64). Whether a product and a sum are
  *  fused is the compiler's choice for the target: results agree with the
- *  dense reference to rounding, not bit for bit across targets.
+ *  dense reference to rounding, not bit for bit across targets (nor across
+ *  CPUs, where the build dispatches, below).
+ *
+ *  The innermost loops (the passes and the Gram tile: leaves that call
+ *  nothing) are marked AUVNAV_KERNEL_CLONES. In a build for the x86-64
+ *  baseline (CMake's AUVNAV_CPU_DISPATCH) GCC compiles each of them for the
+ *  baseline and for x86-64-v3 (AVX2, FMA), and the loader picks the one the
+ *  CPU runs (target_clones). Leaves only: GCC inlines nothing into a
+ *  function built for another -march, so a marked caller would still run
+ *  its loops at the baseline. Elsewhere the mark is empty.
  *
  *  Contract shared by every kernel: pointers address column-major storage
  *  with the stride given; the ranges named are read or written, nothing
@@ -23,6 +32,12 @@
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
+
+#if defined(AUVNAV_CPU_CLONES) && AUVNAV_CPU_CLONES
+#define AUVNAV_KERNEL_CLONES __attribute__((target_clones("default", "arch=x86-64-v3")))
+#else
+#define AUVNAV_KERNEL_CLONES
+#endif
 
 // Internal linkage: each including file gets its own copies, inlined where
 // they are used, not exported from the library and called through its PLT.
@@ -74,8 +89,8 @@ inline void withWidth(int width, F&& f)
  *  expression evaluators, at these short and odd lengths, spent more
  *  spilling their state than computing. */
 template <int C, bool kAssign>
-inline void combinationPass(double* __restrict y, const double* __restrict X, Eigen::Index xs,
-                            Eigen::Index rows, const double* a)
+AUVNAV_KERNEL_CLONES inline void combinationPass(double* __restrict y, const double* __restrict X,
+                                                 Eigen::Index xs, Eigen::Index rows, const double* a)
 {
 	const double a0 = a[0], a1 = C > 1 ? a[1] : 0.0, a2 = C > 2 ? a[2] : 0.0, a3 = C > 3 ? a[3] : 0.0;
 	const double* __restrict x0 = X;
@@ -154,8 +169,9 @@ namespace detail
 /** y0[i] −= Σ_{c<C} a[c] x_c[i], y1[i] −= Σ_{c<C} b[c] x_c[i] for i < rows
  *  (x_c = X + c·xs): two columns in one pass, each x_c[i] loaded once. */
 template <int C>
-inline void pairSubtractPass(double* __restrict y0, double* __restrict y1, const double* __restrict X,
-                             Eigen::Index xs, Eigen::Index rows, const double* a, const double* b)
+AUVNAV_KERNEL_CLONES inline void pairSubtractPass(double* __restrict y0, double* __restrict y1,
+                                                  const double* __restrict X, Eigen::Index xs,
+                                                  Eigen::Index rows, const double* a, const double* b)
 {
 	double ac[4], bc[4];
 	for (int c = 0; c < 4; ++c) ac[c] = c < C ? a[c] : 0.0, bc[c] = c < C ? b[c] : 0.0;
@@ -332,8 +348,8 @@ namespace detail
  *  r in [0, from) and [zero_to, R) (X, Y column-major, `ld` rows): sixteen
  *  sums held in registers while X's and Y's columns stream past. */
 template <typename Gram>
-inline void gramTile(const double* X, const double* Y, int ld, int R, int ib, int jb, int from, int zero_to,
-                     Gram& G)
+AUVNAV_KERNEL_CLONES inline void gramTile(const double* X, const double* Y, int ld, int R, int ib, int jb,
+                                          int from, int zero_to, Gram& G)
 {
 	double acc[4][4] = {};
 	auto term = [&](int r)
