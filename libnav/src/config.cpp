@@ -13,8 +13,8 @@ namespace auvnav::config
 {
 using mrpt::containers::yaml;
 
-Node::Node(yaml y, std::string file, std::string path, std::shared_ptr<Access> access)
-    : y_(std::move(y)), file_(std::move(file)), path_(std::move(path)), access_(std::move(access))
+Node::Node(const yaml& y, std::string file, std::string path, std::shared_ptr<Access> access)
+    : y_(y), file_(std::move(file)), path_(std::move(path)), access_(std::move(access))
 {
 }
 
@@ -33,13 +33,13 @@ Node Node::fromText(const std::string& text, const std::string& origin)
 	if (!detail::parseDocument(text, origin, root) || !root.isMap())
 		throw ConfigError(origin + ": top level must be a YAML map");
 	yaml y;
-	y.node() = std::move(root);
-	return Node(std::move(y), origin, "", std::make_shared<Access>());
+	y.node() = root;
+	return Node(y, origin, "", std::make_shared<Access>());
 }
 
 std::string Node::filePath(const std::string& key) const
 {
-	const std::string p = string(key);
+	std::string p = string(key);
 	if (p.empty()) fail(key, "expected a file path");
 	if (p[0] == '/') return p;
 	const auto slash = file_.find_last_of('/');

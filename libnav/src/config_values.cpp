@@ -36,7 +36,7 @@ Node Node::child(const std::string& key) const
 	if (!has(key)) fail(key, "missing required section");
 	yaml sub(y_[key].node());
 	if (!sub.isMap()) fail(key, "expected a map of keys");
-	return Node(std::move(sub), file_, fullPath(key), access_);
+	return Node(sub, file_, fullPath(key), access_);
 }
 
 std::vector<Node> Node::sequence(const std::string& key) const

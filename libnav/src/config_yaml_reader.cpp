@@ -137,9 +137,9 @@ class TreeBuilder
 			case YAML_SEQUENCE_END_EVENT:
 			case YAML_MAPPING_END_EVENT:
 			{
-				yaml::node_t done = std::move(open_.back().node);
+				yaml::node_t done = open_.back().node;
 				open_.pop_back();
-				add(std::move(done));
+				add(done);
 				return;
 			}
 			default:
@@ -195,7 +195,7 @@ class TreeBuilder
 	{
 		if (open_.empty())
 		{
-			root_ = std::move(n);
+			root_ = n;
 			has_root_ = true;
 			return;
 		}
@@ -208,7 +208,7 @@ class TreeBuilder
 		{
 			// StructureCheck refused non-scalar and duplicate keys; a null key is its text.
 			if (top.key->isNullNode()) top.key->d.emplace<yaml::scalar_t>().emplace<std::string>("");
-			top.node.asMap()[std::move(*top.key)] = std::move(n);
+			top.node.asMap()[std::move(*top.key)] = n;
 			top.key.reset();
 		}
 	}

@@ -73,7 +73,7 @@ void HealthMonitor::onUpdate(const std::string& label, double t_s, const UpdateR
 	refresh(t_s);
 }
 
-void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s)
+void HealthMonitor::judge(const std::string& label, SensorWindow& w, double t_s) const
 {
 	const double n = static_cast<double>(w.entries.size());
 	if (n < limits_.min_updates)

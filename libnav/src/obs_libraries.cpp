@@ -36,7 +36,7 @@ std::string locate(const std::string& lib, const std::vector<std::string>& searc
 std::string loadObservationLibrary(const std::string& lib, const std::vector<std::string>& search_dirs)
 {
 	if (lib.empty()) throw ObservationLibraryError("observation library: empty name");
-	const std::string where = locate(lib, search_dirs);
+	std::string where = locate(lib, search_dirs);
 	static std::mutex mutex;
 	static std::set<std::string> loaded;
 	const std::lock_guard<std::mutex> lock(mutex);

@@ -129,7 +129,7 @@ class Node
 		std::set<std::string> used, free_form, overridden;
 		std::map<std::string, std::set<std::string>> asked;
 	};
-	Node(mrpt::containers::yaml y, std::string file, std::string path, std::shared_ptr<Access> access);
+	Node(const mrpt::containers::yaml& y, std::string file, std::string path, std::shared_ptr<Access> access);
 	std::string scalarText(const std::string& key) const;
 	std::string fullPath(const std::string& key) const;
 	/** Records that `key` was asked for here; present keys become "used". */

@@ -92,7 +92,7 @@ class HealthMonitor
 		NavStatus verdict = NavStatus::Ok;
 		std::string why;
 	};
-	void judge(const std::string& label, SensorWindow& w, double t_s);
+	void judge(const std::string& label, SensorWindow& w, double t_s) const;
 	void refresh(double t_s);
 
 	HealthLimits limits_;

@@ -224,7 +224,7 @@ class DvlConverter final : public Converter
 		const Read res = readScalar(sigma_, r, cols_, s, why);
 		if (res == Read::Bad) return false;
 		if (res == Read::Ok)
-			for (int k = 0; k < 3; ++k) o.velocity_cov[static_cast<std::size_t>(4 * k)] = s * s;
+			for (std::size_t k = 0; k < 3; ++k) o.velocity_cov[4 * k] = s * s;
 		return true;
 	}
 

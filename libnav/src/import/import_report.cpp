@@ -19,6 +19,11 @@ std::string num(double v, int prec = 6)
 	return s.str();
 }
 
+double seconds(TimeNs t)
+{
+	return static_cast<double>(t) * 1e-9;
+}
+
 double spanSeconds(const SensorReport& s)
 {
 	return s.has_span ? static_cast<double>(s.last_ns - s.first_ns) * 1e-9 : 0;
@@ -49,8 +54,8 @@ std::string ImportReport::toJson() const
 		                        {"written", s.written},
 		                        {"rejected", s.rejected},
 		                        {"rejected_by_reason", by_reason},
-		                        {"first_time_s", s.has_span ? Json(s.first_ns * 1e-9) : no_time},
-		                        {"last_time_s", s.has_span ? Json(s.last_ns * 1e-9) : no_time},
+		                        {"first_time_s", s.has_span ? Json(seconds(s.first_ns)) : no_time},
+		                        {"last_time_s", s.has_span ? Json(seconds(s.last_ns)) : no_time},
 		                        {"span_s", spanSeconds(s)},
 		                        {"median_rate_hz", s.median_rate_hz},
 		                        {"repeated_stamps", s.repeated_stamps},

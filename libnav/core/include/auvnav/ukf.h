@@ -73,7 +73,7 @@ struct UtWeights
 {
 	double gamma = 0;  //!< √(n+λ)
 	double wm0 = 0, wc0 = 0, wi = 0;
-	static UtWeights make(int n, const UtParams& p);
+	static UtWeights make(int dim, const UtParams& p);
 };
 
 enum class UpdateStatus

@@ -24,7 +24,7 @@ struct SigmaWeights
 {
 	double gamma = 0;
 	std::vector<double> wm, wc;  // 2n+1 each; point 0 is the centre
-	static SigmaWeights fromUt(const UtWeights& w, int n);
+	static SigmaWeights fromUt(const UtWeights& u, int n);
 	/** A deliberately WRONG weighting for the "the test can fail" checks:
 	 *  the same sigma points, all weights 1/(2n+1). */
 	static SigmaWeights uniform(double gamma, int n);
