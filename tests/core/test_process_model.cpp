@@ -363,7 +363,7 @@ TEST(ProcessModel, TailRowsOfTheLinearMapAreTheDiagonalFactors)
 	ProcessModel pm = fastGaussMarkovModel();
 	StateBlockSpec gm;
 	gm.name = "scale";
-	gm.components = {"", ""};
+	gm.components = {"x", "y"};
 	gm.sigma = {0.01};
 	gm.process = StateProcess::GaussMarkov;
 	gm.process_sigma = 0.01;
@@ -389,4 +389,63 @@ TEST(ProcessModel, TailRowsOfTheLinearMapAreTheDiagonalFactors)
 	EXPECT_LT(a[0], 1.0);
 	EXPECT_LT(a[n - 2 - idx::adcp_bias], 1.0);
 	EXPECT_EQ(a[n - 1 - idx::adcp_bias], 1.0);
+}
+
+TEST(ProcessModel, PerMetreRandomWalkGrowsWithTheDistanceThroughTheWaterNotWithTime)
+{
+	// σ = 0.1 per √m: 2 m moved give 0.02 whether in 1 s or in 4 s, none
+	// while hovering. A per-second walk would give 0.01 × dt (0.01 and 0.04).
+	ProcessModel pm;
+	StateBlockSpec b;
+	b.name = "scale";
+	b.components = {""};
+	b.sigma = {0.01};
+	b.process = StateProcess::RandomWalkPerMetre;
+	b.process_sigma = 0.1;
+	pm.appendBlock(b);
+	const int i = idx::extra;
+	const auto var = [&](double dt, double speed_through_water, double vertical_speed)
+	{ return pm.noiseCovariance(dt, speed_through_water, vertical_speed)(i, i); };
+	EXPECT_NEAR(var(1.0, 2.0, 0.0), 0.01 * 2, 1e-15);
+	EXPECT_NEAR(var(4.0, 0.5, 0.0), 0.01 * 2, 1e-15);
+	EXPECT_EQ(var(10.0, 0.0, 0.0), 0.0);
+	// Diving counts (3-D distance through the water): 1.2 m/s across, 0.5 m/s down: 1.3 m/s.
+	EXPECT_NEAR(var(2.0, 1.2, -0.5), 0.01 * 1.3 * 2, 1e-15);
+	// The mean stays (a walk), and the prediction's linear map keeps it (factor 1).
+	EXPECT_EQ(pm.diagonalTailFactors(pm.decay(3.0))[idx::core_dim - idx::adcp_bias], 1.0);
+	NavState x;
+	x.extra = ExtraVector::Constant(1, 0.02);
+	EXPECT_EQ(pm.propagate(x, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 3.0).extra[0], 0.02);
+}
+
+TEST(ProcessModel, PerMetreRandomWalkThroughTheFilterUsesTheStatesSpeedThroughTheWater)
+{
+	// The filter's prediction adds σ² × |v_n,h − current| × dt (as for the
+	// currents' spatial noise): moving at 2 m/s against no current for 5 s
+	// adds σ² × 10 m, in a 0.5 m/s current along the track σ² × 7.5 m.
+	for (const double current_n : {0.0, 0.5})
+	{
+		ProcessModel pm;
+		StateBlockSpec b;
+		b.name = "scale";
+		b.components = {""};
+		b.sigma = {0.01};
+		b.process = StateProcess::RandomWalkPerMetre;
+		b.process_sigma = 0.1;
+		pm.appendBlock(b);
+		pm.noise.current.tau_s = 1e15;  // a steady current
+		NavState x;
+		x.v_n = Eigen::Vector3d(2.0, 0, 0);
+		x.current_vehicle_ne = Eigen::Vector2d(current_n, 0);
+		x.extra = ExtraVector::Zero(1);
+		// Attitude and velocity all but known: the mean speed stays 2 m/s.
+		Covariance P = Covariance::Identity(pm.dim(), pm.dim()) * 1e-12;
+		P(idx::extra, idx::extra) = 1e-4;
+		ManifoldUkf ukf(pm, UtParams{});
+		ukf.initialize(x, P);
+		for (int k = 0; k < 50; ++k) ukf.predict(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 0.1);
+		const double distance_m = (2.0 - current_n) * 5.0;
+		EXPECT_NEAR(ukf.covariance()(idx::extra, idx::extra) - 1e-4, 0.01 * distance_m, 1e-9)
+		    << "current " << current_n;
+	}
 }

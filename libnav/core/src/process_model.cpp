@@ -17,7 +17,7 @@ double GaussMarkov::variance(double dt_s) const
 	return sigma * sigma * (1 - p * p);
 }
 
-double ExtraStateProcess::variance(double dt_s) const
+double ExtraStateProcess::variance(double dt_s, double distance_m) const
 {
 	switch (kind)
 	{
@@ -25,6 +25,8 @@ double ExtraStateProcess::variance(double dt_s) const
 			return 0;
 		case StateProcess::RandomWalk:
 			return sigma * sigma * dt_s;
+		case StateProcess::RandomWalkPerMetre:
+			return sigma * sigma * distance_m;
 		case StateProcess::GaussMarkov:
 		{
 			const double p = phi(dt_s);
@@ -207,8 +209,12 @@ void ProcessModel::forEachNoiseEntry(double dt, double speed_through_water_mps, 
 	for (int i = 0; i < 18; ++i)
 		add(idx::inertia + i, idx::inertia + i,
 		    noise.parameter_sigma[i] * noise.parameter_sigma[i] * (1 - phi_p * phi_p));
+	// The distance moved through the water over the step, for per-metre
+	// plugin states (the currents' spatial noise above uses its horizontal part).
+	const double distance_m = std::hypot(speed_through_water_mps, vertical_speed_mps) * dt;
 	for (std::size_t i = 0; i < extra.size(); ++i)
-		add(idx::extra + static_cast<int>(i), idx::extra + static_cast<int>(i), extra[i].variance(dt));
+		add(idx::extra + static_cast<int>(i), idx::extra + static_cast<int>(i),
+		    extra[i].variance(dt, distance_m));
 }
 
 Covariance ProcessModel::noiseCovariance(double dt, double speed_through_water_mps,

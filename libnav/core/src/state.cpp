@@ -347,6 +347,13 @@ std::string StateBlockSpec::problem() const
 		return "state block '" + name + "': negative process sigma";
 	if (process == StateProcess::GaussMarkov && !(tau_s > 0 && std::isfinite(tau_s)))
 		return "state block '" + name + "': Gauss-Markov needs tau_s > 0";
+	if (static_cast<int>(process) < 0 || process > StateProcess::RandomWalkPerMetre)
+		return "state block '" + name + "': unknown process";
+	// Components name the outputs' columns, so two alike would be one column.
+	for (std::size_t i = 0; i < d; ++i)
+		for (std::size_t j = 0; j < i; ++j)
+			if (components[i] == components[j])
+				return "state block '" + name + "': component '" + components[i] + "' twice";
 	return "";
 }
 

@@ -5,8 +5,9 @@
  *      KEY:
  *        sigma<SUFFIX>: 0.01          # initial σ per coordinate (required, > 0)
  *        mean<SUFFIX>: 0              # initial value (optional, default 0)
- *        process: constant            # constant | random_walk | gauss_markov
- *        process_sigma<SUFFIX>: 0     # random_walk: σ per √s; gauss_markov: stationary σ
+ *        process: constant            # constant | random_walk | random_walk_per_m | gauss_markov
+ *        process_sigma<SUFFIX>: 0     # random_walk: σ per √s; random_walk_per_m: σ per √m
+ *                                     # moved through the water; gauss_markov: stationary σ
  *        tau_s: 600                   # gauss_markov only
  *
  *  SUFFIX names the unit the user writes ("" for SI, "_deg" for angles);
@@ -47,10 +48,13 @@ inline StateBlockSpec stateBlockFromConfig(const config::Node& n, const std::str
 		b.process = StateProcess::RandomConstant;
 	else if (process == "random_walk")
 		b.process = StateProcess::RandomWalk;
+	else if (process == "random_walk_per_m")
+		b.process = StateProcess::RandomWalkPerMetre;
 	else if (process == "gauss_markov")
 		b.process = StateProcess::GaussMarkov;
 	else
-		n.fail("process", "expected constant, random_walk or gauss_markov, got '" + process + "'");
+		n.fail("process",
+		       "expected constant, random_walk, random_walk_per_m or gauss_markov, got '" + process + "'");
 	if (b.process != StateProcess::RandomConstant)
 		b.process_sigma = n.nonNegative("process_sigma" + suffix) * to_si;
 	if (b.process == StateProcess::GaussMarkov)

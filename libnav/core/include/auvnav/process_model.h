@@ -56,7 +56,9 @@ struct ExtraStateProcess
 	{
 		return kind == StateProcess::GaussMarkov ? std::exp(-dt_s / tau_s) : 1.0;
 	}
-	double variance(double dt_s) const;
+	/** Added variance over a step of dt_s in which the vehicle moved
+	 *  distance_m through the water (RandomWalkPerMetre reads only that). */
+	double variance(double dt_s, double distance_m) const;
 };
 
 /** What one step of dt_s does to the Gauss–Markov states: their decay
@@ -113,8 +115,10 @@ struct ProcessModel
 	StepDecay decay(double dt_s) const;
 
 	/** Process noise covariance over `dt_s` (tangent space, dim() × dim()). `speed_through_water_mps`
-	 *  scales the spatial part of the current noise, `vertical_speed_mps` (its
-	 *  magnitude) the vertical part. */
+	 *  (horizontal) scales the spatial part of the current noise, `vertical_speed_mps` (its
+	 *  magnitude) the vertical part; both make the distance through the water,
+	 *  hypot(speed_through_water, vertical_speed) · dt, that a plugin state's
+	 *  RandomWalkPerMetre process scales with. */
 	Covariance noiseCovariance(double dt_s, double speed_through_water_mps,
 	                           double vertical_speed_mps = 0) const;
 	/** P += noiseCovariance(…), touching only Q's non-zero entries (the same

@@ -25,7 +25,7 @@
  *   37  quadratic damping sub-matrix D_q,sub (2x3)
  *
  *  43… plugin-owned states (plugin SDK v2): blocks a sensor plugin declares
- *     (MeasurementModel::stateBlocks), appended in the order of the
+ *     (MeasurementModel::states), appended in the order of the
  *     navigator's `sensors:` list, at most idx::max_extra coordinates in
  *     all; Euclidean, additive, in NavState::extra.
  *
@@ -157,8 +157,8 @@ struct NavState
 	/** Flat copy of the Euclidean part (everything but the attitude), in
 	 *  tangent order (entries 0..2 are zero), dim() entries. */
 	TangentVector euclidean() const;
-	/** Sets everything but the attitude; e.size() − 43 plugin states. */
-	void setEuclidean(const Eigen::Ref<const TangentVector>& e);
+	/** Sets everything but the attitude; t.size() − 43 plugin states. */
+	void setEuclidean(const Eigen::Ref<const TangentVector>& t);
 
 	bool allFinite() const;
 
@@ -176,12 +176,18 @@ enum class StateProcess
 {
 	RandomConstant,  //!< x' = x, no process noise (a fixed unknown: a mounting angle)
 	RandomWalk,      //!< x' = x + w, Var w = process_sigma² · dt  (σ per √s)
-	GaussMarkov      //!< x' = μ + φ (x − μ), φ = e^{−dt/τ}, Var = process_sigma² (1 − φ²)
+	GaussMarkov,     //!< x' = μ + φ (x − μ), φ = e^{−dt/τ}, Var = process_sigma² (1 − φ²)
+	//! x' = x + w, Var w = process_sigma² · d (σ per √m), d the distance the
+	//! vehicle moved through the water over the step (3-D: the horizontal
+	//! speed through water the core's current noise uses, and the vertical
+	//! speed; ProcessModel::addNoiseCovariance): an error that changes with
+	//! where the vehicle is, not with time (it holds still while hovering).
+	RandomWalkPerMetre
 };
 
-/** A block of states a plugin owns (plugin SDK v2, measurement_model.h):
- *  declared by the plugin, appended by the host after the paper's 43 and
- *  named "<sensor label>.<name>_<component>" in outputs. */
+/** A block of states a plugin owns (plugin SDK v2, plugin_state.h):
+ *  declared by the plugin, checked and appended by the host after the
+ *  paper's 43 and named "<sensor label>.<name>_<component>" in outputs. */
 struct StateBlockSpec
 {
 	std::string name;                     //!< e.g. "dvl_scale"
@@ -189,8 +195,9 @@ struct StateBlockSpec
 	std::vector<double> mean;             //!< initial value and Gauss–Markov mean; empty: zeros
 	std::vector<double> sigma;            //!< initial σ per coordinate (> 0), or one for all
 	StateProcess process = StateProcess::RandomConstant;
-	double process_sigma = 0;  //!< RandomWalk: σ per √s; GaussMarkov: stationary σ
-	double tau_s = 0;          //!< GaussMarkov correlation time [s]
+	//! RandomWalk: σ per √s; RandomWalkPerMetre: σ per √m; GaussMarkov: stationary σ
+	double process_sigma = 0;
+	double tau_s = 0;  //!< GaussMarkov correlation time [s]
 
 	int dimension() const { return static_cast<int>(components.size()); }
 	/** Empty if usable, else what is wrong (for the host's refusal message). */
