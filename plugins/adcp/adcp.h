@@ -69,17 +69,17 @@ class AdcpModel final : public SafeMeasurementModel
  public:
 	AdcpModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
+	uint32_t doUses() const override
 	{
 		return kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
 	}
 	/** h is linear in the gyro bias, velocity, currents and bias once the
 	 *  attitude is held (doPredict): only the attitude's sigma points are evaluated. */
-	MeasurementStructure structure() const noexcept override
+	MeasurementStructure doStructure() const override
 	{
 		return {kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias};
 	}
-	double gateProbability() const noexcept override { return gate_probability_; }
+	double doGateProbability() const override { return gate_probability_; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }

@@ -50,11 +50,11 @@ class AhrsModel final : public SafeMeasurementModel
  public:
 	AhrsModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude; }
-	double gateProbability() const noexcept override { return gate_probability_; }
+	uint32_t doUses() const override { return kAttitude; }
+	double doGateProbability() const override { return gate_probability_; }
 	//! heading_only: a heading [rad], the residual wraps; else z = 0 and h = −r
 	//! are already a rotation vector in one chart: a plain difference.
-	MeasurementStructure structure() const noexcept override { return {0, heading_only_ ? ~0u : 0u}; }
+	MeasurementStructure doStructure() const override { return {0, heading_only_ ? ~0u : 0u}; }
 
 	bool headingOnly() const { return heading_only_; }
 	//! R_nr: the AHRS reference frame's axes in NED (frame convention and declination).

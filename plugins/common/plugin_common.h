@@ -5,6 +5,7 @@
  *  self-contained MODULE.
  */
 #include <auvnav/config.h>
+#include <auvnav/plugin_state.h>
 #include <auvnav/state.h>
 #include <auvnav/state_block_config.h>
 #include <mrpt/poses/CPose3D.h>
@@ -36,28 +37,23 @@ inline Eigen::Matrix3d rotationFromYprDeg(const Eigen::Vector3d& ypr_deg)
 }
 
 /** The optional `states: {bias: …}` of a position-fix plugin (GPS, USBL):
- *  a north/east offset of every fix (state_block_config.h), appended to
- *  `blocks`. True if it is configured; any other key under `states` is
- *  refused. */
-inline bool horizontalFixBias(const config::Node& cfg, std::vector<StateBlockSpec>& blocks)
+ *  a north/east offset of every fix (state_block_config.h); a disabled
+ *  handle if it is not configured. Any other key under `states` is refused. */
+inline PluginState horizontalFixBias(const config::Node& cfg)
 {
-	if (!cfg.has("states")) return false;
+	if (!cfg.has("states")) return {};
 	const auto st = cfg.child("states");
 	st.allowOnly({"bias"});
-	if (!st.has("bias")) return false;
-	blocks.push_back(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
-	return true;
+	if (!st.has("bias")) return {};
+	return PluginState(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
 }
 
-/** Adds the bias state at NavState::extra[at], [at + 1] to a fix's north,
- *  east; false for a state built without it. at < 0: no bias. */
+/** Adds the bias state (if enabled) to a fix's north, east. */
 template <typename Vec>
-bool addFixBias(const NavState& x, int at, Vec&& z_ne)
+void addFixBias(const NavState& x, const PluginState& bias, Vec&& z_ne)
 {
-	if (at < 0) return true;
-	if (x.extra.size() < at + 2) return false;
-	z_ne[0] += x.extra[at];
-	z_ne[1] += x.extra[at + 1];
-	return true;
+	if (!bias.enabled()) return;
+	z_ne[0] += bias(x, 0);
+	z_ne[1] += bias(x, 1);
 }
 }  // namespace auvnav::plugins

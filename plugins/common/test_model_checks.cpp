@@ -35,25 +35,26 @@ class TestModel final : public SafeMeasurementModel
 {
  public:
 	explicit TestModel(Flaw f) : flaw_(f) {}
-	uint32_t uses() const noexcept override
+
+ protected:
+	uint32_t doUses() const override
 	{
 		return flaw_ == Flaw::UndeclaredVelocity ? kPosition : (kPosition | kVelocity | kAttitude);
 	}
 	//! h is linear in the position and velocity (true unless NotAffine).
-	MeasurementStructure structure() const noexcept override
+	MeasurementStructure doStructure() const override
 	{
 		// ResidualOffset overrides residual() as its own (else the filter ignores it).
 		return {kPosition | kVelocity, 0u, flaw_ == Flaw::ResidualOffset};
 	}
-	void residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
-	              Eigen::Ref<Eigen::VectorXd> r) const noexcept override
+	void doResidual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zp,
+	                Eigen::Ref<Eigen::VectorXd> r) const override
 	{
 		r = z - zp;
 		if (flaw_ == Flaw::ResidualOffset) r.array() += 1e-3;
 		if (flaw_ == Flaw::WrapsButClaimsDifference) r[1] = std::remainder(r[1], 2 * M_PI);
 	}
 
- protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation&, const FilterContext&,
 	                        std::vector<Measurement>& out, std::string& why) override
 	{

@@ -56,14 +56,14 @@ std::string frameLabel(DvlFrame f)
 /** v_s_b: the DVL point's velocity over ground in body axes, seen through
  *  the misalignment state δ (if any; not in the Earth frames, dvl.h). */
 Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, const FilterContext& ctx,
-                                 int misalignment_at, DvlFrame frame)
+                                 const PluginState& misalignment, DvlFrame frame)
 {
 	const Eigen::Matrix3d R_bn = x.R_nb.transpose();
 	const Eigen::Vector3d omega_eb_b = ctx.omega_ib_b - x.b_w - R_bn * ctx.omega_ie_n;
 	Eigen::Vector3d v_s_b = R_bn * x.v_n + omega_eb_b.cross(r_s - ctx.imu_position_b);
 	// The true mounting is Exp(δ) R_bs: the sensor sees Exp(δ)ᵀ v in body axes.
-	if (misalignment_at >= 0 && frame != DvlFrame::EarthNed && frame != DvlFrame::EarthEnu)
-		v_s_b = so3::Exp(x.extra.segment<3>(misalignment_at)).transpose() * v_s_b;
+	if (misalignment.enabled() && frame != DvlFrame::EarthNed && frame != DvlFrame::EarthEnu)
+		v_s_b = so3::Exp(misalignment.segment<3>(x)).transpose() * v_s_b;
 	return v_s_b;
 }
 }  // namespace
@@ -87,29 +87,11 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
 		const auto st = cfg.child("states");
 		st.allowOnly({"scale_factor", "misalignment"});
 		if (st.has("scale_factor"))
-		{
-			blocks_.push_back(stateBlockFromConfig(st.child("scale_factor"), "scale_factor", {""}));
-			has_scale_ = true;
-		}
+			scale_ = PluginState(stateBlockFromConfig(st.child("scale_factor"), "scale_factor", {""}));
 		if (st.has("misalignment"))
-		{
-			blocks_.push_back(stateBlockFromConfig(st.child("misalignment"), "misalignment", {"x", "y", "z"},
-			                                       "_deg", kDeg));
-			has_misalignment_ = true;
-		}
+			misalignment_ = PluginState(stateBlockFromConfig(st.child("misalignment"), "misalignment",
+			                                                 {"x", "y", "z"}, "_deg", kDeg));
 	}
-}
-
-void DvlModel::bindStates(int first) noexcept
-{
-	int at = first;
-	if (has_scale_) scale_at_ = at++;
-	if (has_misalignment_)
-	{
-		misalignment_at_ = at;
-		at += 3;
-	}
-	extra_needed_ = at;
 }
 
 PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const FilterContext& ctx,
@@ -175,7 +157,7 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const Filter
 void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, const FilterContext& ctx,
                                  std::vector<Measurement>& out)
 {
-	if (!has_scale_) return;
+	if (!scale_.enabled()) return;
 	Eigen::Vector3d ref_b = Eigen::Vector3d::Zero();
 	double ref_valid = 0;
 	if (scale_reference_lag_s_ > 0)
@@ -185,8 +167,9 @@ void DvlModel::setScaleReference(const Eigen::Vector3d& r_s, DvlFrame frame, con
 		// Re-filtering from an earlier checkpoint (delayed measurements): the
 		// pings after it are undone, so are their entries.
 		while (!history.empty() && history.back().first > t) history.pop_back();
-		if (ctx.mean && ctx.mean->extra.size() >= extra_needed_)
-			history.emplace_back(t, sensorVelocity_b(*ctx.mean, r_s, ctx, misalignment_at_, frame));
+		if (ctx.mean && scale_.presentIn(*ctx.mean) &&
+		    (!misalignment_.enabled() || misalignment_.presentIn(*ctx.mean)))
+			history.emplace_back(t, sensorVelocity_b(*ctx.mean, r_s, ctx, misalignment_, frame));
 		// Kept for twice the lag plus re-filtering (≥ 10 s, filter_history.h); at
 		// most kMaxHistory entries if time stands still.
 		constexpr std::size_t kMaxHistory = 100000;
@@ -308,14 +291,13 @@ Eigen::Matrix3d DvlModel::earthAttitudeCovariance(const Eigen::Vector3d& v_n) co
 bool DvlModel::doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
                          Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
-	if (x.extra.size() < extra_needed_) return false;  // states declared but not in this state
 	const DvlPing& ping = m.payload<DvlPing>();
 	const Eigen::Map<const Eigen::Vector3d> r_s(ping.r_s);
-	Eigen::Vector3d v_s_b = sensorVelocity_b(x, r_s, ctx, misalignment_at_, static_cast<DvlFrame>(m.tag));
-	if (scale_at_ >= 0)
+	Eigen::Vector3d v_s_b = sensorVelocity_b(x, r_s, ctx, misalignment_, static_cast<DvlFrame>(m.tag));
+	if (scale_.enabled())
 	{
 		// (1 + s) v_s_b, with the scale's term at the lagged reference (dvl.h).
-		const double s = x.extra[scale_at_];
+		const double s = scale_.value(x);
 		if (ping.scale_reference_valid != 0)
 			v_s_b += s * Eigen::Map<const Eigen::Vector3d>(ping.scale_reference_b);
 		else

@@ -108,22 +108,19 @@ class DvlModel final : public SafeMeasurementModel
  public:
 	DvlModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
-	{
-		return kAttitude | kGyroBias | kVelocity |
-		       (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
-	}
-	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
-	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
-	MeasurementStructure structure() const noexcept override { return {kGyroBias | kVelocity}; }
-	double gateProbability() const noexcept override { return gate_probability_; }
-	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override;
-
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }
 
  protected:
+	uint32_t doUses() const override
+	{
+		return kAttitude | kGyroBias | kVelocity | scale_.uses() | misalignment_.uses();
+	}
+	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
+	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
+	MeasurementStructure doStructure() const override { return {kGyroBias | kVelocity}; }
+	double doGateProbability() const override { return gate_probability_; }
+	std::vector<PluginState*> doStates() override { return {&scale_, &misalignment_}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -158,13 +155,11 @@ class DvlModel final : public SafeMeasurementModel
 	double earth_heading_sigma_rad_ = 0;
 	double earth_tilt_sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
-	std::vector<StateBlockSpec> blocks_;
+	PluginState scale_;         // s (1), if configured
+	PluginState misalignment_;  // δ (3) [rad, body axes], if configured
 	double scale_reference_lag_s_ = 10;
 	//! (time, the filter's mean of v_s_b with misalignment) per ping with a
 	//! scale state, oldest first: the scale's reference velocity (see above).
 	std::deque<std::pair<double, Eigen::Vector3d>> scale_reference_history_;
-	bool has_scale_ = false, has_misalignment_ = false;
-	int scale_at_ = -1, misalignment_at_ = -1;  // in NavState::extra, after bindStates
-	int extra_needed_ = 0;                      // extra.size() h needs
 };
 }  // namespace auvnav::plugins

@@ -4,6 +4,7 @@
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/so3.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/plugin_state_bench.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 
@@ -788,23 +789,25 @@ TEST(DvlEarth, RejectsBadAttitudeSigmas)
 TEST(DvlStates, DeclaresScaleAndMisalignmentBlocksFromTheConfig)
 {
 	DvlModel none(pt::defaultConfig(), "DVL");
-	EXPECT_TRUE(none.stateBlocks().empty());
+	EXPECT_EQ(at::PluginStateBench(none).extraSize(), 0);
 	EXPECT_EQ(none.uses() & kPluginStates, 0u);
 	DvlModel m(pt::configText(
 	               "states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2, process: random_walk, "
 	               "process_sigma_deg: 0.001}}"),
 	           "DVL");
-	const auto blocks = m.stateBlocks();
-	ASSERT_EQ(blocks.size(), 2u);
-	EXPECT_EQ(blocks[0].name, "scale_factor");
-	EXPECT_EQ(blocks[0].dimension(), 1);
-	EXPECT_DOUBLE_EQ(blocks[0].sigma[0], 0.01);
-	EXPECT_EQ(blocks[0].process, StateProcess::RandomConstant);
-	EXPECT_EQ(blocks[1].name, "misalignment");
-	EXPECT_EQ(blocks[1].dimension(), 3);
-	EXPECT_NEAR(blocks[1].sigma[0], 2 * kDeg, 1e-15);
-	EXPECT_EQ(blocks[1].process, StateProcess::RandomWalk);
-	EXPECT_NEAR(blocks[1].process_sigma, 0.001 * kDeg, 1e-18);
+	const at::PluginStateBench bench(m, 0, "DVL");
+	ASSERT_EQ(bench.layout.plugin_blocks.size(), 2u);
+	EXPECT_EQ(bench.layout.plugin_blocks[0].name, "scale_factor");  // in declaration order
+	EXPECT_EQ(bench.layout.plugin_blocks[1].name, "misalignment");
+	const StateBlockSpec& scale = bench["scale_factor"].spec();
+	EXPECT_EQ(scale.dimension(), 1);
+	EXPECT_DOUBLE_EQ(scale.sigma[0], 0.01);
+	EXPECT_EQ(scale.process, StateProcess::RandomConstant);
+	const StateBlockSpec& misalignment = bench["misalignment"].spec();
+	EXPECT_EQ(misalignment.dimension(), 3);
+	EXPECT_NEAR(misalignment.sigma[0], 2 * kDeg, 1e-15);
+	EXPECT_EQ(misalignment.process, StateProcess::RandomWalk);
+	EXPECT_NEAR(misalignment.process_sigma, 0.001 * kDeg, 1e-18);
 	EXPECT_NE(m.uses() & kPluginStates, 0u);
 	// Bad blocks name the key.
 	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0}}"), "DVL"), config::ConfigError);
@@ -824,12 +827,12 @@ TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
 	tc.ctx().imu_position_b = kImuPos;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}"), "DVL");
-	m.bindStates(2);
-	NavState x = at::RandomNavState(7, 6);
+	const at::PluginStateBench bench(m, 2);
+	NavState x = bench.randomState(7);
 	const double s = 0.005;
 	const Eigen::Vector3d delta = Eigen::Vector3d(0.3, -0.2, 1.0) * kDeg;
-	x.extra[2] = s;
-	x.extra.segment<3>(3) = delta;
+	bench["scale_factor"].value(x) = s;
+	bench["misalignment"].segment(x) = delta;
 	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
 	const Eigen::Vector3d expected = (1 + s) * trueSensorVelocity(x, tc.ctx(), R_bs_true, kDvlPos);
 	const Measurement meas = prepareOne(m, *dvlObs(expected), tc.ctx());
@@ -860,20 +863,21 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
 	                          "scale_reference_lag_s: 10"),
 	           "DVL");
-	m.bindStates(0);
+	const at::PluginStateBench bench(m);
+	const PluginState& scale = bench["scale_factor"];
 	const Eigen::Vector3d delta = Eigen::Vector3d(0.3, -0.2, 1.0) * kDeg;
 	auto stateWithVelocity = [&](unsigned seed)
 	{
-		NavState x = at::RandomNavState(seed, 4);
+		NavState x = bench.randomState(seed);
 		x.extra.setZero();
-		x.extra.segment<3>(1) = delta;
+		bench["misalignment"].segment(x) = delta;
 		return x;
 	};
 	const NavState old_mean = stateWithVelocity(11), mid_mean = stateWithVelocity(12),
 	               now_mean = stateWithVelocity(13);
 	NavState x = stateWithVelocity(14);
 	const double s = 0.005;
-	x.extra[0] = s;
+	scale.value(x) = s;
 	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
 	const Eigen::Vector3d v_x = trueSensorVelocity(x, ctx, R_bs_true, kDvlPos);
 	auto pingAt = [&](double t, const NavState& mean)
@@ -897,7 +901,7 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	EXPECT_GT((h - (1 + s) * v_x).norm(), 1e-4);
 	// A prediction with s = 0 does not depend on the reference.
 	NavState x0 = x;
-	x0.extra[0] = 0;
+	scale.value(x0) = 0;
 	EXPECT_LT((at::Predict(m, later, ctx, x0) - v_x).norm(), 1e-12);
 	// Re-filtering from an earlier checkpoint (a delayed measurement) undoes the pings after it:
 	// 1010.4 s after 1012 s still finds the 1000 s ping as its reference.
@@ -915,7 +919,7 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	DvlModel plain(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
 	                              "scale_reference_lag_s: 0"),
 	               "DVL");
-	plain.bindStates(0);
+	const at::PluginStateBench plain_bench(plain);
 	for (double t : {1000.0, 1010.2, 1020.4})
 	{
 		ctx.t_s = t;
@@ -933,18 +937,16 @@ TEST(DvlStates, AFilterLearnsTheScaleFactorFromVelocityKnownOtherwise)
 	at::TestContext tc;
 	tc.ctx().imu_position_b = kImuPos;
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.02}}"), "DVL");
-	m.bindStates(0);
-	NavState truth = at::RandomNavState(3, 1);
-	truth.extra[0] = 0.005;
+	const at::PluginStateBench bench(m);
+	const PluginState& scale = bench["scale_factor"];
+	NavState truth = bench.randomState(3);
+	scale.value(truth) = 0.005;
 	truth.b_w.setZero();
-	Covariance P = at::TypicalCovariance(1);
+	Covariance P = bench.P0;  // the scale's σ 0.02 from its spec
 	P.block<3, 3>(idx::vel, idx::vel) = Eigen::Matrix3d::Identity() * 1e-6;
-	P(idx::extra, idx::extra) = 0.02 * 0.02;
 	NavState x0 = truth;
-	x0.extra[0] = 0;
-	ProcessModel pm;
-	pm.appendBlock(m.stateBlocks()[0]);
-	ManifoldUkf ukf(pm, UtParams{});
+	scale.value(x0) = 0;
+	ManifoldUkf ukf(bench.process, UtParams{});
 	ukf.initialize(x0, P);
 	const Eigen::Vector3d v_s = (1 + 0.005) * trueSensorVelocity(truth, tc.ctx(), nominalRbs(), kDvlPos);
 	for (int i = 0; i < 20; ++i)
@@ -952,8 +954,8 @@ TEST(DvlStates, AFilterLearnsTheScaleFactorFromVelocityKnownOtherwise)
 		const auto r = at::ApplyObservation(ukf, m, *dvlObs(v_s, janusCovariance(0.002)), tc.ctx());
 		ASSERT_EQ(r.status, PrepareStatus::Ok) << r.why;
 	}
-	const double sigma = std::sqrt(ukf.covariance()(idx::extra, idx::extra));
-	EXPECT_NEAR(ukf.state().extra[0], 0.005, 3 * sigma);
+	const double sigma = std::sqrt(ukf.covariance()(scale.tangentIndex(), scale.tangentIndex()));
+	EXPECT_NEAR(scale.value(ukf.state()), 0.005, 3 * sigma);
 	EXPECT_LT(sigma, 0.2 * 0.02);
-	EXPECT_GT(ukf.state().extra[0], 0.003);
+	EXPECT_GT(scale.value(ukf.state()), 0.003);
 }

@@ -22,7 +22,8 @@ GpsModel::GpsModel(const config::Node& cfg, const std::string& label)
       correlation_time_s_(cfg.positive("correlation_time_s", 60.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	if (horizontalFixBias(cfg, blocks_) && correlated_sigma_m_ > 0)
+	bias_ = horizontalFixBias(cfg);
+	if (bias_.enabled() && correlated_sigma_m_ > 0)
 		cfg.fail("correlated_sigma_m",
 		         "the correlated error is modelled by states.bias already (give one of them, not both)");
 }
@@ -77,23 +78,15 @@ PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const Filt
 	return PrepareStatus::Ok;
 }
 
-bool GpsModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-                          InitialFix& out) noexcept
+bool GpsModel::doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out)
 {
-	try
-	{
-		Eigen::Vector3d p_n;
-		double hdop = 0;
-		std::string why;
-		if (decodeFix(obs, ctx, p_n, hdop, why) != PrepareStatus::Ok) return false;
-		out.p_n = p_n;
-		out.r_b = position_b_;
-		return true;
-	}
-	catch (...)
-	{
-		return false;
-	}
+	Eigen::Vector3d p_n;
+	double hdop = 0;
+	std::string why;
+	if (decodeFix(obs, ctx, p_n, hdop, why) != PrepareStatus::Ok) return false;
+	out.p_n = p_n;
+	out.r_b = position_b_;
+	return true;
 }
 
 PrepareStatus GpsModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -140,10 +133,10 @@ bool GpsModel::likelyOutlier(const Measurement& m, const FilterContext& ctx) con
 	// is mm): S ≈ P_pos + R, with the bias H = [I I]; the 2-dof χ² quantile
 	// is −2 ln(1 − p).
 	Eigen::Matrix2d S = ctx.covariance->block<2, 2>(idx::pos, idx::pos) + m.R;
-	const int b = idx::extra + bias_at_;
-	if (bias_at_ >= 0 && x.extra.size() >= bias_at_ + 2 && ctx.covariance->rows() >= b + 2)
+	const int b = bias_.tangentIndex();
+	if (bias_.presentIn(x) && ctx.covariance->rows() >= b + 2)
 	{
-		nu -= x.extra.segment<2>(bias_at_);
+		nu -= bias_.segment<2>(x);
 		const Eigen::Matrix2d P_pb = ctx.covariance->block<2, 2>(idx::pos, b);
 		S += ctx.covariance->block<2, 2>(b, b) + P_pb + P_pb.transpose();
 	}
@@ -167,7 +160,8 @@ bool GpsModel::doPredict(const NavState& x, const Measurement& /*m*/, const Filt
 {
 	if (z_pred.size() != 2) return false;
 	z_pred = (x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b)).head<2>();
-	return addFixBias(x, bias_at_, z_pred);
+	addFixBias(x, bias_, z_pred);
+	return true;
 }
 
 }  // namespace auvnav::plugins

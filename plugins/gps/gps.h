@@ -46,29 +46,17 @@ class GpsModel final : public SafeMeasurementModel
  public:
 	GpsModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
-	{
-		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
-	}
-	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
-	MeasurementStructure structure() const noexcept override
-	{
-		return {kPosition | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates))};
-	}
-	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override
-	{
-		bias_at_ = blocks_.empty() ? -1 : first_extra_index;
-	}
-	bool reportsPositionFix() const noexcept override { return true; }
-	double gateProbability() const noexcept override { return gate_probability_; }
-
 	const Eigen::Vector3d& position_b() const { return position_b_; }
-	/** The antenna's position from a valid GGA fix (no rate limit, no state). */
-	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                InitialFix& out) noexcept override;
 
  protected:
+	uint32_t doUses() const override { return kAttitude | kPosition | bias_.uses(); }
+	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
+	MeasurementStructure doStructure() const override { return {kPosition | bias_.uses()}; }
+	std::vector<PluginState*> doStates() override { return {&bias_}; }
+	bool doReportsPositionFix() const override { return true; }
+	double doGateProbability() const override { return gate_probability_; }
+	/** The antenna's position from a valid GGA fix (no rate limit, no state). */
+	bool doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) override;
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -94,7 +82,6 @@ class GpsModel final : public SafeMeasurementModel
 	double correlated_sigma_m_ = 0;   // Gauss-Markov part of the error, per axis [m]
 	double correlation_time_s_ = 60;  // its time constant [s]
 	double last_used_s_ = -1e300;
-	int bias_at_ = -1;  // NavState::extra index of b_n (b_e follows); -1: unbound
-	std::vector<StateBlockSpec> blocks_;
+	PluginState bias_;  // (b_n, b_e) if configured
 };
 }  // namespace auvnav::plugins

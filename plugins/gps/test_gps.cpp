@@ -1,6 +1,7 @@
 // The "gps" plugin: NMEA GGA horizontal position with lever arm and outlier gate.
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/plugin_state_bench.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationGPS.h>
@@ -91,12 +92,11 @@ TEST(Gps, WellFormedOnRandomStates)
 	for (const char* cfg : {"{}", "scale_by_hdop: true", "states: {bias: {sigma: 2}}"})
 	{
 		GpsModel model(pt::configText(cfg), "GPS");
-		// With the bias: one block of 2 after another plugin's 1 (bound at 1).
-		const int extra = model.stateBlocks().empty() ? 0 : 3;
-		if (extra) model.bindStates(1);
+		// After another plugin's one state (the bias, if any, is bound at 1).
+		const at::PluginStateBench bench(model, 1);
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
-			const NavState x = at::RandomNavState(seed, extra);
+			const NavState x = bench.randomState(seed);
 			const Eigen::Vector3d p = antennaPosition(at::RandomNavState(seed + 3), kImuPos);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
@@ -339,15 +339,15 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	    "GPS");
 	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPosition | kPluginStates));
 	EXPECT_EQ(model.structure().affine_in, uint32_t(kPosition | kPluginStates));
-	ASSERT_EQ(model.stateBlocks().size(), 1u);
-	const StateBlockSpec b = model.stateBlocks()[0];  // a copy: stateBlocks() returns by value
-	EXPECT_EQ(b.dimension(), 2);
-	EXPECT_EQ(b.process, StateProcess::GaussMarkov);
-	EXPECT_DOUBLE_EQ(b.tau_s, 60);
-	model.bindStates(2);
-	NavState x = at::RandomNavState(7, 4);
-	x.extra[2] = 0.8;
-	x.extra[3] = -1.3;
+	const at::PluginStateBench bench(model, 2);
+	ASSERT_EQ(bench.layout.plugin_blocks.size(), 2u);  // the other plugin's, then the bias
+	const PluginState& bias = bench["bias"];
+	EXPECT_EQ(bias.dimension(), 2);
+	EXPECT_EQ(bias.spec().process, StateProcess::GaussMarkov);
+	EXPECT_DOUBLE_EQ(bias.spec().tau_s, 60);
+	NavState x = bench.randomState(7);
+	bias(x, 0) = 0.8;
+	bias(x, 1) = -1.3;
 	const Eigen::Vector3d a = antennaPosition(x, kImuPos);
 	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), a), tc.ctx());
 	EXPECT_NEAR(m.R(0, 0), 9.0, 1e-12);  // sigma_m alone: no inflation for the correlated part
@@ -367,13 +367,13 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	{
 		GpsModel limited(pt::configText("{sigma_m: 1.0, min_interval_s: 30, states: {bias: {sigma: 1}}}"),
 		                 "GPS");
-		limited.bindStates(1);
-		NavState mean = at::RandomNavState(9, 3);
+		const at::PluginStateBench limited_bench(limited, 1);
+		NavState mean = limited_bench.randomState(9);
 		mean.extra << 0, bias_n, 0;
 		Covariance P = Covariance::Identity(46, 46) * 1e-4;
 		for (int i = 0; i < 2; ++i)
 		{
-			const int ip = idx::pos + i, ib = idx::extra + 1 + i;
+			const int ip = idx::pos + i, ib = limited_bench["bias"].tangentIndex(i);
 			P(ip, ip) = var_p;
 			P(ib, ib) = var_b;
 			P(ip, ib) = P(ib, ip) = cov_pb;

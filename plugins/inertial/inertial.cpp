@@ -28,7 +28,7 @@ InertialModel::InertialModel(const config::Node& cfg, const std::string& label) 
 	coriolis_ = cfg.boolean("coriolis", false);
 }
 
-uint32_t InertialModel::uses() const noexcept
+uint32_t InertialModel::doUses() const
 {
 	return kAttitude | kAcceleration | kGravity | kAccelBias | (coriolis_ ? kVelocity : 0u);
 }

@@ -29,13 +29,13 @@ class InertialModel final : public SafeMeasurementModel
  public:
 	InertialModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override;
+	uint32_t doUses() const override;
 	/** h = R_nbᵀ (a_n − g e_z + 2 Ω × v_n) + b_a: affine in all but the attitude. */
-	MeasurementStructure structure() const noexcept override
+	MeasurementStructure doStructure() const override
 	{
 		return {kAcceleration | kGravity | kAccelBias | kVelocity};
 	}
-	double gateProbability() const noexcept override { return gate_probability_; }
+	double doGateProbability() const override { return gate_probability_; }
 
 	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */
 	double sigma_mps2() const { return sigma_mps2_; }

@@ -72,7 +72,7 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 
 	S_soft_ = matrix3(cfg, "soft_iron", Eigen::Matrix3d::Identity());
 	const Eigen::JacobiSVD<Eigen::Matrix3d> svd(S_soft_);
-	const Eigen::Vector3d sv = svd.singularValues();
+	const Eigen::Vector3d& sv = svd.singularValues();
 	// A reflection would be an axis swapped in the mounting, not soft iron; a
 	// near-singular or wildly scaling matrix is a units or typing mistake.
 	if (!(S_soft_.determinant() > 0))
@@ -98,7 +98,7 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 		if (st.has("heading_bias"))
 		{
 			if (mode_ != Mode::Heading) st.fail("heading_bias", "a heading bias state needs mode: heading");
-			blocks_.push_back(
+			heading_bias_ = PluginState(
 			    stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
 		}
 	}
@@ -227,11 +227,7 @@ bool MagnetometerModel::doPredict(const NavState& x, const Measurement& m, const
 		if (z_pred.size() != 1) return false;
 		const auto& u = m.payload<ReferenceDirection>();
 		z_pred[0] = azimuthOf(x.R_nb, Eigen::Vector3d(u.x, u.y, u.z));
-		if (bias_at_ >= 0)
-		{
-			if (x.extra.size() <= bias_at_) return false;  // declared but not in this state
-			z_pred[0] += x.extra[bias_at_];
-		}
+		z_pred[0] += heading_bias_.valueOr(x, 0.0);
 	}
 	return z_pred.allFinite();
 }

@@ -88,19 +88,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 
 	MagnetometerModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
-	{
-		return kAttitude | (blocks_.empty() ? 0u : static_cast<uint32_t>(kPluginStates));
-	}
-	double gateProbability() const noexcept override { return gate_probability_; }
-	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
-	//! Heading mode: z and h are headings [rad], the residual wraps.
-	MeasurementStructure structure() const noexcept override
-	{
-		return {0, mode_ == Mode::Heading ? ~0u : 0u};
-	}
-
 	Mode mode() const { return mode_; }
 	const Eigen::Vector3d& field_n_ut() const { return m_n_ut_; }
 	const Eigen::Vector3d& hardIron_ut() const { return b_hard_ut_; }
@@ -113,6 +100,11 @@ class MagnetometerModel final : public SafeMeasurementModel
 	std::size_t rateLimitedCount() const { return rate_limited_; }
 
  protected:
+	uint32_t doUses() const override { return kAttitude | heading_bias_.uses(); }
+	double doGateProbability() const override { return gate_probability_; }
+	std::vector<PluginState*> doStates() override { return {&heading_bias_}; }
+	//! Heading mode: z and h are headings [rad], the residual wraps.
+	MeasurementStructure doStructure() const override { return {0, mode_ == Mode::Heading ? ~0u : 0u}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -137,7 +129,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 	double last_used_s_ = -1e300;
 	std::size_t disturbed_ = 0;
 	std::size_t rate_limited_ = 0;
-	std::vector<StateBlockSpec> blocks_;
-	int bias_at_ = -1;  // heading bias in NavState::extra, after bindStates
+	PluginState heading_bias_;  // [rad], heading mode, if configured
 };
 }  // namespace auvnav::plugins

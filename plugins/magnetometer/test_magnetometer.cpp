@@ -2,6 +2,7 @@
 #include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/so3.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/plugin_state_bench.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -667,23 +668,22 @@ TEST(MagnetometerStates, HeadingBiasAddsToTheHeadingAndIsDeclared)
 {
 	at::TestContext tc;
 	MagnetometerModel plain(pt::defaultConfig(), "MAG");
-	EXPECT_TRUE(plain.stateBlocks().empty());
+	EXPECT_EQ(at::PluginStateBench(plain).extraSize(), 0);
 	EXPECT_EQ(plain.uses(), uint32_t(kAttitude));
 	MagnetometerModel model(pt::configText("states: {heading_bias: {sigma_deg: 4, process: gauss_markov, "
 	                                       "process_sigma_deg: 4, tau_s: 120}}"),
 	                        "MAG");
-	const auto blocks = model.stateBlocks();
-	ASSERT_EQ(blocks.size(), 1u);
-	EXPECT_EQ(blocks[0].name, "heading_bias");
-	EXPECT_EQ(blocks[0].process, StateProcess::GaussMarkov);
-	EXPECT_NEAR(blocks[0].process_sigma, 4 * kDeg, 1e-15);
-	EXPECT_DOUBLE_EQ(blocks[0].tau_s, 120);
+	const at::PluginStateBench bench(model, 1, "MAG");
+	const PluginState& bias = bench["heading_bias"];
+	EXPECT_EQ(bench.layout.tangent_names.back(), "MAG.heading_bias");
+	EXPECT_EQ(bias.spec().process, StateProcess::GaussMarkov);
+	EXPECT_NEAR(bias.spec().process_sigma, 4 * kDeg, 1e-15);
+	EXPECT_DOUBLE_EQ(bias.spec().tau_s, 120);
 	EXPECT_EQ(model.uses(), uint32_t(kAttitude | kPluginStates));
-	model.bindStates(1);
 	for (uint32_t seed = 1; seed <= 5; ++seed)
 	{
-		NavState x = at::RandomNavState(seed, 2);
-		x.extra[1] = 3 * kDeg;
+		NavState x = bench.randomState(seed);
+		bias.value(x) = 3 * kDeg;
 		tc.ctx().mean = &x;
 		const Measurement m = prepareOne(model, *magObs(reading(x.R_nb)), tc.ctx());
 		const Measurement mp = prepareOne(plain, *magObs(reading(x.R_nb)), tc.ctx());

@@ -71,12 +71,12 @@ class ModelAidingModel final : public SafeMeasurementModel
  public:
 	ModelAidingModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
+	uint32_t doUses() const override
 	{
 		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia |
 		       kDampingLinear | kDampingQuadratic;
 	}
-	double gateProbability() const noexcept override { return gate_probability_; }
+	double doGateProbability() const override { return gate_probability_; }
 
 	/** Wrench of thruster efforts u (in the configured unit). */
 	Vector6d thrustWrench(const std::vector<double>& effort) const;

@@ -35,8 +35,8 @@ class PressureModel final : public SafeMeasurementModel
 
 	PressureModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kGravity | kPosition; }
-	double gateProbability() const noexcept override { return gate_probability_; }
+	uint32_t doUses() const override { return kAttitude | kGravity | kPosition; }
+	double doGateProbability() const override { return gate_probability_; }
 
 	double density_kg_m3() const { return density_kg_m3_; }
 	double atmospheric_pressure_pa() const { return atmospheric_pa_; }

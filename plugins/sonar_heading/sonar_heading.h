@@ -43,10 +43,10 @@ class SonarHeadingModel final : public SafeMeasurementModel
  public:
 	SonarHeadingModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override { return kAttitude | kPosition; }
-	double gateProbability() const noexcept override { return gate_probability_; }
+	uint32_t doUses() const override { return kAttitude | kPosition; }
+	double doGateProbability() const override { return gate_probability_; }
 	//! Bearings [rad]: every residual component wraps.
-	MeasurementStructure structure() const noexcept override { return {0, ~0u}; }
+	MeasurementStructure doStructure() const override { return {0, ~0u}; }
 	bool validateOnly() const { return validate_only_; }
 	const sonar::SonarConfig& sonarConfig() const { return sonar_; }
 

@@ -2,6 +2,7 @@
 // measurement time and an optional bias state.
 #include <auvnav/obs/CObservationUSBL.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/plugin_state_bench.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 #include <mrpt/io/CMemoryStream.h>
@@ -62,10 +63,10 @@ Measurement prepareOne(UsblModel& model, const mrpt::obs::CObservation& o, const
 
 TEST(Usbl, DefaultConfigAndModule)
 {
-	const UsblModel m(pt::defaultConfig(), "USBL");
+	UsblModel m(pt::defaultConfig(), "USBL");
 	EXPECT_TRUE(m.position_b().isZero());
 	EXPECT_EQ(m.uses(), uint32_t(kAttitude | kPosition));
-	EXPECT_TRUE(m.stateBlocks().empty());
+	EXPECT_EQ(at::PluginStateBench(m).extraSize(), 0);
 	EXPECT_TRUE(
 	    pt::ModuleLoadsAndCreates("usbl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", "states: {bias: {sigma: 1}}",
@@ -90,17 +91,15 @@ TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
 	     {kMounted, "{position_m: [0, 0, 0.4], use_depth: true}", "states: {bias: {sigma: 2}}"})
 	{
 		UsblModel model(pt::configText(cfg), "USBL");
-		const int extra = static_cast<int>(model.stateBlocks().size()) * 2;
-		if (extra) model.bindStates(0);
+		const at::PluginStateBench bench(model);
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
-			const NavState x = at::RandomNavState(seed, extra);
+			const NavState x = bench.randomState(seed);
 			at::WellFormedOptions opt;
 			opt.seed = seed;
 			opt.accept_skip = false;
 			EXPECT_TRUE(at::IsWellFormed(
-			    model, *fixAt(tc.frame(), transponderOf(at::RandomNavState(seed + 3, extra))), tc.ctx(), x,
-			    opt))
+			    model, *fixAt(tc.frame(), transponderOf(bench.randomState(seed + 3))), tc.ctx(), x, opt))
 			    << cfg << ", seed " << seed;
 		}
 	}
@@ -157,10 +156,10 @@ TEST(Usbl, LeverArmAndBiasEnterH)
 	at::TestContext tc;
 	tc.ctx().imu_position_b = kImuPos;
 	UsblModel model(pt::configText(std::string(kMounted) + "\nstates: {bias: {sigma: 1}}"), "USBL");
-	model.bindStates(1);
-	NavState x = at::RandomNavState(5, 3);
-	x.extra[1] = 0.7;
-	x.extra[2] = -1.2;
+	const at::PluginStateBench bench(model, 1);
+	NavState x = bench.randomState(5);
+	bench["bias"](x, 0) = 0.7;
+	bench["bias"](x, 1) = -1.2;
 	const Measurement m = prepareOne(model, *fixAt(tc.frame(), Eigen::Vector3d(0, 0, 0)), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	const Eigen::Vector3d t = transponderOf(x);

@@ -20,10 +20,10 @@ UsblModel::UsblModel(const config::Node& cfg, const std::string& label)
       gate_probability_(gateProbabilityFrom(cfg))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
-	horizontalFixBias(cfg, blocks_);
+	bias_ = horizontalFixBias(cfg);
 }
 
-double UsblModel::measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept
+double UsblModel::doMeasurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const
 {
 	const auto* u = dynamic_cast<const obs::CObservationUSBL*>(&obs);
 	if (!u || u->measurement_time == INVALID_TIMESTAMP) return stamp_s;
@@ -88,23 +88,15 @@ PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const Filte
 	return PrepareStatus::Ok;
 }
 
-bool UsblModel::initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-                           InitialFix& out) noexcept
+bool UsblModel::doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out)
 {
-	try
-	{
-		Eigen::Vector3d p_n;
-		Eigen::Matrix3d C_n;
-		std::string why;
-		if (decodeFix(obs, ctx, p_n, C_n, why) != PrepareStatus::Ok) return false;
-		out.p_n = p_n;
-		out.r_b = position_b_;
-		return true;
-	}
-	catch (...)
-	{
-		return false;
-	}
+	Eigen::Vector3d p_n;
+	Eigen::Matrix3d C_n;
+	std::string why;
+	if (decodeFix(obs, ctx, p_n, C_n, why) != PrepareStatus::Ok) return false;
+	out.p_n = p_n;
+	out.r_b = position_b_;
+	return true;
 }
 
 PrepareStatus UsblModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -130,7 +122,7 @@ bool UsblModel::doPredict(const NavState& x, const Measurement& /*m*/, const Fil
 	const int dim = use_depth_ ? 3 : 2;
 	if (z_pred.size() != dim) return false;
 	Eigen::Vector3d p = x.p_n + x.R_nb * (position_b_ - ctx.imu_position_b);
-	if (!addFixBias(x, bias_at_, p)) return false;
+	addFixBias(x, bias_, p);
 	z_pred = p.head(dim);
 	return true;
 }

@@ -36,24 +36,15 @@ class UsblModel final : public SafeMeasurementModel
  public:
 	UsblModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
-	{
-		return kAttitude | kPosition | (blocks_.empty() ? 0u : kPluginStates);
-	}
-	double gateProbability() const noexcept override { return gate_probability_; }
-	bool reportsPositionFix() const noexcept override { return true; }
-	bool initialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                InitialFix& out) noexcept override;
-	std::vector<StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override
-	{
-		bias_at_ = blocks_.empty() ? -1 : first_extra_index;
-	}
-	double measurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const noexcept override;
-
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 
  protected:
+	uint32_t doUses() const override { return kAttitude | kPosition | bias_.uses(); }
+	double doGateProbability() const override { return gate_probability_; }
+	bool doReportsPositionFix() const override { return true; }
+	bool doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) override;
+	std::vector<PluginState*> doStates() override { return {&bias_}; }
+	double doMeasurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const override;
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -69,7 +60,6 @@ class UsblModel final : public SafeMeasurementModel
 	double sigma_m_ = 2.0, sigma_range_fraction_ = 0.01, depth_sigma_m_ = 1.0;
 	bool use_reported_covariance_ = true, use_depth_ = false;
 	double gate_probability_ = 0.999;
-	int bias_at_ = -1;
-	std::vector<StateBlockSpec> blocks_;
+	PluginState bias_;  // (b_n, b_e) if configured
 };
 }  // namespace auvnav::plugins

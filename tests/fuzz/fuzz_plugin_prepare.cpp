@@ -12,6 +12,7 @@
 #include <auvnav/earth.h>
 #include <auvnav/io/rawlog.h>
 #include <auvnav/measurement_model.h>
+#include <auvnav/state_layout.h>
 #include <mrpt/obs/CObservation.h>
 
 #include <cmath>
@@ -75,17 +76,15 @@ struct Plugins
 		models.push_back(make<plugins::PressureModel>("pressure"));
 		models.push_back(make<plugins::SonarHeadingModel>("sonar_heading"));
 		models.push_back(make<plugins::UsblModel>("usbl"));
-		// Plugin-owned states after the core 43, bound as the navigator does.
-		int extra = 0;
+		// Plugin-owned states after the core 43, checked and bound by the navigator's own code.
+		static const std::string label = "FUZZ", plugin = "fuzzed";
+		std::vector<LabelledModel> labelled;
 		for (auto& m : models)
-		{
-			if (!m) continue;
-			const auto blocks = m->stateBlocks();
-			if (blocks.empty()) continue;
-			m->bindStates(extra);
-			for (const auto& b : blocks) extra += b.dimension();
-		}
-		mean.extra = ExtraVector::Zero(extra);
+			if (m) labelled.push_back({label, plugin, *m});
+		ProcessModel pm;
+		Covariance P0 = Covariance::Identity(idx::core_dim, idx::core_dim);
+		appendPluginStates(labelled, pm, P0);
+		mean.extra = ExtraVector::Zero(pm.dim() - idx::core_dim);
 		mean.p_n << 10, -5, 20;
 		mean.v_n << 1.2, 0.1, 0.05;
 		P = Covariance::Identity(mean.dim(), mean.dim()) * 0.01;

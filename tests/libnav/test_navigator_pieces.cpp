@@ -189,7 +189,7 @@ TEST(FilterHistory, TrimKeepsWhatTheLongestDelayNeeds)
 class ToyDepthModel : public SafeMeasurementModel
 {
  public:
-	uint32_t uses() const noexcept override { return kPosition; }
+	uint32_t doUses() const override { return kPosition; }
 
  protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext&,

@@ -30,9 +30,12 @@
 #include <memory>
 
 // What each version changed for plugin authors: docs/plugin_sdk_changelog.md.
-// ABI 9 / API 2: MeasurementFunction::structure() replaces affineIn() and
-// residualIsDifference(); residual() is called only for a custom residual.
-#define AUVNAV_PLUGIN_ABI_VERSION 9u
+// API 2: MeasurementFunction::structure() replaces affineIn() and
+// residualIsDifference() (ABI 9); plugin-owned states are PluginState
+// handles returned by states(), every virtual is guarded by
+// SafeMeasurementModel's do* methods (ABI 10; API 2 is not released yet,
+// so both changes are one API version).
+#define AUVNAV_PLUGIN_ABI_VERSION 10u
 #define AUVNAV_PLUGIN_API_VERSION 2u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 
@@ -153,43 +156,47 @@ extern "C"
  *  Exceptions from the constructor become an error message. Once the
  *  constructor is done, every key of `cfg` must have been read (or marked
  *  free-form): a misspelled key is refused with the nearest valid one
- *  (config.h, checkAllKeysUsed). The host's `config_dir` is always allowed. */
-#define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                        \
-	namespace                                                                                             \
-	{                                                                                                     \
-	auvnav::MeasurementModel* auvnavCreate_(const char* yaml, const char* label, char* error,             \
-	                                        size_t error_size)                                            \
-	{                                                                                                     \
-		try                                                                                               \
-		{                                                                                                 \
-			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                           \
-			                                                std::string(plugin_name) + " plugin config"); \
-			cfg.markFreeForm("config_dir");                                                               \
-			std::unique_ptr<ModelClass> model(new ModelClass(cfg, label ? label : ""));                   \
-			cfg.checkAllKeysUsed();                                                                       \
-			return model.release();                                                                       \
-		}                                                                                                 \
-		catch (const std::exception& e)                                                                   \
-		{                                                                                                 \
-			std::snprintf(error, error_size, "%s", e.what());                                             \
-		}                                                                                                 \
-		catch (...)                                                                                       \
-		{                                                                                                 \
-			std::snprintf(error, error_size, "unknown exception");                                        \
-		}                                                                                                 \
-		return nullptr;                                                                                   \
-	}                                                                                                     \
-	void auvnavDestroy_(auvnav::MeasurementModel* m)                                                      \
-	{                                                                                                     \
-		delete m;                                                                                         \
-	}                                                                                                     \
-	const AuvnavPluginEntry kAuvnavEntry_ = {                                                             \
-	    {AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, plugin_name, plugin_version,               \
-	     AUVNAV_BUILD_FINGERPRINT, plugin_description},                                                   \
-	    &auvnavCreate_,                                                                                   \
-	    &auvnavDestroy_};                                                                                 \
-	}                                                                                                     \
-	extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1()   \
-	{                                                                                                     \
-		return &kAuvnavEntry_;                                                                            \
+ *  (config.h, checkAllKeysUsed). The host's `config_dir` is always allowed.
+ *  A model that still declares the deprecated stateBlocks()/bindStates()
+ *  builds with a deprecation warning here. */
+#define AUVNAV_PLUGIN(ModelClass, plugin_name, plugin_version, plugin_description)                          \
+	namespace                                                                                               \
+	{                                                                                                       \
+	auvnav::MeasurementModel* auvnavCreate_(const char* yaml, const char* label, char* error,               \
+	                                        size_t error_size)                                              \
+	{                                                                                                       \
+		try                                                                                                 \
+		{                                                                                                   \
+			const auto cfg = auvnav::config::Node::fromText(yaml ? yaml : "{}",                             \
+			                                                std::string(plugin_name) + " plugin config");   \
+			cfg.markFreeForm("config_dir");                                                                 \
+			std::unique_ptr<ModelClass> model(new ModelClass(cfg, label ? label : ""));                     \
+			cfg.checkAllKeysUsed();                                                                         \
+			return model.release();                                                                         \
+		}                                                                                                   \
+		catch (const std::exception& e)                                                                     \
+		{                                                                                                   \
+			std::snprintf(error, error_size, "%s", e.what());                                               \
+		}                                                                                                   \
+		catch (...)                                                                                         \
+		{                                                                                                   \
+			std::snprintf(error, error_size, "unknown exception");                                          \
+		}                                                                                                   \
+		return nullptr;                                                                                     \
+	}                                                                                                       \
+	void auvnavDestroy_(auvnav::MeasurementModel* m)                                                        \
+	{                                                                                                       \
+		delete m;                                                                                           \
+	}                                                                                                       \
+	static_assert(                                                                                          \
+	    auvnav::detail::LegacyStatesNotice<auvnav::detail::declaresLegacyStates<ModelClass>()>::value, ""); \
+	const AuvnavPluginEntry kAuvnavEntry_ = {                                                               \
+	    {AUVNAV_PLUGIN_ABI_VERSION, AUVNAV_PLUGIN_API_VERSION, plugin_name, plugin_version,                 \
+	     AUVNAV_BUILD_FINGERPRINT, plugin_description},                                                     \
+	    &auvnavCreate_,                                                                                     \
+	    &auvnavDestroy_};                                                                                   \
+	}                                                                                                       \
+	extern "C" __attribute__((visibility("default"))) const AuvnavPluginEntry* auvnav_plugin_entry_v1()     \
+	{                                                                                                       \
+		return &kAuvnavEntry_;                                                                              \
 	}

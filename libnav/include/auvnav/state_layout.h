@@ -1,8 +1,9 @@
 #pragma once
 /** @file state_layout.h
  *  The filter's state as configured: the paper's 43 tangent coordinates,
- *  then the blocks the sensors' plugins declare (MeasurementModel::
- *  stateBlocks), in `sensors:` order. Names, offsets and σ limits.
+ *  then the blocks the sensors' plugins own (MeasurementModel::states,
+ *  plugin_state.h), in `sensors:` order. Names, offsets and σ limits. This
+ *  is the one place that checks a plugin's blocks and binds its handles.
  */
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
@@ -39,8 +40,13 @@ struct LabelledModel
 };
 
 /** Appends every model's state blocks to `pm` and `P0` (their σ on the
- *  diagonal), binds each model to its first state, and names them. Throws
- *  PluginError naming the sensor when a model's blocks are unusable. */
+ *  diagonal), binds each model's PluginState handles (or, for a model with
+ *  no handles, its deprecated stateBlocks()/bindStates()) and names them.
+ *  Checks each block once: StateBlockSpec::problem(), a name unique within
+ *  the sensor, room in the state; disabled handles are skipped, a handle
+ *  bound already (by another model or an earlier layout) is refused. Throws
+ *  PluginError naming the sensor and block when a model's blocks are
+ *  unusable. */
 StateLayout appendPluginStates(const std::vector<LabelledModel>& models, ProcessModel& pm, Covariance& P0);
 
 /** `filter.sigma_limits`: {<block or state>: {min, max}} [the state's units]:

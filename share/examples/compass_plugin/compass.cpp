@@ -30,7 +30,7 @@ CompassModel::CompassModel(const auvnav::config::Node& cfg, const std::string& l
 		const auto st = cfg.child("states");
 		st.allowOnly({"heading_bias"});
 		if (st.has("heading_bias"))
-			blocks_.push_back(
+			heading_bias_ = auvnav::PluginState(
 			    auvnav::stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
 	}
 }
@@ -82,13 +82,7 @@ bool CompassModel::doPredict(const auvnav::NavState& x, const auvnav::Measuremen
                              const auvnav::FilterContext& /*ctx*/, Eigen::Ref<Eigen::VectorXd> z_pred) const
 {
 	if (z_pred.size() != 1) return false;
-	double bias = 0;
-	if (bias_at_ >= 0)
-	{
-		if (x.extra.size() <= bias_at_) return false;  // declared, but not in this state
-		bias = x.extra[bias_at_];
-	}
-	z_pred[0] = auvnav::wrapAngle(yawOf(x.R_nb) + bias);
+	z_pred[0] = auvnav::wrapAngle(yawOf(x.R_nb) + heading_bias_.valueOr(x, 0.0));
 	return true;
 }
 

@@ -17,8 +17,8 @@
  *  `states: {heading_bias: {sigma_deg: …}}` (auvnav/state_block_config.h;
  *  the compass's deviation: hard iron, mounting), else 0. The navigator
  *  appends it after the paper's 43 states (states.csv: COMPASS.heading_bias)
- *  and propagates it with the declared process; h reads it at
- *  x.extra[first index given by bindStates].
+ *  and propagates it with the declared process; h reads it through its
+ *  handle, heading_bias_.value(x) (auvnav/plugin_state.h).
  *
  *  The compass is assumed aligned with the body axes (a mounting yaw offset
  *  can be folded into declination_deg). Near ±90° pitch the yaw is
@@ -27,6 +27,7 @@
 #include <auvnav/angles.h>
 #include <auvnav/config.h>
 #include <auvnav/measurement_model.h>
+#include <auvnav/plugin_state.h>
 #include <auvnav/state.h>
 
 #include <Eigen/Core>
@@ -39,15 +40,6 @@ class CompassModel final : public auvnav::SafeMeasurementModel
  public:
 	CompassModel(const auvnav::config::Node& cfg, const std::string& label);
 
-	uint32_t uses() const noexcept override
-	{
-		return auvnav::kAttitude | (blocks_.empty() ? 0u : static_cast<uint32_t>(auvnav::kPluginStates));
-	}
-	std::vector<auvnav::StateBlockSpec> stateBlocks() const override { return blocks_; }
-	void bindStates(int first_extra_index) noexcept override { bias_at_ = first_extra_index; }
-	double gateProbability() const noexcept override { return gate_probability_; }
-	/** z and h are angles: the filter wraps the residual, z − h, into (−π, π]. */
-	auvnav::MeasurementStructure structure() const noexcept override { return {0, 1u}; }
 	/** Heading (yaw) of a body-to-NED rotation [rad], in (−π, π]. */
 	static double yawOf(const Eigen::Matrix3d& R_nb);
 
@@ -55,6 +47,12 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	double sigma_rad() const { return sigma_rad_; }
 
  protected:
+	uint32_t doUses() const override { return auvnav::kAttitude | heading_bias_.uses(); }
+	/** The state the model owns (disabled, and so skipped by the host, without `states:`). */
+	std::vector<auvnav::PluginState*> doStates() override { return {&heading_bias_}; }
+	double doGateProbability() const override { return gate_probability_; }
+	/** z and h are angles: the filter wraps the residual, z − h, into (−π, π]. */
+	auvnav::MeasurementStructure doStructure() const override { return {0, 1u}; }
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext& ctx,
 	                                std::vector<auvnav::Measurement>& out, std::string& why) override;
 	bool doPredict(const auvnav::NavState& x, const auvnav::Measurement& m, const auvnav::FilterContext& ctx,
@@ -65,7 +63,6 @@ class CompassModel final : public auvnav::SafeMeasurementModel
 	double declination_rad_ = 0;
 	double sigma_rad_ = 0;
 	double gate_probability_ = 0.999;
-	std::vector<auvnav::StateBlockSpec> blocks_;  // the heading bias, if configured
-	int bias_at_ = -1;                            // its index in NavState::extra (bindStates)
+	auvnav::PluginState heading_bias_;  // [rad], if configured
 };
 }  // namespace compass_example

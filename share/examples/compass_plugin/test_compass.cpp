@@ -5,6 +5,7 @@
 // observation class and its own state (heading bias).
 #include <auvnav/plugin_host.h>
 #include <auvnav/testing/model_checks.h>
+#include <auvnav/testing/plugin_state_bench.h>
 #include <auvnav/ukf.h>
 #include <gtest/gtest.h>
 #include <mrpt/io/CMemoryStream.h>
@@ -264,32 +265,31 @@ TEST(Compass, HeadingBiasStateIsDeclaredAndRead)
 {
 	at::TestContext tc;
 	CompassModel model(configText("states: {heading_bias: {sigma_deg: 3, process: constant}}"), "COMPASS");
-	const auto blocks = model.stateBlocks();
-	ASSERT_EQ(blocks.size(), 1u);
-	EXPECT_EQ(blocks[0].name, "heading_bias");
-	EXPECT_EQ(blocks[0].dimension(), 1);
-	EXPECT_NEAR(blocks[0].sigma[0], 3 * kDeg, 1e-15);
-	EXPECT_EQ(blocks[0].process, auvnav::StateProcess::RandomConstant);
 	EXPECT_TRUE(model.uses() & auvnav::kPluginStates);
-	model.bindStates(2);  // after 2 coordinates of another plugin
+	// Bound as the navigator binds it, after 2 coordinates of another plugin.
+	const at::PluginStateBench bench(model, 2, "COMPASS");
+	const auvnav::PluginState& bias = bench["heading_bias"];
+	EXPECT_EQ(bias.dimension(), 1);
+	EXPECT_NEAR(bias.spec().sigma[0], 3 * kDeg, 1e-15);
+	EXPECT_EQ(bias.spec().process, auvnav::StateProcess::RandomConstant);
+	EXPECT_EQ(bench.layout.tangent_names.back(), "COMPASS.heading_bias");
 
 	std::vector<auvnav::Measurement> out;
 	std::string why;
 	ASSERT_EQ(model.prepare(*compassObs(0), tc.ctx(), out, why), auvnav::PrepareStatus::Ok) << why;
-	auvnav::NavState x;
+	auvnav::NavState x = bench.randomState(1);
 	x.R_nb = at::rotationYpr(50 * kDeg, 0, 0);
-	x.extra.resize(3);
-	x.extra << 0.7, -0.7, 4 * kDeg;
+	bias.value(x) = 4 * kDeg;
 	EXPECT_NEAR(at::Predict(model, out[0], tc.ctx(), x)[0], 54 * kDeg, 1e-12);
-	x.extra.resize(2);  // the state the model was bound into is missing: h refuses
+	x.extra.resize(2);  // the state the model was bound into is missing: h is refused
 	Eigen::VectorXd z(1);
 	EXPECT_FALSE(model.predict(x, out[0], tc.ctx(), z));
 }
 
 TEST(Compass, WithoutStatesConfigThereIsNoState)
 {
-	const CompassModel m(configText("{}"), "COMPASS");
-	EXPECT_TRUE(m.stateBlocks().empty());
+	CompassModel m(configText("{}"), "COMPASS");
+	EXPECT_EQ(at::PluginStateBench(m).extraSize(), 0);
 	EXPECT_FALSE(m.uses() & auvnav::kPluginStates);
 }
 

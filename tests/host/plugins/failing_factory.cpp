@@ -14,7 +14,7 @@ class FailingModel final : public auvnav::SafeMeasurementModel
 		throw std::runtime_error("calibration file '" + cfg.string("calibration", "none") +
 		                         "' cannot be read (failing_factory test plugin)");
 	}
-	uint32_t uses() const noexcept override { return auvnav::kPosition; }
+	uint32_t doUses() const override { return auvnav::kPosition; }
 
  protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation&, const auvnav::FilterContext&,

@@ -21,7 +21,7 @@ class ProbeModel final : public auvnav::SafeMeasurementModel
 	{
 		if (mode_ != "passthrough" && mode_ != "nan_h") cfg.fail("mode", "expected passthrough or nan_h");
 	}
-	uint32_t uses() const noexcept override { return auvnav::kPosition; }
+	uint32_t doUses() const override { return auvnav::kPosition; }
 
  protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext&,

@@ -14,7 +14,7 @@ class SanitizedModel final : public auvnav::SafeMeasurementModel
 {
  public:
 	SanitizedModel(const auvnav::config::Node&, const std::string&) {}
-	uint32_t uses() const noexcept override { return auvnav::kPosition; }
+	uint32_t doUses() const override { return auvnav::kPosition; }
 
  protected:
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation&, const auvnav::FilterContext&,
