@@ -1,5 +1,5 @@
 # auvnav_add_plugin_module(): builds an auvnav sensor-model plugin, a MODULE
-# library that the navigator loads at run time (libnav/include/auvnav/plugin_api.h).
+# library that the navigator loads at run time (libnav/runtime/include/auvnav/plugin_api.h).
 #
 # Used in-tree by plugins/CMakeLists.txt (auvnav_add_plugin) and installed with
 # the package (lib/cmake/auvnav/), where auvnavConfig.cmake includes it for

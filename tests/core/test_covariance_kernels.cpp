@@ -1,4 +1,4 @@
-// The filter's covariance kernels (libnav/src/covariance_kernels.h, private
+// The filter's covariance kernels (libnav/core/src/covariance_kernels.h, private
 // to the library) against Eigen's general products and solvers as oracles,
 // on the shapes the filter and the smoother use: within rounding of the
 // oracle, nothing written outside the ranges each kernel names, and every

@@ -6,11 +6,10 @@
 # The tests write their own bags: ROS 1 through rosbag_storage with the Debian
 # message headers (libsensor-msgs-dev, libgeometry-msgs-dev, libnav-msgs-dev),
 # ROS 2 through SQLite. They also test the private definition parser and
-# decoder, hence the libnav/src/import include directory.
+# decoder, through auvnav_import_internal (libnav/import/CMakeLists.txt).
 # auvnav_rosbag_storage and PkgConfig::AUVNAV_SQLITE3 come from
-# libnav/src/import/bags.cmake.
+# libnav/import/src/bags.cmake.
 auvnav_add_gtest(test_import_bags
   PREFIX "import."
   SOURCES ${CMAKE_CURRENT_LIST_DIR}/test_bags.cpp ${CMAKE_CURRENT_LIST_DIR}/bag_writers.cpp
-  LIBS auvnav_import auvnav_rosbag_storage PkgConfig::AUVNAV_SQLITE3)
-target_include_directories(test_import_bags PRIVATE ${CMAKE_CURRENT_LIST_DIR}/../../libnav/src/import)
+  LIBS auvnav_import auvnav_import_internal auvnav_rosbag_storage PkgConfig::AUVNAV_SQLITE3)

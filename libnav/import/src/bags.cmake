@@ -1,6 +1,6 @@
-# ROS 1 and ROS 2 bag readers of the importer. Include from libnav/CMakeLists.txt:
+# ROS 1 and ROS 2 bag readers of the importer. Include from libnav/import/CMakeLists.txt:
 #
-#   include(src/import/bags.cmake)
+#   include(src/bags.cmake)
 #   add_library(auvnav_import ... ${AUVNAV_BAG_SOURCES})
 #   target_link_libraries(auvnav_import PRIVATE ${AUVNAV_BAG_LIBS})
 #
