@@ -23,7 +23,7 @@ uint8_t CObservationADCP::serializeGetVersion() const
 
 void CObservationADCP::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	out << timestamp << sensorLabel << sensorPose;
+	detail::writeMountedHead(out, *this);
 	out << blank_distance_m << cell_size_m << velocity_sigma_mps;
 	out << static_cast<uint32_t>(cells.size());
 	for (const auto& c : cells)
@@ -36,36 +36,25 @@ void CObservationADCP::serializeTo(mrpt::serialization::CArchive& out) const
 
 void CObservationADCP::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
-	// Read into a fresh object and adopt it only once the whole record is
-	// valid: a record refused half-way leaves this one untouched.
-	CObservationADCP r;
-	switch (version)
+	if (version != 0) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	const auto read = [&](CObservationADCP& r)
 	{
-		case 0:
+		detail::readMountedHead(in, r, kClass);
+		in >> r.blank_distance_m >> r.cell_size_m >> r.velocity_sigma_mps;
+		r.cells.resize(detail::readCount(in, kMaxCells, "ADCP cell"));
+		for (auto& c : r.cells)
 		{
-			in >> r.timestamp;
-			r.sensorLabel = detail::readLabel(in, kClass);
-			detail::readPose(in, r.sensorPose, kClass);
-			in >> r.blank_distance_m >> r.cell_size_m >> r.velocity_sigma_mps;
-			r.cells.resize(detail::readCount(in, kMaxCells, "ADCP cell"));
-			for (auto& c : r.cells)
-			{
-				for (double& v : c.velocity_s_mps) in >> v;
-				in >> c.correlation;
-				c.valid = detail::readFlag(in, kClass, "cell valid");
-			}
+			for (double& v : c.velocity_s_mps) in >> v;
+			in >> c.correlation;
+			c.valid = detail::readFlag(in, kClass, "cell valid");
 		}
-		break;
-		default:
-			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-	}
-	*this = std::move(r);
+	};
+	detail::readWhole(*this, read);
 }
 
 void CObservationADCP::getDescriptionAsText(std::ostream& o) const
 {
-	CObservation::getDescriptionAsText(o);
-	o << "Sensor pose on vehicle (FRD): " << sensorPose << "\n";
+	describeMounting(o);
 	o << "Blank distance [m]: " << blank_distance_m << ", cell size [m]: " << cell_size_m
 	  << ", velocity sigma [m/s]: " << velocity_sigma_mps << "\n";
 	o << "Cells (" << cells.size() << "): distance [m] | velocity (sensor frame) [m/s] | corr | valid\n";

@@ -26,17 +26,27 @@ bool readFlag(mrpt::serialization::CArchive& in, const char* field)
 	return detail::readFlag(in, kClass, field);
 }
 
-/** The fields versions 0 and 1 share, in their order, up to the beam
- *  inclination. */
-void readCommonHead(mrpt::serialization::CArchive& in, CObservationDVL& d)
+/** The name of enumerator `e` in `names` (indexed by the enum's uint8
+ *  value), "unknown" for a value without one. */
+template <class Enum, std::size_t N>
+const char* nameOf(const char* const (&names)[N], Enum e)
 {
-	in >> d.timestamp;
-	d.sensorLabel = detail::readLabel(in, kClass);
-	detail::readPose(in, d.sensorPose, kClass);
-	for (double& v : d.velocity_s_mps) in >> v;
-	for (double& c : d.velocity_cov) in >> c;
-	d.bottom_lock = readFlag(in, "bottom_lock");
-	in >> d.altitude_m >> d.beam_inclination_rad;
+	const auto i = static_cast<std::size_t>(e);
+	return i < N ? names[i] : "unknown";
+}
+
+/** The enumerator whose name in `names` is `name` (exact); false and `out`
+ *  untouched if there is none. */
+template <class Enum, std::size_t N>
+bool parseName(const char* const (&names)[N], const std::string& name, Enum& out)
+{
+	for (std::size_t i = 0; i < N; ++i)
+		if (name == names[i])
+		{
+			out = static_cast<Enum>(i);
+			return true;
+		}
+	return false;
 }
 }  // namespace
 
@@ -44,36 +54,22 @@ namespace auvnav::obs
 {
 const char* dvlFrameName(DvlFrame f)
 {
-	const auto i = static_cast<uint8_t>(f);
-	return i < kFrameCount ? kFrameNames[i] : "unknown";
+	return nameOf(kFrameNames, f);
 }
 
 const char* dvlSignName(DvlSign s)
 {
-	const auto i = static_cast<uint8_t>(s);
-	return i < kSignCount ? kSignNames[i] : "unknown";
+	return nameOf(kSignNames, s);
 }
 
 bool parseDvlFrame(const std::string& name, DvlFrame& out)
 {
-	for (uint8_t i = 0; i < kFrameCount; ++i)
-		if (name == kFrameNames[i])
-		{
-			out = static_cast<DvlFrame>(i);
-			return true;
-		}
-	return false;
+	return parseName(kFrameNames, name, out);
 }
 
 bool parseDvlSign(const std::string& name, DvlSign& out)
 {
-	for (uint8_t i = 0; i < kSignCount; ++i)
-		if (name == kSignNames[i])
-		{
-			out = static_cast<DvlSign>(i);
-			return true;
-		}
-	return false;
+	return parseName(kSignNames, name, out);
 }
 }  // namespace auvnav::obs
 
@@ -92,7 +88,7 @@ void CObservationDVL::serializeTo(mrpt::serialization::CArchive& out) const
 	if (static_cast<uint8_t>(frame) >= kFrameCount || static_cast<uint8_t>(sign) >= kSignCount)
 		THROW_EXCEPTION_FMT("CObservationDVL: invalid frame %u or sign %u",
 		                    unsigned(static_cast<uint8_t>(frame)), unsigned(static_cast<uint8_t>(sign)));
-	out << timestamp << sensorLabel << sensorPose;
+	detail::writeMountedHead(out, *this);
 	for (double v : velocity_s_mps) out << v;
 	for (double c : velocity_cov) out << c;
 	detail::writeFlag(out, bottom_lock);
@@ -109,51 +105,37 @@ void CObservationDVL::serializeTo(mrpt::serialization::CArchive& out) const
 
 void CObservationDVL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
-	// Read into a fresh object and adopt it only once the whole record is
-	// valid: a record refused half-way leaves this one untouched.
-	CObservationDVL r;
-	switch (version)
+	if (version > 1) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	const auto read = [&](CObservationDVL& r)
 	{
-		case 0:
+		detail::readMountedHead(in, r, kClass);
+		for (double& v : r.velocity_s_mps) in >> v;
+		for (double& c : r.velocity_cov) in >> c;
+		r.bottom_lock = readFlag(in, "bottom_lock");
+		in >> r.altitude_m >> r.beam_inclination_rad;
+		// Version 0 knew the instrument frame and the sensor's own sign only:
+		// it keeps the fresh object's frame, sign, beam velocity, azimuth and
+		// sigma (Instrument, VehicleOverBottom, 0).
+		if (version >= 1)
 		{
-			readCommonHead(in, r);
-			// Version 0 knew the instrument frame and the sensor's own sign only
-			// (and the fresh object's beam velocity, azimuth and sigma are 0).
-			r.frame = DvlFrame::Instrument;
-			r.sign = DvlSign::VehicleOverBottom;
-			r.beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
-			for (auto& b : r.beams)
-			{
-				in >> b.range_m;
-				b.valid = readFlag(in, "beam valid");
-			}
-		}
-		break;
-		case 1:
-		{
-			readCommonHead(in, r);
 			r.frame = static_cast<DvlFrame>(detail::readCode(in, kFrameCount, kClass, "frame"));
 			r.sign = static_cast<DvlSign>(detail::readCode(in, kSignCount, kClass, "sign"));
 			in >> r.beam_velocity_sigma_mps;
-			r.beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
-			for (auto& b : r.beams)
-			{
-				in >> b.range_m;
-				b.valid = readFlag(in, "beam valid");
-				in >> b.velocity_mps >> b.azimuth_rad;
-			}
 		}
-		break;
-		default:
-			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-	}
-	*this = std::move(r);
+		r.beams.resize(detail::readCount(in, kMaxBeams, "DVL beam"));
+		for (auto& b : r.beams)
+		{
+			in >> b.range_m;
+			b.valid = readFlag(in, "beam valid");
+			if (version >= 1) in >> b.velocity_mps >> b.azimuth_rad;
+		}
+	};
+	detail::readWhole(*this, read);
 }
 
 void CObservationDVL::getDescriptionAsText(std::ostream& o) const
 {
-	CObservation::getDescriptionAsText(o);
-	o << "Sensor pose on vehicle (FRD): " << sensorPose << "\n";
+	describeMounting(o);
 	o << "Frame: " << dvlFrameName(frame) << ", sign: " << dvlSignName(sign)
 	  << (sign == DvlSign::BottomOverInstrument ? " (seabed relative to the instrument, RDI PD0)" : "")
 	  << "\n";

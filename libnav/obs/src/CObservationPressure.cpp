@@ -17,33 +17,24 @@ uint8_t CObservationPressure::serializeGetVersion() const
 
 void CObservationPressure::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	out << timestamp << sensorLabel << sensorPose << pressure_pa << temperature_c;
+	detail::writeMountedHead(out, *this);
+	out << pressure_pa << temperature_c;
 }
 
 void CObservationPressure::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
-	// Read into a fresh object and adopt it only once the whole record is
-	// valid: a record refused half-way leaves this one untouched.
-	constexpr const char* kClass = "CObservationPressure";
-	CObservationPressure r;
-	switch (version)
+	if (version != 0) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	const auto read = [&](CObservationPressure& r)
 	{
-		case 0:
-			in >> r.timestamp;
-			r.sensorLabel = detail::readLabel(in, kClass);
-			detail::readPose(in, r.sensorPose, kClass);
-			in >> r.pressure_pa >> r.temperature_c;
-			break;
-		default:
-			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-	}
-	*this = std::move(r);
+		detail::readMountedHead(in, r, "CObservationPressure");
+		in >> r.pressure_pa >> r.temperature_c;
+	};
+	detail::readWhole(*this, read);
 }
 
 void CObservationPressure::getDescriptionAsText(std::ostream& o) const
 {
-	CObservation::getDescriptionAsText(o);
-	o << "Sensor pose on vehicle (FRD): " << sensorPose << "\n";
+	describeMounting(o);
 	o << "Pressure [Pa]: " << std::setprecision(10) << pressure_pa << "\n";
 	o << "Temperature [degC]: " << temperature_c << "\n";
 }

@@ -22,33 +22,25 @@ uint8_t CObservationThrusters::serializeGetVersion() const
 
 void CObservationThrusters::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	out << timestamp << sensorLabel << static_cast<uint8_t>(unit);
+	detail::writeHead(out, *this);
+	out << static_cast<uint8_t>(unit);
 	out << static_cast<uint32_t>(effort.size());
 	for (double e : effort) out << e;
 }
 
 void CObservationThrusters::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
-	// Read into a fresh object and adopt it only once the whole record is
-	// valid: a record refused half-way leaves this one untouched.
 	constexpr const char* kClass = "CObservationThrusters";
-	CObservationThrusters r;
-	switch (version)
+	if (version != 0) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	const auto read = [&](CObservationThrusters& r)
 	{
-		case 0:
-		{
-			in >> r.timestamp;
-			r.sensorLabel = detail::readLabel(in, kClass);
-			constexpr uint8_t kUnitCount = static_cast<uint8_t>(EffortUnit::Speed_rpm) + 1;
-			r.unit = static_cast<EffortUnit>(detail::readCode(in, kUnitCount, kClass, "unit"));
-			r.effort.resize(detail::readCount(in, kMaxThrusters, "thruster"));
-			for (double& e : r.effort) in >> e;
-		}
-		break;
-		default:
-			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-	}
-	*this = std::move(r);
+		detail::readHead(in, r, kClass);
+		constexpr uint8_t kUnitCount = static_cast<uint8_t>(EffortUnit::Speed_rpm) + 1;
+		r.unit = static_cast<EffortUnit>(detail::readCode(in, kUnitCount, kClass, "unit"));
+		r.effort.resize(detail::readCount(in, kMaxThrusters, "thruster"));
+		for (double& e : r.effort) in >> e;
+	};
+	detail::readWhole(*this, read);
 }
 
 void CObservationThrusters::getDescriptionAsText(std::ostream& o) const

@@ -18,7 +18,8 @@ uint8_t CObservationUSBL::serializeGetVersion() const
 
 void CObservationUSBL::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	out << timestamp << sensorLabel << sensorPose << measurement_time << static_cast<uint8_t>(frame);
+	detail::writeMountedHead(out, *this);
+	out << measurement_time << static_cast<uint8_t>(frame);
 	for (double v : position) out << v;
 	for (double v : covariance_ned_m2) out << v;
 	out << slant_range_m << transponder_id;
@@ -26,30 +27,20 @@ void CObservationUSBL::serializeTo(mrpt::serialization::CArchive& out) const
 
 void CObservationUSBL::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
-	// Read into a fresh object and adopt it only once the whole record is
-	// valid: a record refused half-way leaves this one untouched.
 	constexpr const char* kClass = "CObservationUSBL";
-	CObservationUSBL r;
-	switch (version)
+	if (version != 0) MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	const auto read = [&](CObservationUSBL& r)
 	{
-		case 0:
-		{
-			in >> r.timestamp;
-			r.sensorLabel = detail::readLabel(in, kClass);
-			detail::readPose(in, r.sensorPose, kClass);
-			in >> r.measurement_time;
-			// A corrupt byte must not become an enum value no code handles.
-			constexpr uint8_t kFrameCount = static_cast<uint8_t>(UsblFrame::LocalNed) + 1;
-			r.frame = static_cast<UsblFrame>(detail::readCode(in, kFrameCount, kClass, "frame"));
-			for (double& v : r.position) in >> v;
-			for (double& v : r.covariance_ned_m2) in >> v;
-			in >> r.slant_range_m >> r.transponder_id;
-			break;
-		}
-		default:
-			MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
-	}
-	*this = std::move(r);
+		detail::readMountedHead(in, r, kClass);
+		in >> r.measurement_time;
+		// A corrupt byte must not become an enum value no code handles.
+		constexpr uint8_t kFrameCount = static_cast<uint8_t>(UsblFrame::LocalNed) + 1;
+		r.frame = static_cast<UsblFrame>(detail::readCode(in, kFrameCount, kClass, "frame"));
+		for (double& v : r.position) in >> v;
+		for (double& v : r.covariance_ned_m2) in >> v;
+		in >> r.slant_range_m >> r.transponder_id;
+	};
+	detail::readWhole(*this, read);
 }
 
 bool CObservationUSBL::hasCovariance() const
@@ -61,8 +52,7 @@ bool CObservationUSBL::hasCovariance() const
 
 void CObservationUSBL::getDescriptionAsText(std::ostream& o) const
 {
-	CObservation::getDescriptionAsText(o);
-	o << "Transponder pose on vehicle (FRD): " << sensorPose << "\n";
+	describeMounting(o, "Transponder");
 	o << "Measurement time: "
 	  << (measurement_time == INVALID_TIMESTAMP ? std::string("(not given)")
 	                                            : mrpt::system::dateTimeLocalToString(measurement_time))

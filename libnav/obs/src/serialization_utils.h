@@ -6,13 +6,16 @@
 // with "corrupt data:" and names the class and the field. Nothing is
 // allocated before the size that drives it has been checked, so a damaged
 // record costs at most the bounds below, never gigabytes.
+#include <auvnav/obs/MountedObservation.h>
 #include <mrpt/core/exceptions.h>
+#include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 
 namespace auvnav::obs::detail
 {
@@ -102,5 +105,44 @@ inline void readPose(mrpt::serialization::CArchive& in, mrpt::poses::CPose3D& po
 		}
 	if (ok) ok = R.det() > 0;  // a reflection is no rotation
 	if (!ok) THROW_EXCEPTION_FMT("corrupt data: %s sensorPose is not a finite rigid transform", cls);
+}
+
+/** Every auvnav record starts with the timestamp and the sensor label, in
+ *  MRPT's layouts; readHead() reads what writeHead() writes, the label
+ *  bounded by kMaxLabelBytes. */
+inline void writeHead(mrpt::serialization::CArchive& out, const mrpt::obs::CObservation& o)
+{
+	out << o.timestamp << o.sensorLabel;
+}
+
+inline void readHead(mrpt::serialization::CArchive& in, mrpt::obs::CObservation& o, const char* cls)
+{
+	in >> o.timestamp;
+	o.sensorLabel = readLabel(in, cls);
+}
+
+/** A mounted sensor's record continues with its pose: the head above, then
+ *  `sensorPose` (read through readPose(), so refused unless rigid). */
+inline void writeMountedHead(mrpt::serialization::CArchive& out, const MountedObservation& o)
+{
+	writeHead(out, o);
+	out << o.sensorPose;
+}
+
+inline void readMountedHead(mrpt::serialization::CArchive& in, MountedObservation& o, const char* cls)
+{
+	readHead(in, o, cls);
+	readPose(in, o.sensorPose, cls);
+}
+/** Reads a record into a fresh object and adopts it only once `read(fresh)`
+ *  has returned: a record refused half-way (any exception) leaves `self` as
+ *  it was. Callers check the version before, so that the exception for an
+ *  unknown one names their serializeFrom(). */
+template <class Obs, class ReadFn>
+void readWhole(Obs& self, ReadFn&& read)
+{
+	Obs fresh;
+	read(fresh);
+	self = std::move(fresh);
 }
 }  // namespace auvnav::obs::detail

@@ -15,8 +15,7 @@
  *    it was): a `valid` byte other than 0/1, more than 4096 cells, a label
  *    longer than 4 KiB or a sensor pose that is no rigid transform.
  */
-#include <mrpt/obs/CObservation.h>
-#include <mrpt/poses/CPose3D.h>
+#include <auvnav/obs/MountedObservation.h>
 
 #include <array>
 #include <vector>
@@ -30,7 +29,7 @@ struct AdcpCell
 	bool valid = false;  //!< inside the water column and above the correlation floor
 };
 
-class CObservationADCP : public mrpt::obs::CObservation
+class CObservationADCP : public MountedObservation
 {
 	DEFINE_SERIALIZABLE(CObservationADCP, auvnav::obs)
 
@@ -39,7 +38,6 @@ class CObservationADCP : public mrpt::obs::CObservation
 	double cell_size_m = 0;         //!< cell length along the profiling axis [m]
 	double velocity_sigma_mps = 0;  //!< per-axis 1σ velocity noise of one cell [m/s]
 	std::vector<AdcpCell> cells;
-	mrpt::poses::CPose3D sensorPose;  //!< sensor pose in the body frame (FRD)
 
 	/** Distance of the centre of cell `i` from the transducer [m]. */
 	double cellDistance(std::size_t i) const
@@ -47,8 +45,6 @@ class CObservationADCP : public mrpt::obs::CObservation
 		return blank_distance_m + (static_cast<double>(i) + 0.5) * cell_size_m;
 	}
 
-	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }
-	void setSensorPose(const mrpt::poses::CPose3D& p) override { sensorPose = p; }
 	void getDescriptionAsText(std::ostream& o) const override;
 	bool exportTxtSupported() const override { return true; }
 	std::string exportTxtHeader() const override;

@@ -33,8 +33,7 @@
  *    azimuth. Enums and flags travel as uint8; a value out of range is
  *    refused as corrupt data.
  */
-#include <mrpt/obs/CObservation.h>
-#include <mrpt/poses/CPose3D.h>
+#include <auvnav/obs/MountedObservation.h>
 
 #include <array>
 #include <cstdint>
@@ -83,7 +82,7 @@ struct DvlBeam
 	double azimuth_rad = 0;   //!< beam azimuth about the sensor z axis, from sensor x [rad] (version >= 1)
 };
 
-class CObservationDVL : public mrpt::obs::CObservation
+class CObservationDVL : public MountedObservation
 {
 	DEFINE_SERIALIZABLE(CObservationDVL, auvnav::obs)
 
@@ -97,10 +96,7 @@ class CObservationDVL : public mrpt::obs::CObservation
 	DvlFrame frame = DvlFrame::Instrument;          //!< coordinates of velocity_s_mps (version >= 1)
 	DvlSign sign = DvlSign::VehicleOverBottom;      //!< sign convention (version >= 1)
 	double beam_velocity_sigma_mps = 0;  //!< 1σ of one beam's radial velocity, 0 = unknown (version >= 1)
-	mrpt::poses::CPose3D sensorPose;     //!< sensor pose in the body frame (FRD)
 
-	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }
-	void setSensorPose(const mrpt::poses::CPose3D& p) override { sensorPose = p; }
 	void getDescriptionAsText(std::ostream& o) const override;
 	bool exportTxtSupported() const override { return true; }
 	std::string exportTxtHeader() const override;

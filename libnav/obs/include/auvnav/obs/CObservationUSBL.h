@@ -22,8 +22,7 @@
  *  Serialization is versioned; every version stays readable. Decoding checks
  *  `frame` (no out-of-range enum reaches the consumer).
  */
-#include <mrpt/obs/CObservation.h>
-#include <mrpt/poses/CPose3D.h>
+#include <auvnav/obs/MountedObservation.h>
 
 #include <array>
 #include <cstdint>
@@ -37,7 +36,7 @@ enum class UsblFrame : uint8_t
 	LocalNed = 1   //!< north, east, down [m] from the navigation origin
 };
 
-class CObservationUSBL : public mrpt::obs::CObservation
+class CObservationUSBL : public MountedObservation
 {
 	DEFINE_SERIALIZABLE(CObservationUSBL, auvnav::obs)
 
@@ -49,11 +48,8 @@ class CObservationUSBL : public mrpt::obs::CObservation
 	std::array<double, 9> covariance_ned_m2{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
 	double slant_range_m = kNaN;
 	uint16_t transponder_id = 0;
-	mrpt::poses::CPose3D sensorPose;  //!< transponder on the vehicle (body FRD)
 
 	bool hasCovariance() const;
-	void getSensorPose(mrpt::poses::CPose3D& out) const override { out = sensorPose; }
-	void setSensorPose(const mrpt::poses::CPose3D& p) override { sensorPose = p; }
 	void getDescriptionAsText(std::ostream& o) const override;
 	bool exportTxtSupported() const override { return true; }
 	std::string exportTxtHeader() const override;
