@@ -10,11 +10,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class AdcpConverter final : public Converter
+class AdcpConverter final : public MountedConverter
 {
  public:
 	AdcpConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
 	{
 		blank_ = parseScalar(q, "blank_distance", UnitKind::Length);
 		cell_size_ = parseScalar(q, "cell_size", UnitKind::Length);
@@ -33,8 +33,7 @@ class AdcpConverter final : public Converter
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
 	{
 		auto o = auvnav::obs::CObservationADCP::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		if (readScalar(blank_, r, cols_, o->blank_distance_m, why) != Read::Ok ||
 		    readScalar(cell_size_, r, cols_, o->cell_size_m, why) != Read::Ok)
 		{
@@ -69,21 +68,14 @@ class AdcpConverter final : public Converter
 	}
 
  private:
-	std::string label_;
 	Eigen::Matrix3d axes_;
-	Mounting mounting_;
 	ScalarSpec blank_, cell_size_, sigma_;
 	CountSpec count_;
 	std::vector<ScalarSpec> velocity_;
 	ScalarSpec correlation_, valid_;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeAdcpConverter(const config::Node& q, const config::Node& s,
-                                             const std::string& label)
-{
-	return std::make_unique<AdcpConverter>(q, s, label);
-}
+const ConverterFactory makeAdcpConverter = factoryOf<AdcpConverter>;
 
 }  // namespace auvnav::import::detail

@@ -12,11 +12,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class DvlConverter final : public Converter
+class DvlConverter final : public MountedConverter
 {
  public:
 	DvlConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
 	{
 		frame_ = parseText(s, "frame");
 		if (!frame_.present)
@@ -80,8 +80,7 @@ class DvlConverter final : public Converter
 	{
 		using namespace auvnav::obs;
 		auto o = CObservationDVL::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		std::string name;
 		if (!readText(frame_, r, cols_, name, why)) return nullptr;
 		if (!auvnav::obs::parseDvlFrame(name, o->frame))
@@ -243,9 +242,7 @@ class DvlConverter final : public Converter
 		return n > 0 ? sum / n : std::nan("");
 	}
 
-	std::string label_;
 	Eigen::Matrix3d axes_;
-	Mounting mounting_;
 	TextSpec frame_, sign_;
 	std::vector<ScalarSpec> velocity_, cov_;
 	ScalarSpec sigma_, lock_, altitude_, inclination_, beam_sigma_;
@@ -253,14 +250,9 @@ class DvlConverter final : public Converter
 	bool inclination_read_ = false;  // this record's beam_inclination was read
 	CountSpec beam_count_;
 	ScalarSpec range_, valid_, beam_velocity_, azimuth_;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeDvlConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label)
-{
-	return std::make_unique<DvlConverter>(q, s, label);
-}
+const ConverterFactory makeDvlConverter = factoryOf<DvlConverter>;
 
 }  // namespace auvnav::import::detail

@@ -11,11 +11,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class GpsConverter final : public Converter
+class GpsConverter final : public MountedConverter
 {
  public:
 	GpsConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), mounting_(s)
+	    : MountedConverter(s, label)
 	{
 		lat_ = parseScalar(q, "latitude", UnitKind::Angle);
 		lon_ = parseScalar(q, "longitude", UnitKind::Angle);
@@ -38,22 +38,17 @@ class GpsConverter final : public Converter
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
 	{
 		using mrpt::obs::gnss::Message_NMEA_GGA;
-		double lat = 0, lon = 0, lat_raw = 0, lon_raw = 0;
-		if (readScalar(lat_, r, cols_, lat, why, 0, &lat_raw) != Read::Ok ||
-		    readScalar(lon_, r, cols_, lon, why, 0, &lon_raw) != Read::Ok)
+		AngleRead lat, lon;
+		if (readAngle(lat_, r, cols_, lat, why) != Read::Ok ||
+		    readAngle(lon_, r, cols_, lon, why) != Read::Ok)
 		{
 			if (why.empty()) why = "latitude/longitude missing";
 			return nullptr;
 		}
-		if (!(std::abs(lat) <= M_PI / 2 && std::abs(lon) <= 2 * M_PI))
-		{
-			why = "latitude/longitude not finite or out of range";
-			return nullptr;
-		}
 		Message_NMEA_GGA gga;
-		// Degrees in, degrees kept: no rad round trip that could move the last bit.
-		gga.fields.latitude_degrees = lat_.unit.name == "deg" ? lat_raw : lat / kDeg;
-		gga.fields.longitude_degrees = lon_.unit.name == "deg" ? lon_raw : lon / kDeg;
+		if (!latLonDegrees(lat_, lat, lon_, lon, gga.fields.latitude_degrees, gga.fields.longitude_degrees,
+		                   why))
+			return nullptr;
 		double x = 0;
 		Read res = readScalar(alt_, r, cols_, x, why);
 		if (res == Read::Bad) return nullptr;
@@ -91,25 +86,17 @@ class GpsConverter final : public Converter
 		gga.fields.thereis_HDOP = res == Read::Ok;
 		gga.fields.HDOP = res == Read::Ok ? static_cast<float>(x) : 0.0f;
 		auto o = mrpt::obs::CObservationGPS::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		o->setMsg(gga);
 		return o;
 	}
 
  private:
-	std::string label_;
-	Mounting mounting_;
 	ScalarSpec lat_, lon_, alt_, geoid_, quality_, status_, sats_, hdop_;
 	bool ellipsoid_ = false;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeGpsConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label)
-{
-	return std::make_unique<GpsConverter>(q, s, label);
-}
+const ConverterFactory makeGpsConverter = factoryOf<GpsConverter>;
 
 }  // namespace auvnav::import::detail

@@ -14,12 +14,12 @@ namespace
 {
 constexpr double kMaxImageSide = 1 << 20;  // pixels; far beyond any camera or sonar image
 
-class ImageConverter final : public Converter
+class ImageConverter final : public MountedConverter
 {
  public:
 	ImageConverter(const config::Node& q, const config::Node& s, const std::string& label,
 	               const std::string& data_dir)
-	    : label_(label), data_dir_(data_dir), mounting_(s)
+	    : MountedConverter(s, label), data_dir_(data_dir)
 	{
 		file_ = parseText(q, "file");
 		if (!file_.present || file_.is_constant)
@@ -38,8 +38,7 @@ class ImageConverter final : public Converter
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
 	{
 		auto o = mrpt::obs::CObservationImage::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->cameraPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		std::string file;
 		if (!readText(file_, r, cols_, file, why)) return nullptr;
 		const std::string path = (!file.empty() && file[0] == '/') ? file : data_dir_ + "/" + file;
@@ -96,12 +95,10 @@ class ImageConverter final : public Converter
 	}
 
  private:
-	std::string label_, data_dir_;
-	Mounting mounting_;
+	std::string data_dir_;
 	TextSpec file_, camera_name_;
 	bool has_camera_ = false;
 	ScalarSpec camera_[6];
-	Columns cols_;
 };
 }  // namespace
 

@@ -15,11 +15,11 @@ namespace
 {
 constexpr double kGaussPerTesla = 1e4;  // MRPT's CObservationIMU keeps IMU_MAG_* in gauss
 
-class ImuConverter final : public Converter
+class ImuConverter final : public MountedConverter
 {
  public:
 	ImuConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), axes_(parseAxes(s, notes_)), mounting_(s)
+	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
 	{
 		gyro_ = parseVector(q, "angular_velocity", UnitKind::AngularRate, 3);
 		acc_ = parseVector(q, "linear_acceleration", UnitKind::Acceleration, 3);
@@ -43,8 +43,7 @@ class ImuConverter final : public Converter
 	{
 		using namespace mrpt::obs;
 		auto o = CObservationIMU::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		if (!vector(gyro_, r, *o, {IMU_WX, IMU_WY, IMU_WZ}, 1.0, "angular_velocity", why)) return nullptr;
 		if (!vector(acc_, r, *o, {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC}, 1.0, "linear_acceleration", why))
 			return nullptr;
@@ -120,19 +119,12 @@ class ImuConverter final : public Converter
 		return true;
 	}
 
-	std::string label_;
 	Eigen::Matrix3d axes_;
-	Mounting mounting_;
 	std::vector<ScalarSpec> gyro_, acc_, mag_, quat_;
 	ScalarSpec temp_;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeImuConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label)
-{
-	return std::make_unique<ImuConverter>(q, s, label);
-}
+const ConverterFactory makeImuConverter = factoryOf<ImuConverter>;
 
 }  // namespace auvnav::import::detail

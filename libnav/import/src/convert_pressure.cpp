@@ -11,11 +11,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class PressureConverter final : public Converter
+class PressureConverter final : public MountedConverter
 {
  public:
 	PressureConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), mounting_(s)
+	    : MountedConverter(s, label)
 	{
 		pressure_ = parseScalar(q, "pressure", UnitKind::Pressure);
 		depth_ = parseScalar(q, "depth", UnitKind::Length);
@@ -43,8 +43,7 @@ class PressureConverter final : public Converter
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
 	{
 		auto o = auvnav::obs::CObservationPressure::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
+		if (!labelAndMount(*o, r, why)) return nullptr;
 		double v = 0;
 		const ScalarSpec& src = pressure_.present ? pressure_ : depth_;
 		const Read res = readScalar(src, r, cols_, v, why);
@@ -65,19 +64,12 @@ class PressureConverter final : public Converter
 	}
 
  private:
-	std::string label_;
-	Mounting mounting_;
 	ScalarSpec pressure_, depth_, temp_;
 	bool gauge_ = false;
 	double atmospheric_pa_ = 0, density_ = 0, gravity_ = 0;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makePressureConverter(const config::Node& q, const config::Node& s,
-                                                 const std::string& label)
-{
-	return std::make_unique<PressureConverter>(q, s, label);
-}
+const ConverterFactory makePressureConverter = factoryOf<PressureConverter>;
 
 }  // namespace auvnav::import::detail

@@ -63,10 +63,6 @@ class ThrustersConverter final : public Converter
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeThrustersConverter(const config::Node& q, const config::Node& s,
-                                                  const std::string& label)
-{
-	return std::make_unique<ThrustersConverter>(q, s, label);
-}
+const ConverterFactory makeThrustersConverter = factoryOf<ThrustersConverter>;
 
 }  // namespace auvnav::import::detail

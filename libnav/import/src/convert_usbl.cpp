@@ -14,11 +14,11 @@ namespace
  *  north/east/down from the navigation origin, chosen per record by which
  *  cells hold numbers, with its optional covariance, slant range,
  *  transponder id and measurement time (UNIX seconds). */
-class UsblConverter final : public Converter
+class UsblConverter final : public MountedConverter
 {
  public:
 	UsblConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : label_(label), mounting_(s)
+	    : MountedConverter(s, label)
 	{
 		lat_ = parseScalar(q, "latitude", UnitKind::Angle);
 		lon_ = parseScalar(q, "longitude", UnitKind::Angle);
@@ -43,23 +43,16 @@ class UsblConverter final : public Converter
 	mrpt::obs::CObservation::Ptr convert(const Record& r, std::string& why) override
 	{
 		auto o = auvnav::obs::CObservationUSBL::Create();
-		o->sensorLabel = label_;
-		if (!mounting_.poseOf(r, cols_, o->sensorPose, why)) return nullptr;
-		double a = 0, b = 0, raw_a = 0, raw_b = 0, c = NAN;
-		Read ra = lat_.present ? readScalar(lat_, r, cols_, a, why, 0, &raw_a) : Read::Missing;
-		Read rb = lat_.present ? readScalar(lon_, r, cols_, b, why, 0, &raw_b) : Read::Missing;
+		if (!labelAndMount(*o, r, why)) return nullptr;
+		double a = 0, b = 0, c = NAN;
+		AngleRead lat, lon;
+		Read ra = lat_.present ? readAngle(lat_, r, cols_, lat, why) : Read::Missing;
+		Read rb = lat_.present ? readAngle(lon_, r, cols_, lon, why) : Read::Missing;
 		if (ra == Read::Bad || rb == Read::Bad) return nullptr;
 		if (ra == Read::Ok && rb == Read::Ok)
 		{
-			if (!(std::abs(a) <= M_PI / 2 && std::abs(b) <= 2 * M_PI))
-			{
-				why = "latitude/longitude not finite or out of range";
-				return nullptr;
-			}
+			if (!latLonDegrees(lat_, lat, lon_, lon, o->position[0], o->position[1], why)) return nullptr;
 			o->frame = auvnav::obs::UsblFrame::Geodetic;
-			// Degrees in, degrees kept (no rad round trip).
-			o->position[0] = lat_.unit.name == "deg" ? raw_a : a / kDeg;
-			o->position[1] = lon_.unit.name == "deg" ? raw_b : b / kDeg;
 			if (readScalar(depth_, r, cols_, c, why) == Read::Bad) return nullptr;
 		}
 		else
@@ -116,18 +109,11 @@ class UsblConverter final : public Converter
 	}
 
  private:
-	std::string label_;
-	Mounting mounting_;
 	ScalarSpec lat_, lon_, depth_, north_, east_, down_, sigma_, range_, id_, time_;
 	std::vector<ScalarSpec> cov_;
-	Columns cols_;
 };
 }  // namespace
 
-std::unique_ptr<Converter> makeUsblConverter(const config::Node& q, const config::Node& s,
-                                             const std::string& label)
-{
-	return std::make_unique<UsblConverter>(q, s, label);
-}
+const ConverterFactory makeUsblConverter = factoryOf<UsblConverter>;
 
 }  // namespace auvnav::import::detail

@@ -131,6 +131,24 @@ bool finiteOrWhy(const Eigen::Vector3d& v, const char* name, std::string& why)
 	return false;
 }
 
+Read readAngle(const ScalarSpec& s, const Record& r, Columns& cols, AngleRead& out, std::string& why)
+{
+	return readScalar(s, r, cols, out.rad, why, 0, &out.raw);
+}
+
+bool latLonDegrees(const ScalarSpec& lat_spec, const AngleRead& lat, const ScalarSpec& lon_spec,
+                   const AngleRead& lon, double& lat_deg, double& lon_deg, std::string& why)
+{
+	if (!(std::abs(lat.rad) <= M_PI / 2 && std::abs(lon.rad) <= 2 * M_PI))
+	{
+		why = "latitude/longitude not finite or out of range";
+		return false;
+	}
+	lat_deg = lat_spec.unit.name == "deg" ? lat.raw : lat.rad / kDeg;
+	lon_deg = lon_spec.unit.name == "deg" ? lon.raw : lon.rad / kDeg;
+	return true;
+}
+
 CountSpec CountSpec::parse(const config::Node& n, const std::string& key)
 {
 	CountSpec c;

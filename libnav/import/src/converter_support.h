@@ -1,8 +1,10 @@
 #pragma once
 // Internal to the converters: what the per-sensor converters (convert_*.cpp)
-// share: the axis map, the mounting, 3-vector reads and array counts.
+// share: the axis map, the mounting (and the base of the mounted sensors'
+// converters), 3-vector and latitude/longitude reads, array counts.
 #include <auvnav/config.h>
 #include <auvnav/import/record.h>
+#include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include <Eigen/Core>
@@ -10,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "converters.h"
 #include "field_spec.h"
 
 namespace auvnav::import::detail
@@ -37,11 +40,54 @@ class Mounting
 	ScalarSpec fields_[7];
 };
 
+/** Base of the converters of a sensor mounted on the vehicle (all but the
+ *  thrusters): the sensor's label and mounting, which every observation it
+ *  makes gets, and the column cache its reads share. */
+class MountedConverter : public Converter
+{
+ protected:
+	MountedConverter(const config::Node& s, const std::string& label) : label_(label), mounting_(s) {}
+
+	/** Gives `o` the sensor's label and its pose for record `r`, through
+	 *  setSensorPose (an image's cameraPose); false and `why` if the pose
+	 *  cannot be read from `r`. */
+	bool labelAndMount(mrpt::obs::CObservation& o, const Record& r, std::string& why)
+	{
+		o.sensorLabel = label_;
+		mrpt::poses::CPose3D pose;
+		if (!mounting_.poseOf(r, cols_, pose, why)) return false;
+		o.setSensorPose(pose);
+		return true;
+	}
+
+	Columns cols_;
+
+ private:
+	std::string label_;
+	Mounting mounting_;
+};
+
 /** Reads a 3-vector quantity: Ok (all three), Missing (all three missing), Bad. */
 Read readVec3(const std::vector<ScalarSpec>& spec, const Record& r, Columns& cols, Eigen::Vector3d& out,
               std::string& why, const char* name, int index = 0);
 
 bool finiteOrWhy(const Eigen::Vector3d& v, const char* name, std::string& why);
+
+/** An angle as read from a record: in SI (rad) and as the source wrote it. */
+struct AngleRead
+{
+	double rad = 0, raw = 0;
+};
+
+/** Reads angle `s` as readScalar does, keeping the source's number too. */
+Read readAngle(const ScalarSpec& s, const Record& r, Columns& cols, AngleRead& out, std::string& why);
+
+/** A latitude and longitude read from a record, in degrees: a quantity whose
+ *  unit is deg keeps the source's number (no rad round trip that could move
+ *  its last bit). False and `why` when either is not finite or out of range
+ *  (|latitude| <= 90°, |longitude| <= 360°). */
+bool latLonDegrees(const ScalarSpec& lat_spec, const AngleRead& lat, const ScalarSpec& lon_spec,
+                   const AngleRead& lon, double& lat_deg, double& lon_deg, std::string& why);
 
 /** `count:` of an array: a constant or a field (`{field: n}`). */
 struct CountSpec

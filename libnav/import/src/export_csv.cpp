@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <vector>
 
 namespace auvnav::import::detail
 {
@@ -61,56 +62,56 @@ std::string poseCells(const mrpt::poses::CPose3D& p)
 	       "," + exact(q.y()) + "," + exact(q.z());
 }
 
+/** The columns of one class after `t_s`: the fixed ones, then those of each
+ *  element (`#`: its index), then the pose unless the class has none. */
+struct ClassColumns
+{
+	const char* cls;
+	const char* fixed;
+	std::vector<const char*> per_element;
+	bool has_pose = true;
+};
+
+const ClassColumns kClassColumns[] = {
+    {"imu",
+     "gyro_x_radps,gyro_y_radps,gyro_z_radps,acc_x_mps2,acc_y_mps2,acc_z_mps2,mag_x_G,mag_y_G,mag_z_G,"
+     "quat_w,quat_x,quat_y,quat_z,temperature_degC,",
+     {}},
+    {"gps", "latitude_deg,longitude_deg,altitude_msl_m,geoid_separation_m,fix_quality,satellites,hdop,", {}},
+    {"pressure", "pressure_Pa,temperature_degC,", {}},
+    {"dvl",
+     "frame,sign,bottom_lock,vel_x_mps,vel_y_mps,vel_z_mps,cov_00,cov_01,cov_02,cov_10,cov_11,cov_12,cov_20,"
+     "cov_21,cov_22,altitude_m,beam_inclination_rad,beam_velocity_sigma_mps,beam_count,",
+     {"beam_#_range_m", "beam_#_valid", "beam_#_velocity_mps", "beam_#_azimuth_rad"}},
+    {"adcp",
+     "blank_distance_m,cell_size_m,velocity_sigma_mps,cell_count,",
+     {"cell_#_vx_mps", "cell_#_vy_mps", "cell_#_vz_mps", "cell_#_correlation", "cell_#_valid"}},
+    {"thrusters", "thruster_count,", {"effort_#"}, false},
+    {"image", "file,ncols,nrows,fx,fy,cx,cy,camera_name,", {}},
+    {"usbl",
+     "measurement_time_s,latitude_deg,longitude_deg,depth_m,north_m,east_m,down_m,"
+     "cov_nn,cov_ne,cov_nd,cov_en,cov_ee,cov_ed,cov_dn,cov_de,cov_dd,slant_range_m,transponder_id,",
+     {}},
+};
+
 std::string header(const std::string& cls, std::size_t n)
 {
-	std::ostringstream h;
-	h << "t_s,";
-	auto indexed = [&](std::initializer_list<const char*> pattern)
+	std::string h = "t_s,";
+	bool has_pose = true;
+	for (const ClassColumns& c : kClassColumns)
 	{
+		if (cls != c.cls) continue;
+		h += c.fixed;
 		for (std::size_t i = 0; i < n; ++i)
-			for (const char* p : pattern)
-			{
-				std::string c = p;
-				c.replace(c.find('#'), 1, std::to_string(i));
-				h << c << ",";
-			}
-	};
-	if (cls == "imu")
-		h << "gyro_x_radps,gyro_y_radps,gyro_z_radps,acc_x_mps2,acc_y_mps2,acc_z_mps2,mag_x_G,mag_y_G,mag_z_"
-		     "G,"
-		     "quat_w,quat_x,quat_y,quat_z,temperature_degC,";
-	else if (cls == "gps")
-		h << "latitude_deg,longitude_deg,altitude_msl_m,geoid_separation_m,fix_quality,satellites,hdop,";
-	else if (cls == "pressure")
-		h << "pressure_Pa,temperature_degC,";
-	else if (cls == "dvl")
-	{
-		h << "frame,sign,bottom_lock,vel_x_mps,vel_y_mps,vel_z_mps,cov_00,cov_01,cov_02,cov_10,cov_11,cov_12,"
-		     "cov_20,"
-		     "cov_21,cov_22,altitude_m,beam_inclination_rad,beam_velocity_sigma_mps,beam_count,";
-		indexed({"beam_#_range_m", "beam_#_valid", "beam_#_velocity_mps", "beam_#_azimuth_rad"});
+			for (std::string column : c.per_element)
+				h += column.replace(column.find('#'), 1, std::to_string(i)) + ",";
+		has_pose = c.has_pose;
 	}
-	else if (cls == "adcp")
-	{
-		h << "blank_distance_m,cell_size_m,velocity_sigma_mps,cell_count,";
-		indexed({"cell_#_vx_mps", "cell_#_vy_mps", "cell_#_vz_mps", "cell_#_correlation", "cell_#_valid"});
-	}
-	else if (cls == "thrusters")
-	{
-		h << "thruster_count,";
-		indexed({"effort_#"});
-		std::string s = h.str();
-		s.pop_back();  // thrusters have no pose
-		return s;
-	}
-	else if (cls == "image")
-		h << "file,ncols,nrows,fx,fy,cx,cy,camera_name,";
-	else if (cls == "usbl")
-		h << "measurement_time_s,latitude_deg,longitude_deg,depth_m,north_m,east_m,down_m,cov_nn,cov_ne,cov_"
-		     "nd,cov_en,"
-		     "cov_ee,cov_ed,cov_dn,cov_de,cov_dd,slant_range_m,transponder_id,";
-	h << kPoseColumns;
-	return h.str();
+	if (has_pose)
+		h += kPoseColumns;
+	else
+		h.pop_back();  // the trailing comma
+	return h;
 }
 
 std::string imuRow(const mrpt::obs::CObservationIMU& o)

@@ -80,12 +80,17 @@ std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& ke
 	parseCommon(q, common, kind);
 	common.present = true;
 	common.where = n.where(key);
+	// Either list gives exactly one entry per element.
+	const auto checkLength = [&](const char* list, std::size_t length, const char* what)
+	{
+		if (length != count)
+			q.fail(list,
+			       "expected " + std::to_string(count) + " " + what + ", got " + std::to_string(length));
+	};
 	if (q.has("fields"))
 	{
 		const auto names = q.strings("fields");
-		if (names.size() != count)
-			q.fail("fields",
-			       "expected " + std::to_string(count) + " names, got " + std::to_string(names.size()));
+		checkLength("fields", names.size(), "names");
 		for (std::size_t i = 0; i < count; ++i)
 		{
 			out[i] = common;
@@ -95,9 +100,7 @@ std::vector<ScalarSpec> parseVector(const config::Node& n, const std::string& ke
 	else
 	{
 		const auto values = q.numbers("values");
-		if (values.size() != count)
-			q.fail("values",
-			       "expected " + std::to_string(count) + " numbers, got " + std::to_string(values.size()));
+		checkLength("values", values.size(), "numbers");
 		for (std::size_t i = 0; i < count; ++i)
 		{
 			out[i] = common;

@@ -10,22 +10,27 @@
 
 namespace auvnav::import::detail
 {
-std::unique_ptr<Converter> makeImuConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label);
-std::unique_ptr<Converter> makeDvlConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label);
-std::unique_ptr<Converter> makePressureConverter(const config::Node& q, const config::Node& s,
-                                                 const std::string& label);
-std::unique_ptr<Converter> makeGpsConverter(const config::Node& q, const config::Node& s,
-                                            const std::string& label);
-std::unique_ptr<Converter> makeAdcpConverter(const config::Node& q, const config::Node& s,
-                                             const std::string& label);
-std::unique_ptr<Converter> makeThrustersConverter(const config::Node& q, const config::Node& s,
-                                                  const std::string& label);
+/** What makeConverter calls to build the converter of one class. */
+using ConverterFactory = std::unique_ptr<Converter> (*)(const config::Node& q, const config::Node& s,
+                                                        const std::string& label);
+
+/** The factory of converter class `C` (constructible from q, s, label).
+ *  Each convert_<class>.cpp defines its entry below with it. */
+template <class C>
+std::unique_ptr<Converter> factoryOf(const config::Node& q, const config::Node& s, const std::string& label)
+{
+	return std::make_unique<C>(q, s, label);
+}
+
+extern const ConverterFactory makeImuConverter;
+extern const ConverterFactory makeDvlConverter;
+extern const ConverterFactory makePressureConverter;
+extern const ConverterFactory makeGpsConverter;
+extern const ConverterFactory makeAdcpConverter;
+extern const ConverterFactory makeThrustersConverter;
+extern const ConverterFactory makeUsblConverter;
 /** `data_dir` resolves relative image paths. */
 std::unique_ptr<Converter> makeImageConverter(const config::Node& q, const config::Node& s,
                                               const std::string& label, const std::string& data_dir);
-std::unique_ptr<Converter> makeUsblConverter(const config::Node& q, const config::Node& s,
-                                             const std::string& label);
 
 }  // namespace auvnav::import::detail
