@@ -57,12 +57,8 @@ PrepareStatus AdcpModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
                                    std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
-	const auto* adcp = dynamic_cast<const auvnav::obs::CObservationADCP*>(&obs);
-	if (!adcp)
-	{
-		why = std::string("expected auvnav::obs::CObservationADCP, got ") + obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* adcp = observationAs<auvnav::obs::CObservationADCP>(obs, why);
+	if (!adcp) return PrepareStatus::Invalid;
 	if (!(std::isfinite(adcp->cell_size_m) && adcp->cell_size_m > 0))
 	{
 		why = "cell size not a positive number";

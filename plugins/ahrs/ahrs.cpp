@@ -66,12 +66,8 @@ std::optional<Eigen::Matrix3d> AhrsModel::measuredAttitude(const mrpt::obs::CObs
                                                            std::string& why) const
 {
 	using namespace mrpt::obs;
-	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
-	if (!imu)
-	{
-		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
-		return std::nullopt;
-	}
+	const auto* imu = observationAs<CObservationIMU>(obs, why);
+	if (!imu) return std::nullopt;
 	const auto finite = [&](std::initializer_list<TIMUDataIndex> fields, const char* what)
 	{
 		for (const auto f : fields)

@@ -8,6 +8,7 @@
 #include <auvnav/plugin_state.h>
 #include <auvnav/state.h>
 #include <auvnav/state_block_config.h>
+#include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include <Eigen/Core>
@@ -26,6 +27,18 @@ inline double gateProbabilityFrom(const config::Node& cfg, double default_value 
 	const double p = cfg.inRange("gate_probability", 0.0, 1.0, default_value);
 	if (!(p > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
 	return p;
+}
+
+/** `obs` as the observation class T, or null with `why` naming the class
+ *  expected and the one given: every plugin's first check in prepare. */
+template <class T>
+const T* observationAs(const mrpt::obs::CObservation& obs, std::string& why)
+{
+	const auto* typed = dynamic_cast<const T*>(&obs);
+	if (!typed)
+		why = std::string("expected ") + T::GetRuntimeClassIdStatic().className + ", got " +
+		      obs.GetRuntimeClass()->className;
+	return typed;
 }
 
 /** Mounting rotation R_bs (sensor to body) from yaw, pitch, roll in degrees,

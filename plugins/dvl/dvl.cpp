@@ -98,12 +98,8 @@ PrepareStatus DvlModel::doPrepare(const mrpt::obs::CObservation& o, const Filter
                                   std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
-	const auto* dvl = dynamic_cast<const obs::CObservationDVL*>(&o);
-	if (!dvl)
-	{
-		why = std::string("expected auvnav::obs::CObservationDVL, got ") + o.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* dvl = observationAs<obs::CObservationDVL>(o, why);
+	if (!dvl) return PrepareStatus::Invalid;
 	if (!dvl->bottom_lock)
 	{
 		why = "no bottom lock";

@@ -32,12 +32,8 @@ PrepareStatus GpsModel::decodeFix(const mrpt::obs::CObservation& obs, const Filt
                                   Eigen::Vector3d& p_n, double& hdop, std::string& why) const
 {
 	using mrpt::obs::gnss::Message_NMEA_GGA;
-	const auto* gps = dynamic_cast<const mrpt::obs::CObservationGPS*>(&obs);
-	if (!gps)
-	{
-		why = std::string("expected mrpt::obs::CObservationGPS, got ") + obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* gps = observationAs<mrpt::obs::CObservationGPS>(obs, why);
+	if (!gps) return PrepareStatus::Invalid;
 	if (!gps->has_GGA_datum())
 	{
 		why = "no GGA message";

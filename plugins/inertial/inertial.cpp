@@ -38,12 +38,8 @@ PrepareStatus InertialModel::doPrepare(const mrpt::obs::CObservation& obs, const
 {
 	using namespace mrpt::obs;
 	out.clear();
-	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
-	if (!imu)
-	{
-		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* imu = observationAs<CObservationIMU>(obs, why);
+	if (!imu) return PrepareStatus::Invalid;
 	constexpr TIMUDataIndex kAcc[3] = {IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC};
 	Eigen::Vector3d f;
 	for (int i = 0; i < 3; ++i)

@@ -110,12 +110,8 @@ PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, c
 {
 	using namespace mrpt::obs;
 	out.clear();
-	const auto* imu = dynamic_cast<const CObservationIMU*>(&obs);
-	if (!imu)
-	{
-		why = std::string("expected mrpt::obs::CObservationIMU, got ") + obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* imu = observationAs<CObservationIMU>(obs, why);
+	if (!imu) return PrepareStatus::Invalid;
 	Eigen::Vector3d m_s_ut;
 	const TIMUDataIndex fields[3] = {IMU_MAG_X, IMU_MAG_Y, IMU_MAG_Z};
 	const char* names[3] = {"IMU_MAG_X", "IMU_MAG_Y", "IMU_MAG_Z"};

@@ -3,6 +3,8 @@
 #include <auvnav/obs/CObservationThrusters.h>
 #include <auvnav/so3.h>
 
+#include "plugin_common.h"
+
 #include <cmath>
 
 namespace auvnav::plugins
@@ -216,13 +218,8 @@ PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, co
                                           std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
-	const auto* thr = dynamic_cast<const auvnav::obs::CObservationThrusters*>(&obs);
-	if (!thr)
-	{
-		why = std::string("expected auvnav::obs::CObservationThrusters, got ") +
-		      obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* thr = observationAs<auvnav::obs::CObservationThrusters>(obs, why);
+	if (!thr) return PrepareStatus::Invalid;
 	if (static_cast<Eigen::Index>(thr->effort.size()) != T_.cols())
 	{
 		why = "observation has " + std::to_string(thr->effort.size()) + " thrusters, the configuration " +

@@ -42,13 +42,8 @@ PrepareStatus PressureModel::doPrepare(const mrpt::obs::CObservation& obs, const
                                        std::vector<Measurement>& out, std::string& why)
 {
 	out.clear();
-	const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(&obs);
-	if (!p)
-	{
-		why = std::string("expected auvnav::obs::CObservationPressure, got ") +
-		      obs.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* p = observationAs<auvnav::obs::CObservationPressure>(obs, why);
+	if (!p) return PrepareStatus::Invalid;
 	if (!std::isfinite(p->pressure_pa))
 	{
 		why = "non-finite pressure";

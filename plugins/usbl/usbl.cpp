@@ -33,12 +33,8 @@ double UsblModel::doMeasurementTime(const mrpt::obs::CObservation& obs, double s
 PrepareStatus UsblModel::decodeFix(const mrpt::obs::CObservation& o, const FilterContext& ctx,
                                    Eigen::Vector3d& p_n, Eigen::Matrix3d& C_n, std::string& why) const
 {
-	const auto* u = dynamic_cast<const obs::CObservationUSBL*>(&o);
-	if (!u)
-	{
-		why = std::string("expected auvnav::obs::CObservationUSBL, got ") + o.GetRuntimeClass()->className;
-		return PrepareStatus::Invalid;
-	}
+	const auto* u = observationAs<obs::CObservationUSBL>(o, why);
+	if (!u) return PrepareStatus::Invalid;
 	if (!ctx.frame)
 	{
 		why = "no navigation frame in the filter context";
