@@ -45,10 +45,13 @@ class GpsConverter final : public MountedConverter
 			if (why.empty()) why = "latitude/longitude missing";
 			return nullptr;
 		}
+		// Through locals: MRPT's GGA fields are packed, a reference to one
+		// would be misaligned.
+		double lat_deg = 0, lon_deg = 0;
+		if (!latLonDegrees(lat_, lat, lon_, lon, lat_deg, lon_deg, why)) return nullptr;
 		Message_NMEA_GGA gga;
-		if (!latLonDegrees(lat_, lat, lon_, lon, gga.fields.latitude_degrees, gga.fields.longitude_degrees,
-		                   why))
-			return nullptr;
+		gga.fields.latitude_degrees = lat_deg;
+		gga.fields.longitude_degrees = lon_deg;
 		double x = 0;
 		Read res = readScalar(alt_, r, cols_, x, why);
 		if (res == Read::Bad) return nullptr;
