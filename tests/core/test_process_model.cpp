@@ -391,10 +391,9 @@ TEST(ProcessModel, TailRowsOfTheLinearMapAreTheDiagonalFactors)
 	EXPECT_EQ(a[n - 1 - idx::adcp_bias], 1.0);
 }
 
-TEST(ProcessModel, PerMetreRandomWalkGrowsWithTheDistanceThroughTheWaterNotWithTime)
+// A process model with one plugin state "scale" that walks 0.1 per √m.
+ProcessModel perMetreScaleModel()
 {
-	// σ = 0.1 per √m: 2 m moved give 0.02 whether in 1 s or in 4 s, none
-	// while hovering. A per-second walk would give 0.01 × dt (0.01 and 0.04).
 	ProcessModel pm;
 	StateBlockSpec b;
 	b.name = "scale";
@@ -403,6 +402,14 @@ TEST(ProcessModel, PerMetreRandomWalkGrowsWithTheDistanceThroughTheWaterNotWithT
 	b.process = StateProcess::RandomWalkPerMetre;
 	b.process_sigma = 0.1;
 	pm.appendBlock(b);
+	return pm;
+}
+
+TEST(ProcessModel, PerMetreRandomWalkGrowsWithTheDistanceThroughTheWaterNotWithTime)
+{
+	// σ = 0.1 per √m: 2 m moved give 0.02 whether in 1 s or in 4 s, none
+	// while hovering. A per-second walk would give 0.01 × dt (0.01 and 0.04).
+	ProcessModel pm = perMetreScaleModel();
 	const int i = idx::extra;
 	const auto var = [&](double dt, double speed_through_water, double vertical_speed)
 	{ return pm.noiseCovariance(dt, speed_through_water, vertical_speed)(i, i); };
@@ -425,14 +432,7 @@ TEST(ProcessModel, PerMetreRandomWalkThroughTheFilterUsesTheStatesSpeedThroughTh
 	// adds σ² × 10 m, in a 0.5 m/s current along the track σ² × 7.5 m.
 	for (const double current_n : {0.0, 0.5})
 	{
-		ProcessModel pm;
-		StateBlockSpec b;
-		b.name = "scale";
-		b.components = {""};
-		b.sigma = {0.01};
-		b.process = StateProcess::RandomWalkPerMetre;
-		b.process_sigma = 0.1;
-		pm.appendBlock(b);
+		ProcessModel pm = perMetreScaleModel();
 		pm.noise.current.tau_s = 1e15;  // a steady current
 		NavState x;
 		x.v_n = Eigen::Vector3d(2.0, 0, 0);
