@@ -10,11 +10,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class AdcpConverter final : public MountedConverter
+class AdcpConverter final : public AxisMappedConverter
 {
  public:
 	AdcpConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
+	    : AxisMappedConverter(s, label)
 	{
 		blank_ = parseScalar(q, "blank_distance", UnitKind::Length);
 		cell_size_ = parseScalar(q, "cell_size", UnitKind::Length);
@@ -59,7 +59,7 @@ class AdcpConverter final : public MountedConverter
 			const Read rb = readScalar(valid_, r, cols_, valid, why, i);
 			if (rb == Read::Bad) return count_.explainMissing(n, why), nullptr;
 			const bool finite = rv == Read::Ok && v.allFinite();
-			const Eigen::Vector3d v_s = finite ? Eigen::Vector3d(axes_ * v) : Eigen::Vector3d::Zero();
+			const Eigen::Vector3d v_s = finite ? Eigen::Vector3d(axes() * v) : Eigen::Vector3d::Zero();
 			for (int k = 0; k < 3; ++k) cell.velocity_s_mps[static_cast<std::size_t>(k)] = v_s[k];
 			cell.correlation = rc == Read::Ok ? corr : 0;
 			cell.valid = finite && valid != 0;
@@ -68,7 +68,6 @@ class AdcpConverter final : public MountedConverter
 	}
 
  private:
-	Eigen::Matrix3d axes_;
 	ScalarSpec blank_, cell_size_, sigma_;
 	CountSpec count_;
 	std::vector<ScalarSpec> velocity_;

@@ -12,11 +12,11 @@ namespace auvnav::import::detail
 {
 namespace
 {
-class DvlConverter final : public MountedConverter
+class DvlConverter final : public AxisMappedConverter
 {
  public:
 	DvlConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
+	    : AxisMappedConverter(s, label)
 	{
 		frame_ = parseText(s, "frame");
 		if (!frame_.present)
@@ -38,7 +38,7 @@ class DvlConverter final : public MountedConverter
 			          auvnav::obs::DvlSign x;
 			          return auvnav::obs::parseDvlSign(n, x);
 		          });
-		if (frame_.is_constant && frame_.constant == "beam" && !axes_.isIdentity(1e-12))
+		if (frame_.is_constant && frame_.constant == "beam" && !axes().isIdentity(1e-12))
 			s.fail("axes",
 			       "not applied to beam azimuths with frame: beam (give them in the sensor frame, without "
 			       "axes)");
@@ -90,7 +90,7 @@ class DvlConverter final : public MountedConverter
 		}
 		// Beam azimuths and radial velocities are not rotated by `axes`: a beam-frame
 		// record with axes would be silently in the source frame.
-		if (o->frame == DvlFrame::Beam && !axes_.isIdentity(1e-12))
+		if (o->frame == DvlFrame::Beam && !axes().isIdentity(1e-12))
 		{
 			why =
 			    "frame beam: axes are not applied to beam azimuths (give them in the sensor frame, without "
@@ -124,7 +124,7 @@ class DvlConverter final : public MountedConverter
 			// NaN or a declared invalid value is "no velocity" (no bottom lock), not an error.
 			velocity_ok = res == Read::Ok && v.allFinite();
 			const bool rotate = o->frame == DvlFrame::Instrument || o->frame == DvlFrame::Vehicle;
-			const Eigen::Vector3d v_out = velocity_ok ? Eigen::Vector3d(rotate ? axes_ * v : v) : v;
+			const Eigen::Vector3d v_out = velocity_ok ? Eigen::Vector3d(rotate ? axes() * v : v) : v;
 			// An invalid velocity is kept as read (NaN for a missing one), not made up.
 			for (int k = 0; k < 3; ++k)
 				o->velocity_s_mps[static_cast<std::size_t>(k)] = velocity_ok ? v_out[k] : v[k];
@@ -144,9 +144,8 @@ class DvlConverter final : public MountedConverter
 			if (res == Read::Bad) return nullptr;
 			o->bottom_lock = velocity_ok && res == Read::Ok && x != 0;
 		}
-		const Read ra = readScalar(altitude_, r, cols_, x, why);
-		if (ra == Read::Bad) return nullptr;
-		o->altitude_m = ra == Read::Ok ? x : altitudeFromBeams(*o);
+		if (!readOptional(altitude_, r, cols_, x, why)) return nullptr;
+		o->altitude_m = std::isnan(x) ? altitudeFromBeams(*o) : x;
 		return o;
 	}
 
@@ -209,7 +208,7 @@ class DvlConverter final : public MountedConverter
 				// A NaN covariance (beam mode, no 3-D velocity) is kept as read, not made 0.
 				const bool rotate =
 				    o.frame == auvnav::obs::DvlFrame::Instrument || o.frame == auvnav::obs::DvlFrame::Vehicle;
-				if (rotate && C.allFinite()) C = axes_ * C * axes_.transpose();
+				if (rotate && C.allFinite()) C = axes() * C * axes().transpose();
 				for (int k = 0; k < 9; ++k) o.velocity_cov[static_cast<std::size_t>(k)] = C(k / 3, k % 3);
 			}
 			else if (ok != 0)
@@ -242,7 +241,6 @@ class DvlConverter final : public MountedConverter
 		return n > 0 ? sum / n : std::nan("");
 	}
 
-	Eigen::Matrix3d axes_;
 	TextSpec frame_, sign_;
 	std::vector<ScalarSpec> velocity_, cov_;
 	ScalarSpec sigma_, lock_, altitude_, inclination_, beam_sigma_;

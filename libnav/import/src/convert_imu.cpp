@@ -15,11 +15,11 @@ namespace
 {
 constexpr double kGaussPerTesla = 1e4;  // MRPT's CObservationIMU keeps IMU_MAG_* in gauss
 
-class ImuConverter final : public MountedConverter
+class ImuConverter final : public AxisMappedConverter
 {
  public:
 	ImuConverter(const config::Node& q, const config::Node& s, const std::string& label)
-	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
+	    : AxisMappedConverter(s, label)
 	{
 		gyro_ = parseVector(q, "angular_velocity", UnitKind::AngularRate, 3);
 		acc_ = parseVector(q, "linear_acceleration", UnitKind::Acceleration, 3);
@@ -33,7 +33,7 @@ class ImuConverter final : public MountedConverter
 		// The quaternion is an attitude of the source frame in the IMU's own world
 		// frame: `axes` (possibly a reflection) cannot be applied to it, and leaving
 		// it unrotated beside rotated rates would be silently inconsistent.
-		if (quat_[0].present && !axes_.isIdentity(1e-12))
+		if (quat_[0].present && !axes().isIdentity(1e-12))
 			s.fail("axes",
 			       "not applicable to orientation (a quaternion of the source frame): give the orientation "
 			       "in the sensor frame without axes, or import it as a separate sensor");
@@ -114,12 +114,11 @@ class ImuConverter final : public MountedConverter
 				readScalar(spec[static_cast<std::size_t>(k)], r, cols_, v[k], why, 0, &v[k]);
 			scale = 1;
 		}
-		const Eigen::Vector3d v_s = axes_ * v * scale;
+		const Eigen::Vector3d v_s = axes() * v * scale;
 		for (int k = 0; k < 3; ++k) o.set(idx[static_cast<std::size_t>(k)], v_s[k]);
 		return true;
 	}
 
-	Eigen::Matrix3d axes_;
 	std::vector<ScalarSpec> gyro_, acc_, mag_, quat_;
 	ScalarSpec temp_;
 };

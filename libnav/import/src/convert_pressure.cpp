@@ -57,9 +57,7 @@ class PressureConverter final : public MountedConverter
 			o->pressure_pa = gauge_ ? v + atmospheric_pa_ : v;
 		else
 			o->pressure_pa = atmospheric_pa_ + density_ * gravity_ * v;
-		double t = NAN;
-		if (readScalar(temp_, r, cols_, t, why) == Read::Bad) return nullptr;
-		o->temperature_c = t;
+		if (!readOptional(temp_, r, cols_, o->temperature_c, why)) return nullptr;
 		return o;
 	}
 

@@ -131,22 +131,28 @@ bool finiteOrWhy(const Eigen::Vector3d& v, const char* name, std::string& why)
 	return false;
 }
 
-Read readAngle(const ScalarSpec& s, const Record& r, Columns& cols, AngleRead& out, std::string& why)
+LatLonSpec::LatLonSpec(const config::Node& q, const config::Node& s)
+    : lat_(parseScalar(q, "latitude", UnitKind::Angle)), lon_(parseScalar(q, "longitude", UnitKind::Angle))
 {
-	return readScalar(s, r, cols, out.rad, why, 0, &out.raw);
+	if (lat_.present != lon_.present) s.fail("latitude", "give latitude and longitude together");
 }
 
-bool latLonDegrees(const ScalarSpec& lat_spec, const AngleRead& lat, const ScalarSpec& lon_spec,
-                   const AngleRead& lon, double& lat_deg, double& lon_deg, std::string& why)
+Read LatLonSpec::read(const Record& r, Columns& cols, double& lat_deg, double& lon_deg,
+                      std::string& why) const
 {
-	if (!(std::abs(lat.rad) <= M_PI / 2 && std::abs(lon.rad) <= 2 * M_PI))
+	double lat_rad = 0, lon_rad = 0, lat_raw = 0, lon_raw = 0;
+	const Read lat = readScalar(lat_, r, cols, lat_rad, why, 0, &lat_raw);
+	if (lat != Read::Ok) return lat;
+	const Read lon = readScalar(lon_, r, cols, lon_rad, why, 0, &lon_raw);
+	if (lon != Read::Ok) return lon;
+	if (!(std::abs(lat_rad) <= M_PI / 2 && std::abs(lon_rad) <= 2 * M_PI))
 	{
 		why = "latitude/longitude not finite or out of range";
-		return false;
+		return Read::Bad;
 	}
-	lat_deg = lat_spec.unit.name == "deg" ? lat.raw : lat.rad / kDeg;
-	lon_deg = lon_spec.unit.name == "deg" ? lon.raw : lon.rad / kDeg;
-	return true;
+	lat_deg = lat_.unit.name == "deg" ? lat_raw : lat_rad / kDeg;
+	lon_deg = lon_.unit.name == "deg" ? lon_raw : lon_rad / kDeg;
+	return Read::Ok;
 }
 
 CountSpec CountSpec::parse(const config::Node& n, const std::string& key)

@@ -67,27 +67,50 @@ class MountedConverter : public Converter
 	Mounting mounting_;
 };
 
+/** Base of the converters of a vector sensor (IMU, DVL, ADCP): a mounted
+ *  sensor whose source axes map to the sensor frame through `axes:`
+ *  (parseAxes). */
+class AxisMappedConverter : public MountedConverter
+{
+ protected:
+	AxisMappedConverter(const config::Node& s, const std::string& label)
+	    : MountedConverter(s, label), axes_(parseAxes(s, notes_))
+	{
+	}
+
+	//! Source vector to sensor frame.
+	const Eigen::Matrix3d& axes() const { return axes_; }
+
+ private:
+	Eigen::Matrix3d axes_;
+};
+
 /** Reads a 3-vector quantity: Ok (all three), Missing (all three missing), Bad. */
 Read readVec3(const std::vector<ScalarSpec>& spec, const Record& r, Columns& cols, Eigen::Vector3d& out,
               std::string& why, const char* name, int index = 0);
 
 bool finiteOrWhy(const Eigen::Vector3d& v, const char* name, std::string& why);
 
-/** An angle as read from a record: in SI (rad) and as the source wrote it. */
-struct AngleRead
+/** The latitude and longitude of a fix (quantities `latitude` and
+ *  `longitude`, angles), given together or not at all. */
+class LatLonSpec
 {
-	double rad = 0, raw = 0;
+ public:
+	/** Parses them from the quantities `q`; fails on `s` (the sensor entry)
+	 *  when only one is given. */
+	LatLonSpec(const config::Node& q, const config::Node& s);
+
+	bool present() const { return lat_.present; }
+
+	/** Reads the fix in degrees. A quantity whose unit is deg keeps the
+	 *  source's number (no rad round trip that could move its last bit).
+	 *  Missing when either cell is empty; Bad and `why` when either is not
+	 *  finite or out of range (|latitude| <= 90°, |longitude| <= 360°). */
+	Read read(const Record& r, Columns& cols, double& lat_deg, double& lon_deg, std::string& why) const;
+
+ private:
+	ScalarSpec lat_, lon_;
 };
-
-/** Reads angle `s` as readScalar does, keeping the source's number too. */
-Read readAngle(const ScalarSpec& s, const Record& r, Columns& cols, AngleRead& out, std::string& why);
-
-/** A latitude and longitude read from a record, in degrees: a quantity whose
- *  unit is deg keeps the source's number (no rad round trip that could move
- *  its last bit). False and `why` when either is not finite or out of range
- *  (|latitude| <= 90°, |longitude| <= 360°). */
-bool latLonDegrees(const ScalarSpec& lat_spec, const AngleRead& lat, const ScalarSpec& lon_spec,
-                   const AngleRead& lon, double& lat_deg, double& lon_deg, std::string& why);
 
 /** `count:` of an array: a constant or a field (`{field: n}`). */
 struct CountSpec

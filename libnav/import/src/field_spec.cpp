@@ -195,6 +195,12 @@ Read readScalar(const ScalarSpec& s, const Record& r, Columns& cols, double& out
 	return Read::Ok;
 }
 
+bool readOptional(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why)
+{
+	out_si = NAN;
+	return readScalar(s, r, cols, out_si, why) != Read::Bad;
+}
+
 TextSpec parseText(const config::Node& n, const std::string& key)
 {
 	TextSpec t;

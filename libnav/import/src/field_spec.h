@@ -62,6 +62,10 @@ Read readNumber(const Value& v, double& out, std::string& why);
 Read readScalar(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why,
                 int index = 0, double* raw_out = nullptr);
 
+/** Reads an optional scalar in SI: `out_si` is NaN when it is missing; false
+ *  (and `why`) only when it is present but unusable. */
+bool readOptional(const ScalarSpec& s, const Record& r, Columns& cols, double& out_si, std::string& why);
+
 /** A text-valued setting, constant (`frame: earth_enu`) or per record
  *  (`frame: {field: coord_sys, map: {"3": earth_enu}}`). */
 struct TextSpec

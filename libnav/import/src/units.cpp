@@ -1,3 +1,4 @@
+#include <auvnav/enum_names.h>
 #include <auvnav/import/record.h>
 #include <auvnav/import/units.h>
 
@@ -64,38 +65,12 @@ const std::vector<Unit>& table()
 
 const char* kindName(UnitKind k)
 {
-	switch (k)
-	{
-		case UnitKind::Angle:
-			return "an angle";
-		case UnitKind::AngularRate:
-			return "an angular rate";
-		case UnitKind::Acceleration:
-			return "an acceleration";
-		case UnitKind::Velocity:
-			return "a velocity";
-		case UnitKind::Pressure:
-			return "a pressure";
-		case UnitKind::Length:
-			return "a length";
-		case UnitKind::MagneticField:
-			return "a magnetic field";
-		case UnitKind::Temperature:
-			return "a temperature";
-		case UnitKind::Force:
-			return "a force";
-		case UnitKind::RotationSpeed:
-			return "a rotation speed";
-		case UnitKind::Dimensionless:
-			return "dimensionless";
-		case UnitKind::VelocitySquared:
-			return "a velocity variance";
-		case UnitKind::LengthSquared:
-			return "a position variance";
-		case UnitKind::Time:
-			return "a time";
-	}
-	return "?";
+	static constexpr const char* kNames[] = {
+	    "an angle",      "an angular rate",     "an acceleration",     "a velocity", "a pressure",
+	    "a length",      "a magnetic field",    "a temperature",       "a force",    "a rotation speed",
+	    "dimensionless", "a velocity variance", "a position variance", "a time"};
+	static_assert(namesEveryValue(kNames, UnitKind::Time));
+	return nameOf(kNames, k, "?");
 }
 
 std::string unitsOfKind(UnitKind k)
