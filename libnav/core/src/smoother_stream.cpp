@@ -1,4 +1,5 @@
 // Stretch file, forward recorder and backward pass (smoother_stream.h).
+#include <auvnav/enum_names.h>
 #include <auvnav/smoother_stream.h>
 
 #include <cerrno>
@@ -361,16 +362,9 @@ void SmoothingRecorder::commit(std::size_t emitted)
 
 const char* smoothedKindName(SmoothedKind k)
 {
-	switch (k)
-	{
-		case SmoothedKind::Smoothed:
-			return "smoothed";
-		case SmoothedKind::SegmentEnd:
-			return "segment_end";
-		case SmoothedKind::Kept:
-			return "filtered_kept";
-	}
-	return "?";
+	static constexpr const char* kNames[] = {"smoothed", "segment_end", "filtered_kept"};
+	static_assert(namesEveryValue(kNames, SmoothedKind::Kept));
+	return nameOf(kNames, k, "?");
 }
 
 BackwardPassSummary smoothStretchFile(

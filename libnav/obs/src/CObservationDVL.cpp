@@ -1,3 +1,4 @@
+#include <auvnav/enum_names.h>
 #include <auvnav/obs/CObservationDVL.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -18,6 +19,8 @@ constexpr const char* kFrameNames[] = {"instrument", "vehicle", "earth_ned", "ea
 constexpr const char* kSignNames[] = {"vehicle_over_bottom", "bottom_over_instrument"};
 constexpr uint8_t kFrameCount = sizeof(kFrameNames) / sizeof(kFrameNames[0]);
 constexpr uint8_t kSignCount = sizeof(kSignNames) / sizeof(kSignNames[0]);
+static_assert(auvnav::namesEveryValue(kFrameNames, DvlFrame::Beam));
+static_assert(auvnav::namesEveryValue(kSignNames, DvlSign::BottomOverInstrument));
 
 constexpr const char* kClass = "CObservationDVL";
 
@@ -25,51 +28,28 @@ bool readFlag(mrpt::serialization::CArchive& in, const char* field)
 {
 	return detail::readFlag(in, kClass, field);
 }
-
-/** The name of enumerator `e` in `names` (indexed by the enum's uint8
- *  value), "unknown" for a value without one. */
-template <class Enum, std::size_t N>
-const char* nameOf(const char* const (&names)[N], Enum e)
-{
-	const auto i = static_cast<std::size_t>(e);
-	return i < N ? names[i] : "unknown";
-}
-
-/** The enumerator whose name in `names` is `name` (exact); false and `out`
- *  untouched if there is none. */
-template <class Enum, std::size_t N>
-bool parseName(const char* const (&names)[N], const std::string& name, Enum& out)
-{
-	for (std::size_t i = 0; i < N; ++i)
-		if (name == names[i])
-		{
-			out = static_cast<Enum>(i);
-			return true;
-		}
-	return false;
-}
 }  // namespace
 
 namespace auvnav::obs
 {
 const char* dvlFrameName(DvlFrame f)
 {
-	return nameOf(kFrameNames, f);
+	return auvnav::nameOf(kFrameNames, f, "unknown");
 }
 
 const char* dvlSignName(DvlSign s)
 {
-	return nameOf(kSignNames, s);
+	return auvnav::nameOf(kSignNames, s, "unknown");
 }
 
 bool parseDvlFrame(const std::string& name, DvlFrame& out)
 {
-	return parseName(kFrameNames, name, out);
+	return auvnav::parseName(kFrameNames, name, out);
 }
 
 bool parseDvlSign(const std::string& name, DvlSign& out)
 {
-	return parseName(kSignNames, name, out);
+	return auvnav::parseName(kSignNames, name, out);
 }
 }  // namespace auvnav::obs
 

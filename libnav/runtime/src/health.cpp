@@ -1,3 +1,4 @@
+#include <auvnav/enum_names.h>
 #include <auvnav/health.h>
 
 #include <Eigen/Eigenvalues>
@@ -18,18 +19,9 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
 
 const char* navStatusName(NavStatus s)
 {
-	switch (s)
-	{
-		case NavStatus::Ok:
-			return "ok";
-		case NavStatus::Degraded:
-			return "degraded";
-		case NavStatus::NotInitialized:
-			return "not_initialized";
-		case NavStatus::Diverged:
-			return "diverged";
-	}
-	return "unknown";
+	static constexpr const char* kNames[] = {"ok", "degraded", "not_initialized", "diverged"};
+	static_assert(namesEveryValue(kNames, NavStatus::Diverged));
+	return nameOf(kNames, s, "unknown");
 }
 
 HealthLimits HealthLimits::fromConfig(const config::Node& h)
