@@ -9,25 +9,6 @@ namespace auvnav
 {
 namespace
 {
-struct BlockSpan
-{
-	uint32_t bit;
-	int begin, size;
-};
-constexpr BlockSpan kBlocks[] = {{kAttitude, idx::att, 3},
-                                 {kGyroBias, idx::gyro_bias, 3},
-                                 {kAcceleration, idx::acc, 3},
-                                 {kGravity, idx::gravity, 1},
-                                 {kAccelBias, idx::acc_bias, 3},
-                                 {kVelocity, idx::vel, 3},
-                                 {kPosition, idx::pos, 3},
-                                 {kCurrentVehicle, idx::current_vehicle, 2},
-                                 {kCurrentFar, idx::current_far, 2},
-                                 {kAdcpBias, idx::adcp_bias, 2},
-                                 {kInertia, idx::inertia, 6},
-                                 {kDampingLinear, idx::damping_lin, 6},
-                                 {kDampingQuadratic, idx::damping_quad, 6}};
-
 // Row-major copies of the 2x3 parameter blocks.
 void put23(TangentVector& t, int at, const Eigen::Matrix<double, 2, 3>& m)
 {
@@ -41,11 +22,30 @@ void get23(const Eigen::Ref<const TangentVector>& t, int at, Eigen::Matrix<doubl
 }
 }  // namespace
 
+const std::array<StateBlockInfo, 13>& coreStateBlocks()
+{
+	static constexpr std::array<StateBlockInfo, 13> kBlocks = {
+	    {{kAttitude, idx::att, 3, "attitude", "att"},
+	     {kGyroBias, idx::gyro_bias, 3, "gyro_bias", "gyro_bias"},
+	     {kAcceleration, idx::acc, 3, "acceleration", "acc"},
+	     {kGravity, idx::gravity, 1, "gravity", "gravity"},
+	     {kAccelBias, idx::acc_bias, 3, "accel_bias", "acc_bias"},
+	     {kVelocity, idx::vel, 3, "velocity", "vel"},
+	     {kPosition, idx::pos, 3, "position", "pos"},
+	     {kCurrentVehicle, idx::current_vehicle, 2, "current_vehicle", "current"},
+	     {kCurrentFar, idx::current_far, 2, "current_far", "current_far"},
+	     {kAdcpBias, idx::adcp_bias, 2, "adcp_bias", "adcp_bias"},
+	     {kInertia, idx::inertia, 6, "inertia", "M"},
+	     {kDampingLinear, idx::damping_lin, 6, "damping_linear", "Dl"},
+	     {kDampingQuadratic, idx::damping_quad, 6, "damping_quadratic", "Dq"}}};
+	return kBlocks;
+}
+
 int tangentPrefix(uint32_t mask, int dim)
 {
 	if (mask & kPluginStates) return dim;
 	int end = 0;
-	for (const auto& b : kBlocks)
+	for (const auto& b : coreStateBlocks())
 		if (mask & b.bit) end = std::max(end, b.begin + b.size);
 	return end;
 }
@@ -54,7 +54,7 @@ uint32_t blockOfCoordinate(int i, int dim)
 {
 	if (i < 0 || i >= dim) return 0;
 	if (i >= idx::extra) return kPluginStates;
-	for (const auto& b : kBlocks)
+	for (const auto& b : coreStateBlocks())
 		if (i >= b.begin && i < b.begin + b.size) return b.bit;
 	return 0;
 }

@@ -148,19 +148,8 @@ std::pair<TangentVector, TangentVector> sigmaLimitsFromConfig(const config::Node
 {
 	const auto& names = layout.tangent_names;
 	// What a key may name, each [first, count).
-	std::map<std::string, std::pair<int, int>> targets = {{"att", {idx::att, 3}},
-	                                                      {"gyro_bias", {idx::gyro_bias, 3}},
-	                                                      {"acc", {idx::acc, 3}},
-	                                                      {"gravity", {idx::gravity, 1}},
-	                                                      {"acc_bias", {idx::acc_bias, 3}},
-	                                                      {"vel", {idx::vel, 3}},
-	                                                      {"pos", {idx::pos, 3}},
-	                                                      {"current", {idx::current_vehicle, 2}},
-	                                                      {"current_far", {idx::current_far, 2}},
-	                                                      {"adcp_bias", {idx::adcp_bias, 2}},
-	                                                      {"M", {idx::inertia, 6}},
-	                                                      {"Dl", {idx::damping_lin, 6}},
-	                                                      {"Dq", {idx::damping_quad, 6}}};
+	std::map<std::string, std::pair<int, int>> targets;
+	for (const auto& b : coreStateBlocks()) targets[b.prefix] = {b.begin, b.size};
 	for (const auto& b : layout.plugin_blocks) targets[b.sensor + "." + b.name] = {b.offset, b.dim};
 	for (int i = 0; i < static_cast<int>(names.size()); ++i) targets.emplace(names[i], std::make_pair(i, 1));
 	std::vector<std::string> keys;

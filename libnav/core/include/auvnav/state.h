@@ -36,6 +36,7 @@
  *  read them in SI units.
  */
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -77,6 +78,20 @@ enum StateBlock : uint32_t
 	kPluginStates = 1u << 13,
 	kAllBlocks = (1u << 14) - 1
 };
+
+/** One of the paper's 13 state blocks: its StateBlock bit, its tangent
+ *  coordinates [begin, begin + size), its name in messages ("attitude") and
+ *  the prefix of its coordinates' names ("att", as in tangentNames() and the
+ *  keys of filter.sigma_limits). */
+struct StateBlockInfo
+{
+	uint32_t bit;
+	int begin, size;
+	const char* name;
+	const char* prefix;
+};
+/** The paper's 13 blocks, in tangent order. */
+const std::array<StateBlockInfo, 13>& coreStateBlocks();
 
 /** Number of leading tangent coordinates that cover every block in `mask`,
  *  for a state of `dim` coordinates (kPluginStates covers all of them). */

@@ -39,40 +39,11 @@ namespace auvnav::testing
 {
 // ---------------------------------------------------------------- state blocks
 
-/** Tangent-coordinate span of one StateBlock (state.h order). */
-struct BlockSpan
-{
-	uint32_t bit;
-	int begin, size;
-	const char* name;
-};
-
-/** All 13 state blocks with their tangent spans and names. */
-inline const std::array<BlockSpan, 13>& stateBlocks()
-{
-	static const std::array<BlockSpan, 13> blocks = {{
-	    {kAttitude, idx::att, 3, "attitude"},
-	    {kGyroBias, idx::gyro_bias, 3, "gyro_bias"},
-	    {kAcceleration, idx::acc, 3, "acceleration"},
-	    {kGravity, idx::gravity, 1, "gravity"},
-	    {kAccelBias, idx::acc_bias, 3, "accel_bias"},
-	    {kVelocity, idx::vel, 3, "velocity"},
-	    {kPosition, idx::pos, 3, "position"},
-	    {kCurrentVehicle, idx::current_vehicle, 2, "current_vehicle"},
-	    {kCurrentFar, idx::current_far, 2, "current_far"},
-	    {kAdcpBias, idx::adcp_bias, 2, "adcp_bias"},
-	    {kInertia, idx::inertia, 6, "inertia"},
-	    {kDampingLinear, idx::damping_lin, 6, "damping_linear"},
-	    {kDampingQuadratic, idx::damping_quad, 6, "damping_quadratic"},
-	}};
-	return blocks;
-}
-
 /** Names of the blocks set in `mask`, e.g. "attitude|velocity". */
 inline std::string blockNames(uint32_t mask)
 {
 	std::string s;
-	for (const auto& b : stateBlocks())
+	for (const auto& b : coreStateBlocks())
 		if (mask & b.bit) s += (s.empty() ? "" : "|") + std::string(b.name);
 	if (mask & kPluginStates) s += (s.empty() ? "" : "|") + std::string("plugin_states");
 	return s.empty() ? "none" : s;
@@ -327,7 +298,7 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 
 	// Same state with every undeclared block moved far away.
 	TangentVector delta = RandomTangent(opt.seed * 7919u + 1u, opt.undeclared_scale, 3.0, x.dim());
-	for (const auto& b : stateBlocks())
+	for (const auto& b : coreStateBlocks())
 		if (mask & b.bit) delta.segment(b.begin, b.size).setZero();
 	if (mask & kPluginStates) delta.tail(x.dim() - idx::core_dim).setZero();
 	const NavState x_far = x.boxplus(delta);
@@ -338,7 +309,7 @@ inline ::testing::AssertionResult IsWellFormed(MeasurementModel& model, const mr
 		return AssertionFailure() << "structure().affine_in = 0x" << std::hex << structure.affine_in
 		                          << " has unknown bits";
 	TangentVector step = RandomTangent(opt.seed * 104729u + 3u, 1.0, 3.0, x.dim());
-	for (const auto& b : stateBlocks())
+	for (const auto& b : coreStateBlocks())
 		if (!(affine & b.bit)) step.segment(b.begin, b.size).setZero();
 	if (!(affine & kPluginStates)) step.tail(x.dim() - idx::core_dim).setZero();
 	const NavState x_plus = x.boxplus(step), x_minus = x.boxplus(-step), x_twice = x.boxplus(2 * step);
