@@ -59,11 +59,10 @@ void RejectedFixRun::add(double t_s, const Eigen::Vector2d& nu_ne_m, const Eigen
 	const Eigen::LLT<Eigen::Matrix2d> llt(R_m2);
 	if (llt.info() != Eigen::Success || !nu_ne_m.allFinite())
 	{
-		entries_.clear();
+		clear();
 		return;
 	}
-	entries_.push_back({t_s, nu_ne_m, R_m2, llt.solve(Eigen::Matrix2d::Identity())});
-	while (static_cast<int>(entries_.size()) > capacity_) entries_.pop_front();
+	push({t_s, nu_ne_m, R_m2, llt.solve(Eigen::Matrix2d::Identity())});
 }
 
 Eigen::Vector2d RejectedFixRun::meanOffset_m(int count) const
@@ -73,8 +72,8 @@ Eigen::Vector2d RejectedFixRun::meanOffset_m(int count) const
 	Eigen::Vector2d b = Eigen::Vector2d::Zero();
 	for (int k = size() - count; k < size(); ++k)
 	{
-		W += entries_[k].R_inv;
-		b += entries_[k].R_inv * entries_[k].nu;
+		W += entry(k).R_inv;
+		b += entry(k).R_inv * entry(k).nu;
 	}
 	return W.ldlt().solve(b);
 }
@@ -82,7 +81,7 @@ Eigen::Vector2d RejectedFixRun::meanOffset_m(int count) const
 Eigen::Matrix2d RejectedFixRun::meanNoise_m2(int count) const
 {
 	Eigen::Matrix2d R = Eigen::Matrix2d::Zero();
-	for (int k = size() - count; k < size(); ++k) R += entries_[k].R;
+	for (int k = size() - count; k < size(); ++k) R += entry(k).R;
 	return R / count;
 }
 
@@ -93,8 +92,8 @@ bool RejectedFixRun::agree(int count, double probability) const
 	double q = 0;
 	for (int k = size() - count; k < size(); ++k)
 	{
-		const Eigen::Vector2d d = entries_[k].nu - mean;
-		q += d.dot(entries_[k].R_inv * d);
+		const Eigen::Vector2d d = entry(k).nu - mean;
+		q += d.dot(entry(k).R_inv * d);
 	}
 	return q <= ManifoldUkf::chiSquareQuantile(2 * (count - 1), probability);
 }

@@ -27,6 +27,7 @@
  *  sensor whose fixes are accepted in between never builds a run.
  */
 #include <auvnav/measurement_model.h>
+#include <auvnav/recent_rejections.h>
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -72,18 +73,24 @@ class InitialFixConsensus
 	std::deque<Entry> fixes_;
 };
 
-class RejectedFixRun
+/** One gate-failing fix: its time [s], horizontal innovation ν [m] (north,
+ *  east) and the fix's noise R [m²] with its inverse. */
+struct RejectedFix
+{
+	double t_s;
+	Eigen::Vector2d nu;
+	Eigen::Matrix2d R, R_inv;
+};
+
+class RejectedFixRun : public RecentRejections<RejectedFix>
 {
  public:
-	/** Keeps at most `capacity` rejections (the newest). */
-	explicit RejectedFixRun(int capacity = 16) : capacity_(capacity) {}
+	explicit RejectedFixRun(int capacity = 16) : RecentRejections(capacity) {}
 
-	void clear() { entries_.clear(); }
 	/** One more gate rejection: time [s], horizontal innovation ν = fix − h(x̂)
 	 *  [m] (north, east), and the fix's noise R [m²]. A non-positive-definite R
 	 *  starts a new run (nothing to judge it by). */
 	void add(double t_s, const Eigen::Vector2d& nu_ne_m, const Eigen::Matrix2d& R_m2);
-	int size() const { return static_cast<int>(entries_.size()); }
 
 	/** True when the last `count` (≥ 2) rejections agree with one offset
 	 *  (the χ² test above, at `probability`). */
@@ -96,19 +103,8 @@ class RejectedFixRun
 	 *  default); 0 when there are none. */
 	double firstTime_s(int count = 1 << 30) const
 	{
-		if (entries_.empty()) return 0.0;
-		return entries_[static_cast<std::size_t>(std::max(0, size() - count))].t_s;
+		return size() == 0 ? 0.0 : entry(std::max(0, size() - count)).t_s;
 	}
-
- private:
-	struct Entry
-	{
-		double t_s;
-		Eigen::Vector2d nu;
-		Eigen::Matrix2d R, R_inv;
-	};
-	int capacity_;
-	std::deque<Entry> entries_;
 };
 
 }  // namespace auvnav

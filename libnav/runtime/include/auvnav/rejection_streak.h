@@ -16,35 +16,32 @@
  *  navigator re-acquires the aid at once (ManifoldUkf::update's recovery),
  *  instead of waiting for `gates.recovery_after_s`.
  */
+#include <auvnav/recent_rejections.h>
+
 #include <Eigen/Core>
-#include <deque>
 
 namespace auvnav
 {
-class RejectionStreak
+/** One rejection of a streak: its time [s] and its innovation whitened by
+ *  R: L⁻¹ ν, R = L Lᵀ. */
+struct WhitenedRejection
+{
+	double t_s;
+	Eigen::VectorXd w;
+};
+
+class RejectionStreak : public RecentRejections<WhitenedRejection>
 {
  public:
-	/** Keeps at most `capacity` rejections (the newest). */
-	explicit RejectionStreak(int capacity = 8) : capacity_(capacity) {}
+	explicit RejectionStreak(int capacity = 8) : RecentRejections(capacity) {}
 
-	void clear() { entries_.clear(); }
 	/** One more rejection: time [s], innovation ν, measurement noise R. A
 	 *  change of dimension starts a new streak. */
 	void add(double t_s, const Eigen::VectorXd& nu, const Eigen::MatrixXd& R);
-	int size() const { return static_cast<int>(entries_.size()); }
 
 	/** True when the last `count` (≥ 3) rejections fit a linear drift within
 	 *  the χ² quantile at `probability` (see above). */
 	bool consistentBias(int count, double probability) const;
-
- private:
-	struct Entry
-	{
-		double t_s;
-		Eigen::VectorXd w;  //!< innovation whitened by R: L⁻¹ ν, R = L Lᵀ
-	};
-	int capacity_;
-	std::deque<Entry> entries_;
 };
 
 }  // namespace auvnav
