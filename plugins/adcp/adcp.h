@@ -67,19 +67,8 @@ Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne,
 class AdcpModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	AdcpModel(const config::Node& cfg, const std::string& label);
-
-	uint32_t doUses() const override
-	{
-		return kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
-	}
-	/** h is linear in the gyro bias, velocity, currents and bias once the
-	 *  attitude is held (doPredict): only the attitude's sigma points are evaluated. */
-	MeasurementStructure doStructure() const override
-	{
-		return {kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias};
-	}
-	double doGateProbability() const override { return gate_probability_; }
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
 	const Eigen::Matrix3d& R_bs() const { return R_bs_; }
@@ -95,6 +84,17 @@ class AdcpModel final : public SafeMeasurementModel
 	static constexpr const char* kSkipNonFinite = "skipped_non_finite";
 
  protected:
+	uint32_t doUses() const override
+	{
+		return kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
+	}
+	/** h is linear in the gyro bias, velocity, currents and bias once the
+	 *  attitude is held (doPredict): only the attitude's sigma points are evaluated. */
+	MeasurementStructure doStructure() const override
+	{
+		return {kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias};
+	}
+	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -104,7 +104,6 @@ class AdcpModel final : public SafeMeasurementModel
 	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
  private:
-	std::string label_;
 	Eigen::Vector3d position_b_;
 	Eigen::Matrix3d R_bs_;
 	bool use_observation_pose_ = false;

@@ -21,7 +21,7 @@ struct AhrsReference
 };
 }  // namespace
 
-AhrsModel::AhrsModel(const config::Node& cfg, const std::string& label) : label_(label)
+AhrsModel::AhrsModel(const config::Node& cfg, const std::string& /*label*/)
 {
 	// A misspelled key must not fall back to its default silently.
 	cfg.allowOnly({"reference_frame", "heading_reference", "declination_deg", "orientation_ypr_deg",
@@ -59,7 +59,7 @@ AhrsModel::AhrsModel(const config::Node& cfg, const std::string& label) : label_
 	sigma_heading_rad_ = cfg.inRange("sigma_heading_deg", 1e-3, 180.0, 2.0) * kDeg;
 	heading_only_ = cfg.boolean("heading_only", false);
 	gate_probability_ = gateProbabilityFrom(cfg);
-	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);
+	min_interval_ = MinInterval(cfg);
 }
 
 std::optional<Eigen::Matrix3d> AhrsModel::measuredAttitude(const mrpt::obs::CObservation& obs,
@@ -127,13 +127,8 @@ PrepareStatus AhrsModel::doPrepare(const mrpt::obs::CObservation& obs, const Fil
 	const auto R_meas = measuredAttitude(obs, why);
 	if (!R_meas) return PrepareStatus::Invalid;
 	const double t_obs = mrpt::Clock::toDouble(obs.timestamp);
-	if (t_obs - last_used_s_ < min_interval_s_)
-	{
-		++rate_limited_;
-		why = "within min_interval_s of the last attitude used";
-		return PrepareStatus::Skip;
-	}
-	last_used_s_ = t_obs;
+	if (min_interval_.tooSoon(t_obs, "attitude", why)) return PrepareStatus::Skip;
+	min_interval_.markUsed(t_obs);
 
 	Measurement m;
 	if (heading_only_)

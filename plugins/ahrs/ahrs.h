@@ -43,23 +43,20 @@
 #include <optional>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
 class AhrsModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	AhrsModel(const config::Node& cfg, const std::string& label);
-
-	uint32_t doUses() const override { return kAttitude; }
-	double doGateProbability() const override { return gate_probability_; }
-	//! heading_only: a heading [rad], the residual wraps; else z = 0 and h = −r
-	//! are already a rotation vector in one chart: a plain difference.
-	MeasurementStructure doStructure() const override { return {0, heading_only_ ? ~0u : 0u}; }
 
 	bool headingOnly() const { return heading_only_; }
 	//! R_nr: the AHRS reference frame's axes in NED (frame convention and declination).
 	const Eigen::Matrix3d& R_nr() const { return R_nr_; }
-	std::size_t rateLimitedCount() const { return rate_limited_; }
+	std::size_t rateLimitedCount() const { return min_interval_.skippedCount(); }
 
 	/** The body attitude the observation reports, R_nb,meas; nullopt with
 	 *  `why` for an unusable observation. */
@@ -67,20 +64,22 @@ class AhrsModel final : public SafeMeasurementModel
 	                                                std::string& why) const;
 
  protected:
+	uint32_t doUses() const override { return kAttitude; }
+	double doGateProbability() const override { return gate_probability_; }
+	//! heading_only: a heading [rad], the residual wraps; else z = 0 and h = −r
+	//! are already a rotation vector in one chart: a plain difference.
+	MeasurementStructure doStructure() const override { return {0, heading_only_ ? ~0u : 0u}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
-	std::string label_;
 	Eigen::Matrix3d R_nr_ = Eigen::Matrix3d::Identity();
 	std::optional<Eigen::Matrix3d> R_bs_config_;  // orientation_ypr_deg, else the observation's sensorPose
 	double sigma_roll_rad_ = 0, sigma_pitch_rad_ = 0, sigma_heading_rad_ = 0;
 	bool heading_only_ = false;
 	double gate_probability_ = 0.999;
-	double min_interval_s_ = 0;
-	double last_used_s_ = -1e300;
-	std::size_t rate_limited_ = 0;
+	MinInterval min_interval_;
 };
 }  // namespace auvnav::plugins

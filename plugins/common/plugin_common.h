@@ -5,15 +5,16 @@
  *  self-contained MODULE.
  */
 #include <auvnav/config.h>
-#include <auvnav/plugin_state.h>
+#include <auvnav/measurement_model.h>
 #include <auvnav/state.h>
-#include <auvnav/state_block_config.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt/poses/CPose3D.h>
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace auvnav::plugins
@@ -49,24 +50,51 @@ inline Eigen::Matrix3d rotationFromYprDeg(const Eigen::Vector3d& ypr_deg)
 	return p.getRotationMatrix().asEigen();
 }
 
-/** The optional `states: {bias: …}` of a position-fix plugin (GPS, USBL):
- *  a north/east offset of every fix (state_block_config.h); a disabled
- *  handle if it is not configured. Any other key under `states` is refused. */
-inline PluginState horizontalFixBias(const config::Node& cfg)
+/** Appends the one measurement of an observation (z, R, label) to `out`:
+ *  the last step of a prepare that gives a single measurement. */
+inline PrepareStatus appendMeasurement(std::vector<Measurement>& out, Eigen::VectorXd z, Eigen::MatrixXd R,
+                                       const char* label)
 {
-	if (!cfg.has("states")) return {};
-	const auto st = cfg.child("states");
-	st.allowOnly({"bias"});
-	if (!st.has("bias")) return {};
-	return PluginState(stateBlockFromConfig(st.child("bias"), "bias", {"n", "e"}));
+	Measurement m;
+	m.z = std::move(z);
+	m.R = std::move(R);
+	m.label = label;
+	out.push_back(std::move(m));
+	return PrepareStatus::Ok;
 }
 
-/** Adds the bias state (if enabled) to a fix's north, east. */
-template <typename Vec>
-void addFixBias(const NavState& x, const PluginState& bias, Vec&& z_ne)
+/** The `min_interval_s` key [s] of a plugin that thins its observations: one
+ *  closer than that to the last one used is skipped (0, the default: none).
+ *  The plugin says which observation it used (markUsed), so that one it only
+ *  offers (e.g. a likely outlier) need not start a new interval. */
+class MinInterval
 {
-	if (!bias.enabled()) return;
-	z_ne[0] += bias(x, 0);
-	z_ne[1] += bias(x, 1);
-}
+ public:
+	MinInterval() = default;
+	explicit MinInterval(const config::Node& cfg)
+	    : min_interval_s_(cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0))
+	{
+	}
+
+	/** Time [s] from the last observation used to `t_s` (huge before the first). */
+	double sinceLastUsed_s(double t_s) const { return t_s - last_used_s_; }
+	/** True if `t_s` is within min_interval_s of the last observation used:
+	 *  then it is counted and `why` says "within min_interval_s of the last
+	 *  <what> used". */
+	bool tooSoon(double t_s, const char* what, std::string& why)
+	{
+		if (!(sinceLastUsed_s(t_s) < min_interval_s_)) return false;
+		++skipped_;
+		why = std::string("within min_interval_s of the last ") + what + " used";
+		return true;
+	}
+	void markUsed(double t_s) { last_used_s_ = t_s; }
+	/** Observations skipped by tooSoon() so far. */
+	std::size_t skippedCount() const { return skipped_; }
+
+ private:
+	double min_interval_s_ = 0;
+	double last_used_s_ = -1e300;  // none used yet
+	std::size_t skipped_ = 0;
+};
 }  // namespace auvnav::plugins

@@ -68,9 +68,8 @@ Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, 
 }
 }  // namespace
 
-DvlModel::DvlModel(const config::Node& cfg, const std::string& label)
-    : label_(label),
-      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
+DvlModel::DvlModel(const config::Node& cfg, const std::string& /*label*/)
+    : position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
       R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
       use_observation_pose_(cfg.boolean("use_observation_pose", false)),
       sigma_mps_(cfg.positive("sigma_mps", 0.02)),

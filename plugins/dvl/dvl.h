@@ -106,6 +106,7 @@ struct DvlPing
 class DvlModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	DvlModel(const config::Node& cfg, const std::string& label);
 
 	const Eigen::Vector3d& position_b() const { return position_b_; }
@@ -145,7 +146,6 @@ class DvlModel final : public SafeMeasurementModel
 	 *  (Earth frames), for the reported velocity v_n in NED. */
 	Eigen::Matrix3d earthAttitudeCovariance(const Eigen::Vector3d& v_n) const;
 
-	std::string label_;
 	Eigen::Vector3d position_b_;
 	Eigen::Matrix3d R_bs_;
 	bool use_observation_pose_ = false;

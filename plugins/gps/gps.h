@@ -34,38 +34,41 @@
  *  counted twice is refused).
  */
 #include <auvnav/config.h>
-#include <auvnav/measurement_model.h>
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
+
+#include "position_fix_model.h"
 
 namespace auvnav::plugins
 {
-class GpsModel final : public SafeMeasurementModel
+/** One GGA fix: the antenna's position [m, navigation frame] and the HDOP
+ *  (NaN if not reported). */
+struct GgaFix
+{
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();
+	double hdop = std::numeric_limits<double>::quiet_NaN();
+};
+
+class GpsModel final : public PositionFixModel<GgaFix>
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	GpsModel(const config::Node& cfg, const std::string& label);
 
-	const Eigen::Vector3d& position_b() const { return position_b_; }
-
  protected:
-	uint32_t doUses() const override { return kAttitude | kPosition | bias_.uses(); }
 	//! The antenna is at p_n + R_nb r (+ b): affine in the position and the bias.
-	MeasurementStructure doStructure() const override { return {kPosition | bias_.uses()}; }
-	std::vector<PluginState*> doStates() override { return {&bias_}; }
-	bool doReportsPositionFix() const override { return true; }
-	double doGateProbability() const override { return gate_probability_; }
-	/** The antenna's position from a valid GGA fix (no rate limit, no state). */
-	bool doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) override;
-	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                        std::vector<Measurement>& out, std::string& why) override;
-	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
+	MeasurementStructure doStructure() const override { return {kPosition | bias().uses()}; }
 
  private:
 	/** The GGA fix of `obs` in the navigation frame (Ok), or why not. */
-	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                        Eigen::Vector3d& p_n, double& hdop, std::string& why) const;
+	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, GgaFix& fix,
+	                        std::string& why) const override;
+	/** North, east with σ from sigma_m (HDOP) and the correlated error, one
+	 *  fix per min_interval_s (see the file comment). */
+	PrepareStatus measureFix(const GgaFix& fix, const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                         std::vector<Measurement>& out, std::string& why) override;
 	/** Variance [m²] of the correlated error for a fix `since_last_s` after
 	 *  the last one used (0 when correlated_sigma_m is 0). */
 	double correlatedVariance(double since_last_s) const;
@@ -73,15 +76,10 @@ class GpsModel final : public SafeMeasurementModel
 	 *  covariance (linearised; false without them). */
 	bool likelyOutlier(const Measurement& m, const FilterContext& ctx) const;
 
-	std::string label_;
-	Eigen::Vector3d position_b_;
 	double sigma_m_ = 3.0;
 	bool scale_by_hdop_ = false;
-	double gate_probability_ = 0.999;
-	double min_interval_s_ = 0;       // fixes closer than this to the last one used are skipped
+	MinInterval min_interval_;        // fixes closer than this to the last one used are skipped
 	double correlated_sigma_m_ = 0;   // Gauss-Markov part of the error, per axis [m]
 	double correlation_time_s_ = 60;  // its time constant [s]
-	double last_used_s_ = -1e300;
-	PluginState bias_;  // (b_n, b_e) if configured
 };
 }  // namespace auvnav::plugins

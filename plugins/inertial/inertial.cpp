@@ -14,7 +14,7 @@ namespace
 constexpr double kMg = 1e-3 * 9.80665;  // 1 mg in m/s² (standard gravity, as datasheets)
 }
 
-InertialModel::InertialModel(const config::Node& cfg, const std::string& label) : label_(label)
+InertialModel::InertialModel(const config::Node& cfg, const std::string& /*label*/)
 {
 	const double rate_hz = cfg.inRange("rate_hz", 1.0, 10000.0, 100.0);
 	const double vrw = cfg.nonNegative("vrw_mg_per_sqrt_hz", 0.12) * kMg;  // m/s²/√Hz
@@ -56,12 +56,8 @@ PrepareStatus InertialModel::doPrepare(const mrpt::obs::CObservation& obs, const
 		why = "non-finite specific force";
 		return PrepareStatus::Invalid;
 	}
-	Measurement m;
-	m.z = f;
-	m.R = Eigen::Matrix3d::Identity() * (sigma_mps2_ * sigma_mps2_);
-	m.label = "specific_force";
-	out.push_back(std::move(m));
-	return PrepareStatus::Ok;
+	return appendMeasurement(out, f, Eigen::Matrix3d::Identity() * (sigma_mps2_ * sigma_mps2_),
+	                         "specific_force");
 }
 
 bool InertialModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,

@@ -27,8 +27,13 @@ namespace auvnav::plugins
 class InertialModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	InertialModel(const config::Node& cfg, const std::string& label);
 
+	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */
+	double sigma_mps2() const { return sigma_mps2_; }
+
+ protected:
 	uint32_t doUses() const override;
 	/** h = R_nbᵀ (a_n − g e_z + 2 Ω × v_n) + b_a: affine in all but the attitude. */
 	MeasurementStructure doStructure() const override
@@ -36,11 +41,6 @@ class InertialModel final : public SafeMeasurementModel
 		return {kAcceleration | kGravity | kAccelBias | kVelocity};
 	}
 	double doGateProbability() const override { return gate_probability_; }
-
-	/** Per-axis 1σ of one sample [m/s²] (white noise and model noise). */
-	double sigma_mps2() const { return sigma_mps2_; }
-
- protected:
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -50,7 +50,6 @@ class InertialModel final : public SafeMeasurementModel
 	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
  private:
-	std::string label_;
 	double sigma_mps2_ = 0;
 	double gate_probability_ = 0.999;
 	bool coriolis_ = false;

@@ -45,7 +45,7 @@ Eigen::Vector3d predictedReading_s(const Eigen::Matrix3d& R_nb, const Eigen::Mat
 	return b_hard_ut + S_soft * (R_bs.transpose() * (R_nb.transpose() * m_n_ut));
 }
 
-MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string& label) : label_(label)
+MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string& /*label*/)
 {
 	// A misspelled key must not fall back to its default silently.
 	cfg.allowOnly({"mode", "field_ut", "declination_deg", "inclination_deg", "hard_iron_ut", "soft_iron",
@@ -102,7 +102,7 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 			    stateBlockFromConfig(st.child("heading_bias"), "heading_bias", {""}, "_deg", kDeg));
 		}
 	}
-	min_interval_s_ = cfg.inRange("min_interval_s", 0.0, 3600.0, 0.0);
+	min_interval_ = MinInterval(cfg);
 }
 
 PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -174,13 +174,8 @@ PrepareStatus MagnetometerModel::doPrepare(const mrpt::obs::CObservation& obs, c
 	// Rate limit after the checks, so that a disturbed reading does not hold
 	// back the next good one.
 	const double t_obs = mrpt::Clock::toDouble(obs.timestamp);
-	if (t_obs - last_used_s_ < min_interval_s_)
-	{
-		++rate_limited_;
-		why = "within min_interval_s of the last reading used";
-		return PrepareStatus::Skip;
-	}
-	last_used_s_ = t_obs;
+	if (min_interval_.tooSoon(t_obs, "reading", why)) return PrepareStatus::Skip;
+	min_interval_.markUsed(t_obs);
 
 	Measurement m;
 	if (mode_ == Mode::Vector)

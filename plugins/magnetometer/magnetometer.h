@@ -54,6 +54,8 @@
 #include <cstddef>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
 /** Earth field in NED [µT] from total intensity [µT], declination and
@@ -86,6 +88,7 @@ class MagnetometerModel final : public SafeMeasurementModel
 		Heading
 	};
 
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	MagnetometerModel(const config::Node& cfg, const std::string& label);
 
 	Mode mode() const { return mode_; }
@@ -97,7 +100,7 @@ class MagnetometerModel final : public SafeMeasurementModel
 	//! Readings skipped by the disturbance gate (norm or dip) so far.
 	std::size_t disturbedCount() const { return disturbed_; }
 	//! Readings skipped by min_interval_s so far.
-	std::size_t rateLimitedCount() const { return rate_limited_; }
+	std::size_t rateLimitedCount() const { return min_interval_.skippedCount(); }
 
  protected:
 	uint32_t doUses() const override { return kAttitude | heading_bias_.uses(); }
@@ -111,7 +114,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
-	std::string label_;
 	Mode mode_ = Mode::Heading;
 	double field_ut_ = 0;
 	double declination_rad_ = 0;
@@ -125,10 +127,8 @@ class MagnetometerModel final : public SafeMeasurementModel
 	double norm_tolerance_ = 0.1;
 	double dip_tolerance_rad_ = 0;
 	double gate_probability_ = 0.999;
-	double min_interval_s_ = 0;
-	double last_used_s_ = -1e300;
+	MinInterval min_interval_;
 	std::size_t disturbed_ = 0;
-	std::size_t rate_limited_ = 0;
 	PluginState heading_bias_;  // [rad], heading mode, if configured
 };
 }  // namespace auvnav::plugins

@@ -147,7 +147,7 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 	       applyPlaced(vm.D_q, subs.D_q, nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
 }
 
-ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& label) : label_(label)
+ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /*label*/)
 {
 	vm_.M = diagonal6(cfg, "inertia_diag");
 	vm_.D_l = diagonal6(cfg, "linear_damping_diag");

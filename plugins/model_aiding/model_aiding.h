@@ -69,14 +69,8 @@ Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb);
 class ModelAidingModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	ModelAidingModel(const config::Node& cfg, const std::string& label);
-
-	uint32_t doUses() const override
-	{
-		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia |
-		       kDampingLinear | kDampingQuadratic;
-	}
-	double doGateProbability() const override { return gate_probability_; }
 
 	/** Wrench of thruster efforts u (in the configured unit). */
 	Vector6d thrustWrench(const std::vector<double>& effort) const;
@@ -84,13 +78,18 @@ class ModelAidingModel final : public SafeMeasurementModel
 	const Eigen::Matrix<double, 6, Eigen::Dynamic>& configurationMatrix() const { return T_; }
 
  protected:
+	uint32_t doUses() const override
+	{
+		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia |
+		       kDampingLinear | kDampingQuadratic;
+	}
+	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
-	std::string label_;
 	VehicleModel vm_;
 	Eigen::Matrix<double, 6, Eigen::Dynamic> T_;
 	std::vector<double> gain_forward_, gain_reverse_;

@@ -9,9 +9,8 @@
 
 namespace auvnav::plugins
 {
-PressureModel::PressureModel(const config::Node& cfg, const std::string& label)
-    : label_(label),
-      density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
+PressureModel::PressureModel(const config::Node& cfg, const std::string& /*label*/)
+    : density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
       atmospheric_pa_(cfg.inRange("atmospheric_pressure_pa", 50e3, 120e3, 101325.0)),
       sigma_pa_(cfg.positive("sigma_pa", 100.0)),
       bias_sigma_pa_(cfg.inRange("bias_sigma_pa", 0.0, 1e5, 0.0)),
@@ -54,12 +53,8 @@ PrepareStatus PressureModel::doPrepare(const mrpt::obs::CObservation& obs, const
 		why = "absurd pressure (outside 50 kPa .. 100 MPa)";
 		return PrepareStatus::Invalid;
 	}
-	Measurement m;
-	m.z = Eigen::VectorXd::Constant(1, p->pressure_pa);
-	m.R = Eigen::MatrixXd::Constant(1, 1, noiseVariance(ctx));
-	m.label = "pressure";
-	out.push_back(std::move(m));
-	return PrepareStatus::Ok;
+	return appendMeasurement(out, Eigen::VectorXd::Constant(1, p->pressure_pa),
+	                         Eigen::MatrixXd::Constant(1, 1, noiseVariance(ctx)), "pressure");
 }
 
 bool PressureModel::doPredict(const NavState& x, const Measurement& /*m*/, const FilterContext& ctx,

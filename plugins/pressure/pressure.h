@@ -33,10 +33,8 @@ class PressureModel final : public SafeMeasurementModel
 	/** Pressures outside this range are rejected as absurd [Pa]. */
 	static constexpr double kMinPressurePa = 5e4, kMaxPressurePa = 1e8;
 
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	PressureModel(const config::Node& cfg, const std::string& label);
-
-	uint32_t doUses() const override { return kAttitude | kGravity | kPosition; }
-	double doGateProbability() const override { return gate_probability_; }
 
 	double density_kg_m3() const { return density_kg_m3_; }
 	double atmospheric_pressure_pa() const { return atmospheric_pa_; }
@@ -50,13 +48,14 @@ class PressureModel final : public SafeMeasurementModel
 	static constexpr double kNominalGravity = 9.80665;  //!< [m/s²], only for the floor
 
  protected:
+	uint32_t doUses() const override { return kAttitude | kGravity | kPosition; }
+	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
-	std::string label_;
 	double density_kg_m3_ = 1025;
 	double atmospheric_pa_ = 101325;
 	double sigma_pa_ = 100;

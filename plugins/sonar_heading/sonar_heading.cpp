@@ -29,7 +29,7 @@ double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double 
 	return auvnav::wrapAngle(std::atan2(pole_ne.y() - p_s.y(), pole_ne.x() - p_s.x()) - psi_s);
 }
 
-SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& label) : label_(label)
+SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& /*label*/)
 {
 	const auto sonar_file = config::Node::load(resolve(cfg, "sonar_config"));
 	sonar_ = sonar::SonarConfig::fromConfig(sonar_file);

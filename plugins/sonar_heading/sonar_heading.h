@@ -41,23 +41,23 @@ struct PolePosition
 class SonarHeadingModel final : public SafeMeasurementModel
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	SonarHeadingModel(const config::Node& cfg, const std::string& label);
 
-	uint32_t doUses() const override { return kAttitude | kPosition; }
-	double doGateProbability() const override { return gate_probability_; }
-	//! Bearings [rad]: every residual component wraps.
-	MeasurementStructure doStructure() const override { return {0, ~0u}; }
 	bool validateOnly() const { return validate_only_; }
 	const sonar::SonarConfig& sonarConfig() const { return sonar_; }
 
  protected:
+	uint32_t doUses() const override { return kAttitude | kPosition; }
+	double doGateProbability() const override { return gate_probability_; }
+	//! Bearings [rad]: every residual component wraps.
+	MeasurementStructure doStructure() const override { return {0, ~0u}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
-	std::string label_;
 	sonar::SonarConfig sonar_;
 	bool validate_only_ = true;
 	double sigma_floor_rad_ = 0;

@@ -24,42 +24,41 @@
  *  gauss_markov process with a τ of minutes.
  */
 #include <auvnav/config.h>
-#include <auvnav/measurement_model.h>
 
 #include <Eigen/Core>
 #include <string>
 
+#include "position_fix_model.h"
+
 namespace auvnav::plugins
 {
-class UsblModel final : public SafeMeasurementModel
+/** One USBL fix: the transponder's position [m, navigation frame; down NaN
+ *  if the fix has no depth] and its covariance [m², NED]. */
+struct UsblFix
+{
+	Eigen::Vector3d p_n = Eigen::Vector3d::Zero();
+	Eigen::Matrix3d C_n = Eigen::Matrix3d::Zero();
+};
+
+class UsblModel final : public PositionFixModel<UsblFix>
 {
  public:
+	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
 	UsblModel(const config::Node& cfg, const std::string& label);
 
-	const Eigen::Vector3d& position_b() const { return position_b_; }
-
  protected:
-	uint32_t doUses() const override { return kAttitude | kPosition | bias_.uses(); }
-	double doGateProbability() const override { return gate_probability_; }
-	bool doReportsPositionFix() const override { return true; }
-	bool doInitialFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, InitialFix& out) override;
-	std::vector<PluginState*> doStates() override { return {&bias_}; }
 	double doMeasurementTime(const mrpt::obs::CObservation& obs, double stamp_s) const override;
-	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                        std::vector<Measurement>& out, std::string& why) override;
-	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
-	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
 
  private:
 	/** The fix in the navigation frame and its covariance (Ok), or why not. */
-	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
-	                        Eigen::Vector3d& p_n, Eigen::Matrix3d& C_n, std::string& why) const;
+	PrepareStatus decodeFix(const mrpt::obs::CObservation& obs, const FilterContext& ctx, UsblFix& fix,
+	                        std::string& why) const override;
+	/** North, east (and, with use_depth, down) with the fix's covariance. */
+	PrepareStatus measureFix(const UsblFix& fix, const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                         std::vector<Measurement>& out, std::string& why) override;
+	bool useDepth() const { return measuredAxes() == 3; }
 
-	std::string label_;
-	Eigen::Vector3d position_b_;
 	double sigma_m_ = 2.0, sigma_range_fraction_ = 0.01, depth_sigma_m_ = 1.0;
-	bool use_reported_covariance_ = true, use_depth_ = false;
-	double gate_probability_ = 0.999;
-	PluginState bias_;  // (b_n, b_e) if configured
+	bool use_reported_covariance_ = true;
 };
 }  // namespace auvnav::plugins
