@@ -1,12 +1,12 @@
-// A minimal plugin with one plugin-owned state, written against the
-// deprecated interface (stateBlocks/bindStates/x.extra): a pressure depth
-// update h = p_atm + ρ g p_n.z + b with an optional offset b [Pa] as a state.
-// Kept to test that the host still honours the shim and to compare with
-// biased_pressure.h, the same plugin with a PluginState handle.
+// The plugin of biased_pressure.h written against the deprecated interface
+// (stateBlocks/bindStates/x.extra): the same measurement, with its offset
+// b [Pa] declared as a StateBlockSpec and read at the index the host binds.
+// Kept to test that the host still honours the shim; only the state differs.
 #pragma once
 #include <auvnav/measurement_model.h>
-#include <auvnav/obs/CObservationPressure.h>
 #include <auvnav/state_block_config.h>
+
+#include "biased_pressure.h"
 
 namespace legacy_example
 {
@@ -28,17 +28,7 @@ class BiasedPressure final : public auvnav::SafeMeasurementModel
 	auvnav::PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const auvnav::FilterContext&,
 	                                std::vector<auvnav::Measurement>& out, std::string& why) override
 	{
-		const auto* p = dynamic_cast<const auvnav::obs::CObservationPressure*>(&obs);
-		if (!p)
-		{
-			why = "not a pressure";
-			return auvnav::PrepareStatus::Invalid;
-		}
-		auvnav::Measurement m;
-		m.z = Eigen::VectorXd::Constant(1, p->pressure_pa);
-		m.R = Eigen::MatrixXd::Constant(1, 1, 100.0);
-		out.assign(1, m);
-		return auvnav::PrepareStatus::Ok;
+		return handle_example::pressureMeasurement(obs, out, why);
 	}
 	bool doPredict(const auvnav::NavState& x, const auvnav::Measurement&, const auvnav::FilterContext&,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override
@@ -49,7 +39,7 @@ class BiasedPressure final : public auvnav::SafeMeasurementModel
 			if (x.extra.size() <= bias_at_) return false;  // declared, but not in this state
 			bias = x.extra[bias_at_];
 		}
-		z_pred[0] = 101325 + 1025 * 9.81 * x.p_n.z() + bias;
+		z_pred[0] = handle_example::predictedPressure(x, bias);
 		return true;
 	}
 
