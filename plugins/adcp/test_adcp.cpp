@@ -14,17 +14,12 @@
 #include "adcp.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using auvnav::obs::CObservationADCP;
 using auvnav::plugins::AdcpCell;
 using auvnav::plugins::AdcpModel;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);   // flatfish_sensors.yaml imu.position_m
 const Eigen::Vector3d kAdcpPos(0.659, -0.141, 0.206);  // flatfish_sensors.yaml adcp.position_m
 constexpr uint32_t kUses = kAttitude | kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias;
 
@@ -142,15 +137,6 @@ class AppliedCellsOnly final : public MeasurementModel
 	MeasurementModel& m_;
 };
 
-std::vector<Measurement> prepareAll(AdcpModel& model, const mrpt::obs::CObservation& o,
-                                    const FilterContext& ctx, PrepareStatus expected = PrepareStatus::Ok)
-{
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), expected) << why;
-	return out;
-}
-
 std::size_t countSkipped(const std::vector<Measurement>& out)
 {
 	return static_cast<std::size_t>(
@@ -231,31 +217,25 @@ TEST(Adcp, DefaultConfigMatchesFlatfishMounting)
 
 TEST(Adcp, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(AdcpModel(pt::configText("position_m: [1, 2]"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("orientation_ypr_deg: [a, 0, 0]"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("sigma_mps: 0"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("extra_sigma_mps: -0.1"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("min_correlation: 1.5"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("max_distance_m: -2"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("max_distance_m: 0"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("use_observation_pose: perhaps"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("gate_probability: 0"), "ADCP"), config::ConfigError);
-	EXPECT_THROW(AdcpModel(pt::configText("position_m: [200, 0, 0]"), "ADCP"), config::ConfigError);
+	for (const char* yaml :
+	     {"position_m: [1, 2]", "orientation_ypr_deg: [a, 0, 0]", "sigma_mps: 0", "extra_sigma_mps: -0.1",
+	      "min_correlation: 1.5", "max_distance_m: -2", "max_distance_m: 0", "use_observation_pose: perhaps",
+	      "gate_probability: 0", "position_m: [200, 0, 0]"})
+		EXPECT_TRUE(pt::ConstructorRefuses<AdcpModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("min_correlation: -1", "min_correlation"));
 	EXPECT_TRUE(pt::ModuleRefuses("sigma_mps: -1", "sigma_mps"));
 }
 
 TEST(Adcp, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("adcp", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kUses));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("adcp", pt::defaultConfigText(), kUses));
 }
 
 // ---------------------------------------------------------------- contract
 
 TEST(Adcp, WellFormedOnRealisticObservationsAndRandomStates)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	for (const char* cfg : {"{}", "use_observation_pose: true", "{sigma_mps: 0.04, max_distance_m: 7}"})
 	{
 		AdcpModel model(pt::configText(cfg), "ADCP");
@@ -267,10 +247,7 @@ TEST(Adcp, WellFormedOnRealisticObservationsAndRandomStates)
 			// the normal case), noisy, the far cells cut by the seabed.
 			const auto o =
 			    profileOf(at::RandomNavState(seed + 50), tc.ctx(), Geometry{}, 0.03, seed, 12 + seed % 8);
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(applied, *o, tc.ctx(), at::RandomNavState(seed), opt))
+			EXPECT_TRUE(pt::IsWellFormedAndUsed(applied, *o, tc.ctx(), at::RandomNavState(seed), seed))
 			    << cfg << ", seed " << seed;
 			EXPECT_EQ(applied.applied + applied.skipped, o->cells.size());
 			EXPECT_GE(applied.applied, 10u);
@@ -302,7 +279,7 @@ TEST(Adcp, DistancesComeFromTheObservationGeometry)
 	at::TestContext tc;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	// FlatFish: d_i = 0.5 + (i + 0.5) 0.5, d_max = 0.5 + 20 · 0.5 = 10.5.
-	auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
+	auto out = pt::prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
 	ASSERT_EQ(out.size(), 20u);
 	for (int i = 0; i < 20; ++i)
 	{
@@ -311,14 +288,14 @@ TEST(Adcp, DistancesComeFromTheObservationGeometry)
 		EXPECT_DOUBLE_EQ(out[i].payload<AdcpCell>().max_distance_m, 10.5);
 	}
 	// Another instrument setting: d_max follows the observation, not a fixed cell count.
-	out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{1.0, 2.0, 7}), tc.ctx());
+	out = pt::prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{1.0, 2.0, 7}), tc.ctx());
 	ASSERT_EQ(out.size(), 7u);
 	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 2.0);
 	EXPECT_DOUBLE_EQ(out[6].payload<AdcpCell>().distance_m, 14.0);
 	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.payload<AdcpCell>().max_distance_m, 15.0);
 	// Invalid cells still count in d_max (the profile's extent is the instrument's).
 	auto o = profileOf(NavState{}, tc.ctx(), Geometry{1.0, 2.0, 7}, 0, 1, 3);
-	out = prepareAll(model, *o, tc.ctx());
+	out = pt::prepareAll(model, *o, tc.ctx());
 	EXPECT_DOUBLE_EQ(out[2].payload<AdcpCell>().max_distance_m, 15.0);
 }
 
@@ -329,7 +306,7 @@ TEST(Adcp, NavigatorFixedFarDistanceOverridesTheGeometry)
 	at::TestContext tc;
 	tc.ctx().current_far_distance_m = 6.0;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
-	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
+	const auto out = pt::prepareAll(model, *profileOf(NavState{}, tc.ctx()), tc.ctx());
 	ASSERT_EQ(out.size(), 20u);
 	for (const auto& m : out) EXPECT_DOUBLE_EQ(m.payload<AdcpCell>().max_distance_m, 6.0);
 	EXPECT_DOUBLE_EQ(out[0].payload<AdcpCell>().distance_m, 0.75);  // distances still from the observation
@@ -356,7 +333,7 @@ TEST(Adcp, CellsAtTheEndsSeeExactlyTheTwoCurrentStates)
 	uni_mid.current_vehicle_ne = uni_mid.current_far_ne = 0.5 * (x.current_vehicle_ne + x.current_far_ne);
 
 	// Blank 0, three 1 m cells: the middle cell's centre is at 1.5 m = d_max / 2.
-	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
+	const auto out = pt::prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
 	ASSERT_EQ(out.size(), 3u);
 	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().distance_m, 1.5);
 	EXPECT_DOUBLE_EQ(out[1].payload<AdcpCell>().max_distance_m, 3.0);
@@ -385,12 +362,11 @@ TEST(Adcp, HandComputedLevelHeading90Through22_5DegreeMount)
 {
 	// Level, facing east (body x = east, body y = south), v_n = (0, 1, 0),
 	// current_vehicle = (0.2, 0), current_far = (0, 0.1), no rotation, no bias.
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ie_n.setZero();
-	tc.ctx().imu_position_b = kImuPos;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	const NavState x = eastbound();
-	const auto out = prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
+	const auto out = pt::prepareAll(model, *profileOf(NavState{}, tc.ctx(), Geometry{0.0, 1.0, 3}), tc.ctx());
 	ASSERT_EQ(out.size(), 3u);
 	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);  // 0.92388, 0.38268
 	// Sensor frame = body yawed −22.5°: z_s = Rz(+22.5°) z_b.
@@ -431,13 +407,12 @@ TEST(Adcp, HandComputedLevelHeading90Through22_5DegreeMount)
 
 TEST(Adcp, AdcpBiasAppearsInSensorXYOnly)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, 0.02, -0.05);
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	NavState x = at::RandomNavState(3);
 	x.b_adcp.setZero();
-	const auto out = prepareAll(model, *profileOf(x, tc.ctx()), tc.ctx());
+	const auto out = pt::prepareAll(model, *profileOf(x, tc.ctx()), tc.ctx());
 	NavState biased = x;
 	biased.b_adcp = Eigen::Vector2d(0.1, -0.2);
 	for (const auto& m : out)
@@ -454,24 +429,22 @@ TEST(Adcp, LeverArmAndEarthRate)
 {
 	// At rest on the rotating Earth in still water, the gyro reads R_nbᵀ ω_ie + b_w:
 	// the sensor does not move relative to the water, every cell sees 0.
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	NavState x;
 	x.R_nb = at::rotationYpr(40 * kDeg, 5 * kDeg, -3 * kDeg);
 	x.b_w = Eigen::Vector3d(0.01, -0.02, 0.03);
 	tc.ctx().omega_ib_b = x.R_nb.transpose() * tc.ctx().omega_ie_n + x.b_w;
-	const auto out = prepareAll(model, *profileOf(x, tc.ctx()), tc.ctx());
+	const auto out = pt::prepareAll(model, *profileOf(x, tc.ctx()), tc.ctx());
 	for (const auto& m : out) EXPECT_LT(at::Predict(model, m, tc.ctx(), x).norm(), 1e-15);
 
 	// Turning to starboard at 0.1 rad/s around a resting IMU point: the sensor
 	// moves with ω × (r_adcp − r_imu) and sees the water move the other way.
-	at::TestContext tc2;
+	pt::FlatfishContext tc2;
 	tc2.ctx().omega_ie_n.setZero();
-	tc2.ctx().imu_position_b = kImuPos;
 	tc2.ctx().omega_ib_b = Eigen::Vector3d(0, 0, 0.1);
 	const NavState level;
-	const auto out2 = prepareAll(model, *profileOf(level, tc2.ctx()), tc2.ctx());
+	const auto out2 = pt::prepareAll(model, *profileOf(level, tc2.ctx()), tc2.ctx());
 	const Eigen::VectorXd h = at::Predict(model, out2[0], tc2.ctx(), level);
 	// ω × (0.36476, −0.141, 0.23463) = (0.0141, 0.036476, 0) body; negated, into the sensor frame.
 	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);
@@ -485,8 +458,7 @@ TEST(Adcp, SimulatorConventionsTranscribed)
 	// apps/sim/sensors.cpp AdcpSim::sample, transcribed (the plugin cannot link
 	// the simulator): vehicle state at the CG, gyro as ImuSim, a current that
 	// is linear in depth below the sensor, cells along the sensor z axis.
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	const Eigen::Quaterniond q_nb(at::rotationYpr(130 * kDeg, 0, 0));  // level: cells straight down
 	Eigen::Matrix<double, 6, 1> nu_b;
 	nu_b << 0.9, -0.1, 0.05, 0.0, 0.0, 0.08;  // [v_b; ω_b] over ground
@@ -534,7 +506,7 @@ TEST(Adcp, SimulatorConventionsTranscribed)
 	x.b_adcp = adcp_bias;
 	tc.ctx().omega_ib_b = w_b + R_nb.transpose() * tc.ctx().omega_ie_n + gyro_bias;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
-	const auto out = prepareAll(model, *o, tc.ctx());
+	const auto out = pt::prepareAll(model, *o, tc.ctx());
 	ASSERT_EQ(out.size(), 20u);
 	for (const auto& m : out)
 	{
@@ -560,7 +532,7 @@ TEST(Adcp, InvalidCellsAreSkippedAndCounted)
 	o->cells[5].velocity_s_mps[0] = std::nan("");
 	o->cells[6].correlation = std::nan("");
 	o->cells[7].correlation = 0.5;  // exactly at the threshold: used
-	auto out = prepareAll(model, *o, tc.ctx());
+	auto out = pt::prepareAll(model, *o, tc.ctx());
 	ASSERT_EQ(out.size(), 10u);  // every cell accounted for
 	EXPECT_EQ(countSkipped(out), 6u);
 	const char* expected[10] = {"cell",
@@ -587,7 +559,7 @@ TEST(Adcp, InvalidCellsAreSkippedAndCounted)
 	// A stricter threshold and a range limit (cell centres at 0.75 + 0.5 i).
 	AdcpModel strict(pt::configText("{min_correlation: 0.78, max_distance_m: 4.0}"), "ADCP");
 	auto clean = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 10});  // correlations 0.95 − 0.02 i
-	out = prepareAll(strict, *clean, tc.ctx());
+	out = pt::prepareAll(strict, *clean, tc.ctx());
 	ASSERT_EQ(out.size(), 10u);
 	// Cells 0..6 are within 4 m (cell 6 at 3.75 m), 7..9 beyond; cell 9 (0.77) is also
 	// below 0.78 and reported as low correlation (checked first).
@@ -599,7 +571,7 @@ TEST(Adcp, InvalidCellsAreSkippedAndCounted)
 
 	// All cells unusable: still Ok, every cell counted as skipped, nothing to update.
 	for (auto& c : clean->cells) c.valid = false;
-	out = prepareAll(model, *clean, tc.ctx());
+	out = pt::prepareAll(model, *clean, tc.ctx());
 	EXPECT_EQ(out.size(), 10u);
 	EXPECT_EQ(countSkipped(out), 10u);
 }
@@ -635,9 +607,7 @@ TEST(Adcp, MalformedObservationIsInvalid)
 	EXPECT_EQ(obs_pose.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
 	EXPECT_EQ(obs_pose.prepare(*good, tc.ctx(), out, why), PrepareStatus::Ok);
 	// Wrong class.
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why),
-	          PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationADCP"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<obs::CObservationDVL>(model, tc.ctx(), "CObservationADCP"));
 	// No cells at all: nothing to apply, not an error.
 	auto empty = emptyObs();
 	EXPECT_EQ(model.prepare(*empty, tc.ctx(), out, why), PrepareStatus::Skip);
@@ -651,20 +621,20 @@ TEST(Adcp, NoiseFromObservationOrConfigPlusRepresentationError)
 	auto o = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 4});
 	const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
 	o->velocity_sigma_mps = 0.03;  // the observation's own σ
-	for (const auto& m : prepareAll(model, *o, tc.ctx()))
+	for (const auto& m : pt::prepareAll(model, *o, tc.ctx()))
 		EXPECT_TRUE(m.R.isApprox((0.03 * 0.03 + 0.02 * 0.02) * I, 1e-15));
-	EXPECT_DOUBLE_EQ(prepareAll(model, *o, tc.ctx())[0].R(0, 0), 0.0013);
+	EXPECT_DOUBLE_EQ(pt::prepareAll(model, *o, tc.ctx())[0].R(0, 0), 0.0013);
 	for (double unusable : {0.0, -0.1, std::nan(""), HUGE_VAL})
 	{
 		o->velocity_sigma_mps = unusable;  // default 0.05
-		for (const auto& m : prepareAll(model, *o, tc.ctx()))
+		for (const auto& m : pt::prepareAll(model, *o, tc.ctx()))
 			EXPECT_TRUE(m.R.isApprox((0.05 * 0.05 + 0.02 * 0.02) * I, 1e-15)) << unusable << "\n" << m.R;
 	}
 	o->velocity_sigma_mps = 0.03;
 	AdcpModel configured(pt::configText("{sigma_mps: 0.1, extra_sigma_mps: 0}"), "ADCP");
-	for (const auto& m : prepareAll(configured, *o, tc.ctx())) EXPECT_TRUE(m.R.isApprox(0.01 * I, 1e-15));
+	for (const auto& m : pt::prepareAll(configured, *o, tc.ctx())) EXPECT_TRUE(m.R.isApprox(0.01 * I, 1e-15));
 	AdcpModel no_extra(pt::configText("extra_sigma_mps: 0"), "ADCP");
-	for (const auto& m : prepareAll(no_extra, *o, tc.ctx())) EXPECT_TRUE(m.R.isApprox(0.0009 * I, 1e-15));
+	for (const auto& m : pt::prepareAll(no_extra, *o, tc.ctx())) EXPECT_TRUE(m.R.isApprox(0.0009 * I, 1e-15));
 }
 
 // ---------------------------------------------------------------- with the filter
@@ -696,8 +666,7 @@ NavState cruising()
 
 TEST(Adcp, UpdatePullsCurrentsTowardTruth)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.05);
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	const Eigen::Vector2d truth_c(0.3, -0.1);
@@ -709,8 +678,7 @@ TEST(Adcp, UpdatePullsCurrentsTowardTruth)
 		NavState x0 = truth;  // currents start at 0 with σ 0.2
 		x0.current_vehicle_ne.setZero();
 		x0.current_far_ne.setZero();
-		ManifoldUkf ukf(ProcessModel{}, UtParams{});
-		ukf.initialize(x0, covarianceAfterDvl(0.2));
+		ManifoldUkf ukf = pt::filterAt(x0, covarianceAfterDvl(0.2));
 		const auto res = applyCells(ukf, model, *profileOf(truth, tc.ctx()), tc.ctx());
 		ASSERT_EQ(res.status, PrepareStatus::Ok);
 		EXPECT_EQ(res.skipped, 0u);
@@ -731,8 +699,7 @@ TEST(Adcp, UpdatePullsCurrentsTowardTruth)
 
 TEST(Adcp, GrossOutlierCellRejectedByTheGateOthersAccepted)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	AdcpModel model(pt::defaultConfig(), "ADCP");
 	NavState truth = cruising();
 	truth.current_vehicle_ne = Eigen::Vector2d(0.3, -0.1);
@@ -742,8 +709,7 @@ TEST(Adcp, GrossOutlierCellRejectedByTheGateOthersAccepted)
 	NavState x0 = truth;
 	x0.current_vehicle_ne.setZero();
 	x0.current_far_ne.setZero();
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, covarianceAfterDvl(0.2));
+	ManifoldUkf ukf = pt::filterAt(x0, covarianceAfterDvl(0.2));
 	const auto res = applyCells(ukf, model, *o, tc.ctx());
 	ASSERT_EQ(res.updates.size(), 20u);
 	for (const auto& [cell, r] : res.updates)
@@ -758,8 +724,7 @@ TEST(Adcp, GrossOutlierCellRejectedByTheGateOthersAccepted)
 
 	// Without the gate the same cell is applied.
 	AdcpModel ungated(pt::configText("gate_probability: 1"), "ADCP");
-	ManifoldUkf ukf2(ProcessModel{}, UtParams{});
-	ukf2.initialize(x0, covarianceAfterDvl(0.2));
+	ManifoldUkf ukf2 = pt::filterAt(x0, covarianceAfterDvl(0.2));
 	const auto res2 = applyCells(ukf2, ungated, *o, tc.ctx());
 	EXPECT_EQ(res2.count(UpdateStatus::Accepted), 20);
 }
@@ -771,8 +736,7 @@ TEST(Adcp, SkippedCellsNeverChangeTheState)
 	auto o = profileOf(eastbound(), tc.ctx(), Geometry{0.5, 0.5, 6});
 	for (auto& c : o->cells) c.valid = false;
 	o->cells[2].velocity_s_mps[0] = NAN;
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(cruising(), covarianceAfterDvl());
+	ManifoldUkf ukf = pt::filterAt(cruising(), covarianceAfterDvl());
 	const NavState before = ukf.state();
 	const Covariance P_before = ukf.covariance();
 	const auto res = applyCells(ukf, model, *o, tc.ctx());

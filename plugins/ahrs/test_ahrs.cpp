@@ -13,16 +13,11 @@
 #include "level_heading.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using auvnav::plugins::AhrsModel;
 using mrpt::obs::CObservationIMU;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-
 CObservationIMU::Ptr emptyObs(double t_s = 1.7e9,
                               const Eigen::Vector3d& mount_ypr_deg = Eigen::Vector3d::Zero())
 {
@@ -57,14 +52,6 @@ CObservationIMU::Ptr yprObs(double yaw, double pitch, double roll)
 	return o;
 }
 
-Measurement prepareOne(AhrsModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
-{
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
-	return out.empty() ? Measurement{} : out[0];
-}
-
 Eigen::Matrix3d measured(const AhrsModel& model, const mrpt::obs::CObservation& o)
 {
 	std::string why;
@@ -76,18 +63,6 @@ Eigen::Matrix3d measured(const AhrsModel& model, const mrpt::obs::CObservation& 
 double angleBetween(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B)
 {
 	return so3::Log(A * B.transpose()).norm();
-}
-double headingOf(const Eigen::Matrix3d& R)
-{
-	return std::atan2(R(1, 0), R(0, 0));
-}
-double rollOf(const Eigen::Matrix3d& R)
-{
-	return std::atan2(R(2, 1), R(2, 2));
-}
-double pitchOf(const Eigen::Matrix3d& R)
-{
-	return -std::asin(R(2, 0));
 }
 
 Covariance attitudeCovariance(double tilt_sigma, double heading_sigma)
@@ -112,31 +87,20 @@ TEST(Ahrs, DefaultConfig)
 
 TEST(Ahrs, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("ahrs", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("ahrs", pt::defaultConfigText(), kAttitude));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("ahrs", "heading_only: true\nreference_frame: enu", kAttitude));
 }
 
 TEST(Ahrs, RejectsBadConfigNamingTheKey)
 {
-	const std::vector<std::pair<std::string, std::string>> bad = {
-	    {"reference_frame: nwu", "reference_frame"},
-	    {"heading_reference: grid", "heading_reference"},
-	    {"declination_deg: 200", "declination_deg"},
-	    {"heading_reference: 'true'\ndeclination_deg: 4", "declination_deg"},
-	    {"orientation_ypr_deg: [0, 0]", "orientation_ypr_deg"},
-	    {"sigma_roll_deg: 0", "sigma_roll_deg"},
-	    {"sigma_pitch_deg: .nan", "sigma_pitch_deg"},
-	    {"sigma_heading_deg: 500", "sigma_heading_deg"},
-	    {"heading_only: 3", "heading_only"},
-	    {"gate_probability: 1.5", "gate_probability"},
-	    {"min_interval_s: -2", "min_interval_s"},
-	    {"sigma_yaw_deg: 1", "sigma_yaw_deg"},  // misspelled key
-	};
-	for (const auto& [yaml, key] : bad)
-	{
-		EXPECT_THROW(AhrsModel(pt::configText(yaml), "AHRS"), config::ConfigError) << yaml;
-		EXPECT_TRUE(pt::ModuleRefuses(yaml, key)) << yaml;
-	}
+	// The key each message must name is the one on the yaml's last line; the
+	// last case is a misspelled key.
+	for (const char* yaml :
+	     {"reference_frame: nwu", "heading_reference: grid", "declination_deg: 200",
+	      "heading_reference: 'true'\ndeclination_deg: 4", "orientation_ypr_deg: [0, 0]", "sigma_roll_deg: 0",
+	      "sigma_pitch_deg: .nan", "sigma_heading_deg: 500", "heading_only: 3", "gate_probability: 1.5",
+	      "min_interval_s: -2", "sigma_yaw_deg: 1"})
+		EXPECT_TRUE(pt::RefusesNamingTheKey<AhrsModel>(yaml)) << yaml;
 }
 
 TEST(Ahrs, WellFormedOnRandomStates)
@@ -149,13 +113,10 @@ TEST(Ahrs, WellFormedOnRandomStates)
 			const NavState x = at::RandomNavState(seed);
 			const NavState mean = at::RandomNavState(seed + 50);
 			tc.ctx().mean = (seed % 2) ? &mean : nullptr;
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
 			const auto o = (seed % 3)
 			                   ? quatObs(at::RandomNavState(seed + 7).R_nb, Eigen::Vector3d(10, 180, 5))
 			                   : yprObs(0.3 * seed, 0.2, -0.1);
-			EXPECT_TRUE(at::IsWellFormed(model, *o, tc.ctx(), x, opt)) << cfg << ", seed " << seed;
+			EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *o, tc.ctx(), x, seed)) << cfg << ", seed " << seed;
 		}
 	tc.ctx().mean = nullptr;
 }
@@ -206,7 +167,7 @@ TEST(Ahrs, ResidualIsTheSo3LogAndItsJacobianIsTheIdentity)
 	at::TestContext tc;
 	AhrsModel model(pt::configText("heading_reference: 'true'"), "AHRS");
 	const Eigen::Matrix3d R_meas = at::rotationYpr(-120 * kDeg, 20 * kDeg, 15 * kDeg);
-	const Measurement m = prepareOne(model, *quatObs(R_meas), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *quatObs(R_meas), tc.ctx());
 	ASSERT_EQ(m.z.size(), 3);
 	const Eigen::Vector3d phi(0.02, -0.05, 0.3);
 	NavState x;
@@ -235,22 +196,22 @@ TEST(Ahrs, NoiseMapsRollPitchHeadingToNedAxes)
 	AhrsModel model(pt::configText("sigma_roll_deg: 1\nsigma_pitch_deg: 2\nsigma_heading_deg: 5"), "AHRS");
 	const double vr = std::pow(1 * kDeg, 2), vp = std::pow(2 * kDeg, 2), vh = std::pow(5 * kDeg, 2);
 	// Level, facing north: roll about north, pitch about east.
-	Measurement m = prepareOne(model, *yprObs(0, 0, 0), tc.ctx());
+	Measurement m = pt::prepareOne(model, *yprObs(0, 0, 0), tc.ctx());
 	EXPECT_NEAR(m.R(0, 0), vr, 2e-6 * vh);
 	EXPECT_NEAR(m.R(1, 1), vp, 2e-6 * vh);
 	EXPECT_NEAR(m.R(2, 2), vh, 2e-6 * vh);
 	EXPECT_NEAR(m.R(0, 1), 0, 1e-15);
 	// Facing east: roll about east, pitch about south.
-	m = prepareOne(model, *yprObs(90 * kDeg, 0, 0), tc.ctx());
+	m = pt::prepareOne(model, *yprObs(90 * kDeg, 0, 0), tc.ctx());
 	EXPECT_NEAR(m.R(0, 0), vp, 2e-6 * vh);
 	EXPECT_NEAR(m.R(1, 1), vr, 2e-6 * vh);
 	// Nose up 30°: the roll axis tilts toward the vertical and shares heading's axis.
-	m = prepareOne(model, *yprObs(0, 30 * kDeg, 0), tc.ctx());
+	m = pt::prepareOne(model, *yprObs(0, 30 * kDeg, 0), tc.ctx());
 	EXPECT_NEAR(m.R(0, 0), vr * 0.75, 2e-6 * vh);
 	EXPECT_NEAR(m.R(2, 2), vh + vr * 0.25, 2e-6 * vh);
 	EXPECT_NEAR(m.R(0, 2), -vr * std::sqrt(0.75) * 0.5, 2e-6 * vh);
 	// Pitch 90°: J loses rank, R stays positive definite.
-	m = prepareOne(model, *yprObs(0, 90 * kDeg, 0), tc.ctx());
+	m = pt::prepareOne(model, *yprObs(0, 90 * kDeg, 0), tc.ctx());
 	EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m.R).eigenvalues().minCoeff(), 0.0);
 }
 
@@ -268,8 +229,7 @@ TEST(Ahrs, FullUpdateCorrectsEveryAxisHeadingOnlyJustTheHeading)
 		                    "sigma_heading_deg: 1\nheading_only: ") +
 		        (heading_only ? "true" : "false")),
 		    "AHRS");
-		ManifoldUkf ukf(ProcessModel{}, UtParams{});
-		ukf.initialize(prior, attitudeCovariance(5 * kDeg, 20 * kDeg));
+		ManifoldUkf ukf = pt::filterAt(prior, attitudeCovariance(5 * kDeg, 20 * kDeg));
 		tc.ctx().mean = &ukf.state();
 		const auto res = at::ApplyObservation(ukf, model, *quatObs(R_true), tc.ctx());
 		ASSERT_EQ(res.updates.size(), 1u) << res.why;
@@ -285,8 +245,8 @@ TEST(Ahrs, FullUpdateCorrectsEveryAxisHeadingOnlyJustTheHeading)
 		{
 			// Only turned about down (roll and pitch as before); the heading
 			// (azimuth of the levelled forward axis) is corrected.
-			EXPECT_NEAR(rollOf(ukf.state().R_nb), rollOf(prior.R_nb), 1e-9);
-			EXPECT_NEAR(pitchOf(ukf.state().R_nb), pitchOf(prior.R_nb), 1e-9);
+			EXPECT_NEAR(pt::rollOf(ukf.state().R_nb), pt::rollOf(prior.R_nb), 1e-9);
+			EXPECT_NEAR(pt::pitchOf(ukf.state().R_nb), pt::pitchOf(prior.R_nb), 1e-9);
 			const Eigen::Vector3d u_b = plugins::levelReferenceDirection_b(prior.R_nb);
 			EXPECT_NEAR(
 			    wrapAngle(plugins::azimuthOf(ukf.state().R_nb, u_b) - plugins::azimuthOf(R_true, u_b)), 0,
@@ -303,7 +263,7 @@ TEST(Ahrs, HeadingOnlyCarriesNoTiltInformationAndWraps)
 	                "AHRS");
 	const NavState x = at::RandomNavState(3);
 	tc.ctx().mean = &x;
-	const Measurement m = prepareOne(model, *quatObs(x.R_nb), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *quatObs(x.R_nb), tc.ctx());
 	for (int j = 0; j < 3; ++j)
 	{
 		TangentVector d = TangentVector::Zero(idx::core_dim);
@@ -313,19 +273,19 @@ TEST(Ahrs, HeadingOnlyCarriesNoTiltInformationAndWraps)
 		                  2e-6;
 		EXPECT_NEAR(dh, j == 2 ? 1.0 : 0.0, 1e-7) << j;
 	}
-	EXPECT_NEAR(wrapAngle(m.z[0] - headingOf(x.R_nb)), 0, 1e-9);
+	EXPECT_NEAR(wrapAngle(m.z[0] - pt::headingOf(x.R_nb)), 0, 1e-9);
 	// Across ±180°: truth −178°, prior 179°: the update goes +3° through 180°.
 	const Eigen::Matrix3d R_true = at::rotationYpr(-178 * kDeg, 5 * kDeg, 2 * kDeg);
 	NavState prior;
 	prior.R_nb = at::rotationYpr(179 * kDeg, 5 * kDeg, 2 * kDeg);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(prior, attitudeCovariance(2 * kDeg, 10 * kDeg));
+	ManifoldUkf ukf = pt::filterAt(prior, attitudeCovariance(2 * kDeg, 10 * kDeg));
 	tc.ctx().mean = &ukf.state();
 	const auto res = at::ApplyObservation(ukf, model, *quatObs(R_true), tc.ctx());
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted);
 	// Gain 100/104: 3° · 4/104 left.
-	EXPECT_NEAR(wrapAngle(headingOf(ukf.state().R_nb) - headingOf(R_true)), -3 * kDeg * 4 / 104, 0.02 * kDeg);
+	EXPECT_NEAR(wrapAngle(pt::headingOf(ukf.state().R_nb) - pt::headingOf(R_true)), -3 * kDeg * 4 / 104,
+	            0.02 * kDeg);
 	Eigen::VectorXd z(1), h(1), r(1);
 	z[0] = -179.5 * kDeg;
 	h[0] = 179.5 * kDeg;
@@ -384,30 +344,19 @@ TEST(Ahrs, NanMeasurementNeverChangesTheState)
 {
 	at::TestContext tc;
 	AhrsModel model(pt::defaultConfig(), "AHRS");
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(at::RandomNavState(5), at::TypicalCovariance());
-	const NavState before = ukf.state();
-	Measurement m = prepareOne(model, *quatObs(before.R_nb), tc.ctx());
+	const NavState x0 = at::RandomNavState(5);
+	Measurement m = pt::prepareOne(model, *quatObs(x0.R_nb), tc.ctx());
 	m.R(1, 1) = std::nan("");
-	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
 }
 
 TEST(Ahrs, MinIntervalThinsTheOutput)
 {
 	at::TestContext tc;
 	AhrsModel model(pt::configText("min_interval_s: 0.42"), "AHRS");
-	int used = 0;
-	for (int k = 0; k < 40; ++k)  // 2 s at 20 Hz
-	{
-		std::vector<Measurement> out;
-		std::string why;
-		if (model.prepare(*quatObs(Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero(), 1.7e9 + 0.05 * k),
-		                  tc.ctx(), out, why) == PrepareStatus::Ok)
-			++used;
-		else
-			EXPECT_NE(why.find("min_interval_s"), std::string::npos);
-	}
-	EXPECT_EQ(used, 5);  // t = 0, 0.45, 0.9, 1.35, 1.8
+	// 2 s at 20 Hz: used at t = 0, 0.45, 0.9, 1.35, 1.8 s.
+	const auto attitude = quatObs(Eigen::Matrix3d::Identity());
+	const pt::Offered n = pt::offerInTurn(model, tc.ctx(), *attitude, 40, 1.7e9, 0.05);
+	EXPECT_EQ(n.used, 5);
 	EXPECT_EQ(model.rateLimitedCount(), 35u);
 }

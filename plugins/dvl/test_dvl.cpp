@@ -15,18 +15,13 @@
 #include "dvl.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using auvnav::obs::CObservationDVL;
 using auvnav::obs::DvlFrame;
 using auvnav::obs::DvlSign;
 using auvnav::plugins::DvlModel;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
 const Eigen::Vector3d kDvlPos(0.659, -0.141, 0.206);  // dvl.position_m
 
 /** Covariance of a 4-beam Janus DVL (30°, 0.01 m/s per beam), as the simulator computes it. */
@@ -71,23 +66,6 @@ Eigen::Vector3d trueSensorVelocity(const NavState& x, const FilterContext& ctx, 
 Eigen::Matrix3d nominalRbs()
 {
 	return at::rotationYpr(-22.5 * kDeg, 0, 0);
-}
-
-Measurement prepareOne(DvlModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
-{
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
-	return out.empty() ? Measurement{} : out[0];
-}
-
-std::vector<Measurement> prepareAll(DvlModel& model, const mrpt::obs::CObservation& o,
-                                    const FilterContext& ctx)
-{
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
-	return out;
 }
 
 constexpr DvlFrame kAllFrames[] = {DvlFrame::Instrument, DvlFrame::Vehicle, DvlFrame::EarthNed,
@@ -170,52 +148,45 @@ TEST(Dvl, DefaultConfigMatchesFlatfishMounting)
 
 TEST(Dvl, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(DvlModel(pt::configText("position_m: [1, 2]"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("orientation_ypr_deg: [a, 0, 0]"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("sigma_mps: 0"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("extra_sigma_mps: -0.1"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("use_observation_pose: perhaps"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("gate_probability: -1"), "DVL"), config::ConfigError);
+	for (const char* yaml :
+	     {"position_m: [1, 2]", "orientation_ypr_deg: [a, 0, 0]", "sigma_mps: 0", "extra_sigma_mps: -0.1",
+	      "use_observation_pose: perhaps", "gate_probability: -1"})
+		EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("sigma_mps: -1", "sigma_mps"));
 }
 
 TEST(Dvl, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("dvl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
-	                                      kAttitude | kGyroBias | kVelocity));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("dvl", pt::defaultConfigText(), kAttitude | kGyroBias | kVelocity));
 }
 
 TEST(Dvl, WellFormedOnRandomStates)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	for (const char* cfg : {"{}", "use_observation_pose: true"})
 	{
 		DvlModel model(pt::configText(cfg), "DVL");
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
-			const NavState x = at::RandomNavState(seed);
 			tc.ctx().omega_ib_b = Eigen::Vector3d(0.02, -0.01, 0.1 * std::sin(seed));
 			const Eigen::Vector3d v_s =
 			    trueSensorVelocity(at::RandomNavState(seed + 50), tc.ctx(), nominalRbs(), kDvlPos);
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(model, *dvlObs(v_s), tc.ctx(), x, opt)) << cfg << ", seed " << seed;
+			EXPECT_TRUE(
+			    pt::IsWellFormedAndUsed(model, *dvlObs(v_s), tc.ctx(), at::RandomNavState(seed), seed))
+			    << cfg << ", seed " << seed;
 		}
 	}
 }
 
 TEST(Dvl, ForwardMotionAtHeading90SeenThroughThe22_5DegreeMount)
 {
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ie_n.setZero();  // no rotation at all
-	tc.ctx().imu_position_b = kImuPos;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;
 	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);  // level, facing east
 	x.v_n = Eigen::Vector3d(0, 1, 0);           // 1 m/s east = straight ahead
-	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	// Sensor x is yawed 22.5° to port: forward motion = (cos 22.5°, sin 22.5°, 0).
 	EXPECT_NEAR(h[0], 0.9238795325, 1e-9);
@@ -225,13 +196,12 @@ TEST(Dvl, ForwardMotionAtHeading90SeenThroughThe22_5DegreeMount)
 
 TEST(Dvl, YawRateAddsTheLeverArmVelocity)
 {
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ie_n.setZero();
-	tc.ctx().imu_position_b = kImuPos;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0, 0, 0.1);  // turning to starboard, 0.1 rad/s
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;  // level, heading north, IMU point at rest
-	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	// ω × (r_dvl − r_imu) = 0.1 e_z × (0.36476, −0.141, 0.23463) = (0.0141, 0.036476, 0) in body,
 	// then into the sensor frame (rotate by +22.5° about z).
@@ -246,14 +216,13 @@ TEST(Dvl, EarthRateAndGyroBiasAreRemovedFromTheGyroSample)
 {
 	// At rest on a rotating Earth the gyro reads R_nbᵀ ω_ie + b_w: the body
 	// does not turn relative to the seabed, so the DVL sees zero velocity.
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;
 	x.R_nb = at::rotationYpr(40 * kDeg, 5 * kDeg, -3 * kDeg);
 	x.b_w = Eigen::Vector3d(0.01, -0.02, 0.03);  // exaggerated so a wrong sign would show
 	tc.ctx().omega_ib_b = x.R_nb.transpose() * tc.ctx().omega_ie_n + x.b_w;
-	const Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *dvlObs(Eigen::Vector3d::Zero()), tc.ctx());
 	EXPECT_LT(at::Predict(model, m, tc.ctx(), x).norm(), 1e-15);
 	// A gyro bias the state does not know about shows up as lever-arm velocity.
 	NavState wrong = x;
@@ -271,15 +240,15 @@ TEST(Dvl, ObservationPoseOnlyWhenConfigured)
 	o->sensorPose = mrpt::poses::CPose3D(1.0, 0, 0, 90 * kDeg, 0, 0);  // sensor x = body right
 	NavState x;
 	x.v_n = Eigen::Vector3d(1, 0, 0);  // forward
-	const Eigen::VectorXd h_cfg = at::Predict(cfg_pose, prepareOne(cfg_pose, *o, tc.ctx()), tc.ctx(), x);
-	const Eigen::VectorXd h_obs = at::Predict(obs_pose, prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
+	const Eigen::VectorXd h_cfg = at::Predict(cfg_pose, pt::prepareOne(cfg_pose, *o, tc.ctx()), tc.ctx(), x);
+	const Eigen::VectorXd h_obs = at::Predict(obs_pose, pt::prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
 	EXPECT_NEAR(h_cfg[0], std::cos(22.5 * kDeg), 1e-12);  // config: the nominal 22.5° mount
 	EXPECT_NEAR(h_obs[0], 0.0, 1e-12);                    // observation: yawed 90°
 	EXPECT_NEAR(h_obs[1], -1.0, 1e-12);
 	// With a yaw rate the lever arm of the observation pose is used.
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0, 0, 0.5);
 	x.v_n.setZero();
-	const Eigen::VectorXd h_rot = at::Predict(obs_pose, prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
+	const Eigen::VectorXd h_rot = at::Predict(obs_pose, pt::prepareOne(obs_pose, *o, tc.ctx()), tc.ctx(), x);
 	EXPECT_NEAR(h_rot[0], 0.5, 1e-12);  // ω × (1, 0, 0) = (0, 0.5, 0) body = sensor x
 }
 
@@ -289,7 +258,7 @@ TEST(Dvl, NoiseFromObservationCovariancePlusExtra)
 	DvlModel model(pt::defaultConfig(), "DVL");
 	const double extra2 = 0.005 * 0.005;
 	const Eigen::Matrix3d C = janusCovariance();
-	Measurement m = prepareOne(model, *dvlObs(Eigen::Vector3d(1, 0, 0), C), tc.ctx());
+	Measurement m = pt::prepareOne(model, *dvlObs(Eigen::Vector3d(1, 0, 0), C), tc.ctx());
 	EXPECT_TRUE(m.R.isApprox(C + extra2 * Eigen::Matrix3d::Identity(), 1e-14));
 	EXPECT_NEAR(m.R(0, 0), 0.01 * 0.01 / (4 * 0.25 * 0.5) + extra2, 1e-15);  // 2e-4 + 2.5e-5
 	// Zero, NaN, asymmetric or indefinite covariance: the configured σ instead.
@@ -301,15 +270,14 @@ TEST(Dvl, NoiseFromObservationCovariancePlusExtra)
 	nan_cov(1, 1) = std::nan("");
 	for (const Eigen::Matrix3d& bad : {Eigen::Matrix3d(Eigen::Matrix3d::Zero()), nan_cov, asym, indefinite})
 	{
-		m = prepareOne(model, *dvlObs(Eigen::Vector3d(1, 0, 0), bad), tc.ctx());
+		m = pt::prepareOne(model, *dvlObs(Eigen::Vector3d(1, 0, 0), bad), tc.ctx());
 		EXPECT_TRUE(m.R.isApprox((0.02 * 0.02 + extra2) * Eigen::Matrix3d::Identity(), 1e-14)) << m.R;
 	}
 }
 
 TEST(Dvl, UpdateReducesVelocityError)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.05);
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState truth;
@@ -317,8 +285,7 @@ TEST(Dvl, UpdateReducesVelocityError)
 	truth.v_n = Eigen::Vector3d(1.0, 0.2, 0.1);
 	NavState x0 = truth;
 	x0.v_n = Eigen::Vector3d(0.6, 0.6, -0.1);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, at::TypicalCovariance());
+	ManifoldUkf ukf = pt::filterAt(x0);
 	const Eigen::Vector3d z = trueSensorVelocity(truth, tc.ctx(), nominalRbs(), kDvlPos);
 	const double err_before = (x0.v_n - truth.v_n).norm();
 	const auto res = at::ApplyObservation(ukf, model, *dvlObs(z), tc.ctx());
@@ -366,33 +333,27 @@ TEST(Dvl, InvalidInputs)
 	o->sensorPose = mrpt::poses::CPose3D(NAN, 0, 0, 0, 0, 0);
 	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Ok);  // pose not used
 	EXPECT_EQ(obs_pose.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), out, why),
-	          PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationDVL"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<obs::CObservationPressure>(model, tc.ctx(), "CObservationDVL"));
 }
 
 TEST(Dvl, GrossOutlierRejectedAndNanNeverChangesTheState)
 {
 	at::TestContext tc;
 	DvlModel model(pt::defaultConfig(), "DVL");
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
 	Covariance P0 = at::TypicalCovariance();
 	P0.block<3, 3>(idx::vel, idx::vel) = 0.01 * 0.01 * Eigen::Matrix3d::Identity();
-	ukf.initialize(at::RandomNavState(7), P0);
-	const NavState before = ukf.state();
-	const Covariance P_before = ukf.covariance();
-	const Eigen::Vector3d v_true = trueSensorVelocity(before, tc.ctx(), nominalRbs(), kDvlPos);
+	const NavState x0 = at::RandomNavState(7);
+	ManifoldUkf ukf = pt::filterAt(x0, P0);
+	const Eigen::Vector3d v_true = trueSensorVelocity(x0, tc.ctx(), nominalRbs(), kDvlPos);
 	auto res = at::ApplyObservation(ukf, model, *dvlObs(v_true + Eigen::Vector3d(2.0, 0, 0)), tc.ctx());
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Rejected);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
-	res = at::ApplyObservation(ukf, model, *dvlObs(Eigen::Vector3d(NAN, 0, 0)), tc.ctx());
-	EXPECT_EQ(res.status, PrepareStatus::Invalid);
-	Measurement m = prepareOne(model, *dvlObs(v_true), tc.ctx());
+	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), x0));
+	EXPECT_TRUE(ukf.covariance() == P0);
+	EXPECT_TRUE(pt::PrepareRefuses(model, *dvlObs(Eigen::Vector3d(NAN, 0, 0)), tc.ctx(), x0));
+	Measurement m = pt::prepareOne(model, *dvlObs(v_true), tc.ctx());
 	m.z[2] = std::nan("");
-	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
-	EXPECT_TRUE(ukf.covariance() == P_before);
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
 }
 
 // ------------------------------------------------------------ output frames
@@ -401,9 +362,8 @@ TEST(DvlFrames, HandComputedLevelEastboundCase)
 {
 	// Level, facing east, 1 m/s east and 0.2 m/s down, no rotation: the DVL
 	// point moves with the IMU point.
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ie_n.setZero();
-	tc.ctx().imu_position_b = kImuPos;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState x;
 	x.R_nb = at::rotationYpr(90 * kDeg, 0, 0);
@@ -412,7 +372,7 @@ TEST(DvlFrames, HandComputedLevelEastboundCase)
 	{
 		auto o = modeObs(f, x, tc.ctx(), sign);
 		Eigen::VectorXd z, hx;
-		stackZH(model, prepareAll(model, *o, tc.ctx()), tc.ctx(), x, z, hx);
+		stackZH(model, pt::prepareAll(model, *o, tc.ctx()), tc.ctx(), x, z, hx);
 		return hx;
 	};
 	const double c = std::cos(22.5 * kDeg), s = std::sin(22.5 * kDeg);
@@ -440,8 +400,7 @@ TEST(DvlFrames, PredictionEqualsTheIndependentlyComputedReadingInEveryFrame)
 {
 	// Random states with a body rate: h(x_true) must reproduce what the DVL
 	// reports, in every frame and both signs (lever arm, Earth rate, gyro bias).
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	for (const char* cfg : {"{}", "use_observation_pose: true"})
 	{
 		DvlModel model(pt::configText(cfg), "DVL");
@@ -453,8 +412,8 @@ TEST(DvlFrames, PredictionEqualsTheIndependentlyComputedReadingInEveryFrame)
 				for (DvlSign sign : {DvlSign::VehicleOverBottom, DvlSign::BottomOverInstrument})
 				{
 					Eigen::VectorXd z, h;
-					stackZH(model, prepareAll(model, *modeObs(f, x, tc.ctx(), sign), tc.ctx()), tc.ctx(), x,
-					        z, h);
+					stackZH(model, pt::prepareAll(model, *modeObs(f, x, tc.ctx(), sign), tc.ctx()), tc.ctx(),
+					        x, z, h);
 					ASSERT_EQ(z.size(), f == DvlFrame::Beam ? 4 : 3);
 					EXPECT_LT((z - h).cwiseAbs().maxCoeff(), 1e-12)
 					    << cfg << " seed " << seed << " frame " << obs::dvlFrameName(f) << " sign "
@@ -466,8 +425,7 @@ TEST(DvlFrames, PredictionEqualsTheIndependentlyComputedReadingInEveryFrame)
 
 TEST(DvlFrames, WellFormedInEveryFrameSignAndBeamCount)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	for (uint32_t seed = 1; seed <= 10; ++seed)
 	{
@@ -475,16 +433,13 @@ TEST(DvlFrames, WellFormedInEveryFrameSignAndBeamCount)
 		tc.ctx().omega_ib_b = Eigen::Vector3d(0.02, -0.01, 0.1 * std::sin(seed));
 		// Observations of another state, so that z ≠ h.
 		const NavState other = at::RandomNavState(seed + 50);
-		at::WellFormedOptions opt;
-		opt.seed = seed;
-		opt.accept_skip = false;
 		for (DvlFrame f : kAllFrames)
 			for (DvlSign sign : {DvlSign::VehicleOverBottom, DvlSign::BottomOverInstrument})
 				for (int beams : {3, 4})
 				{
 					if (f != DvlFrame::Beam && beams == 3) continue;
-					EXPECT_TRUE(
-					    at::IsWellFormed(model, *modeObs(f, other, tc.ctx(), sign, beams), tc.ctx(), x, opt))
+					EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *modeObs(f, other, tc.ctx(), sign, beams),
+					                                    tc.ctx(), x, seed))
 					    << obs::dvlFrameName(f) << " " << obs::dvlSignName(sign) << " beams " << beams
 					    << " seed " << seed;
 				}
@@ -493,8 +448,7 @@ TEST(DvlFrames, WellFormedInEveryFrameSignAndBeamCount)
 
 TEST(DvlFrames, BottomOverInstrumentNegatesThePrediction)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, 0.02, -0.15);
 	DvlModel model(pt::defaultConfig(), "DVL");
 	const NavState x = at::RandomNavState(3);
@@ -505,8 +459,8 @@ TEST(DvlFrames, BottomOverInstrumentNegatesThePrediction)
 		auto pd0 = modeObs(f, x, tc.ctx());
 		pd0->sign = DvlSign::BottomOverInstrument;
 		Eigen::VectorXd z1, h1, z2, h2;
-		stackZH(model, prepareAll(model, *vob, tc.ctx()), tc.ctx(), x, z1, h1);
-		stackZH(model, prepareAll(model, *pd0, tc.ctx()), tc.ctx(), x, z2, h2);
+		stackZH(model, pt::prepareAll(model, *vob, tc.ctx()), tc.ctx(), x, z1, h1);
+		stackZH(model, pt::prepareAll(model, *pd0, tc.ctx()), tc.ctx(), x, z2, h2);
 		EXPECT_TRUE(z1 == z2) << obs::dvlFrameName(f);
 		EXPECT_TRUE(h2 == -h1) << obs::dvlFrameName(f) << ": " << h1.transpose() << " vs " << h2.transpose();
 		EXPECT_GT(h1.norm(), 0.1);
@@ -520,9 +474,7 @@ TEST(DvlFrames, BottomOverInstrumentNegatesThePrediction)
 	x0.v_n = Eigen::Vector3d(0.6, 0.6, -0.1);
 	for (DvlFrame f : kAllFrames)
 	{
-		ManifoldUkf a(ProcessModel{}, UtParams{}), b(ProcessModel{}, UtParams{});
-		a.initialize(x0, at::TypicalCovariance());
-		b.initialize(x0, at::TypicalCovariance());
+		ManifoldUkf a = pt::filterAt(x0), b = pt::filterAt(x0);
 		const auto ra = at::ApplyObservation(a, model, *modeObs(f, truth, tc.ctx()), tc.ctx());
 		const auto rb = at::ApplyObservation(
 		    b, model, *modeObs(f, truth, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
@@ -547,7 +499,8 @@ TEST(DvlFrames, AuxLayoutAndLabels)
 	                                                     {DvlFrame::Beam, "beam"}};
 	for (const auto& [f, label] : expected)
 	{
-		const auto ms = prepareAll(model, *modeObs(f, x, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
+		const auto ms =
+		    pt::prepareAll(model, *modeObs(f, x, tc.ctx(), DvlSign::BottomOverInstrument), tc.ctx());
 		ASSERT_FALSE(ms.empty());
 		for (std::size_t k = 0; k < ms.size(); ++k)
 		{
@@ -578,7 +531,7 @@ TEST(DvlBeams, OneScalarPerValidBeamWithTheBeamGeometry)
 		auto o = modeObs(DvlFrame::Beam, x, tc.ctx(), DvlSign::VehicleOverBottom, 4);
 		if (valid == 3) o->beams[1].valid = false;  // beam 1 lost: its NaN velocity must not matter
 		if (valid == 3) o->beams[1].velocity_mps = std::nan("");
-		const auto ms = prepareAll(model, *o, tc.ctx());
+		const auto ms = pt::prepareAll(model, *o, tc.ctx());
 		ASSERT_EQ(ms.size(), std::size_t(valid));
 		std::vector<int> used;
 		for (const auto& m : ms)
@@ -605,16 +558,14 @@ TEST(DvlBeams, ThreeValidBeamsFixTheVelocityInAFilter)
 {
 	// Three beams span 3-D: their three scalar updates fix the velocity as
 	// one 3-D update does (UpdateReducesVelocityError).
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	NavState truth;
 	truth.R_nb = at::rotationYpr(-60 * kDeg, 3 * kDeg, 1 * kDeg);
 	truth.v_n = Eigen::Vector3d(0.3, -0.8, 0.05);
 	NavState x0 = truth;
 	x0.v_n = Eigen::Vector3d(0.5, -0.4, 0.0);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, at::TypicalCovariance());
+	ManifoldUkf ukf = pt::filterAt(x0);
 	const auto three_beams = modeObs(DvlFrame::Beam, truth, tc.ctx(), DvlSign::VehicleOverBottom, 3);
 	const auto res = at::ApplyObservation(ukf, model, *three_beams, tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
@@ -646,14 +597,14 @@ TEST(DvlBeams, BeamSigmaFromTheObservationOrTheConfig)
 	DvlModel model(pt::configText("beam_sigma_mps: 0.03\nextra_sigma_mps: 0"), "DVL");
 	auto o = modeObs(DvlFrame::Beam, NavState{}, tc.ctx());
 	o->beam_velocity_sigma_mps = 0.02;
-	auto ms = prepareAll(model, *o, tc.ctx());
+	auto ms = pt::prepareAll(model, *o, tc.ctx());
 	ASSERT_EQ(ms.size(), 4u);
 	EXPECT_DOUBLE_EQ(ms[0].R(0, 0), 0.02 * 0.02);
 	EXPECT_EQ(ms[0].label, "beam");
 	for (double unknown : {0.0, -1.0, std::nan("")})
 	{
 		o->beam_velocity_sigma_mps = unknown;
-		ms = prepareAll(model, *o, tc.ctx());
+		ms = pt::prepareAll(model, *o, tc.ctx());
 		ASSERT_EQ(ms.size(), 4u);
 		EXPECT_DOUBLE_EQ(ms[0].R(0, 0), 0.03 * 0.03) << unknown;
 		EXPECT_EQ(ms[0].label, "beam_default_sigma");
@@ -710,16 +661,16 @@ TEST(DvlEarth, CompassAndTiltErrorsEnterTheNoise)
 	// 2 m/s north: the heading error is cross-track (east), the tilt error vertical.
 	auto ned = dvlObs(Eigen::Vector3d(2, 0, 0), C);
 	ned->frame = DvlFrame::EarthNed;
-	Measurement m = prepareOne(model, *ned, tc.ctx());
+	Measurement m = pt::prepareOne(model, *ned, tc.ctx());
 	Eigen::Matrix3d extra = Eigen::Matrix3d::Zero();
 	extra(1, 1) = 4 * sh * sh;
 	extra(2, 2) = 4 * st * st;
 	EXPECT_TRUE(m.R.isApprox(C + extra, 1e-12)) << m.R - C;
-	EXPECT_TRUE(prepareOne(no_att, *ned, tc.ctx()).R.isApprox(C, 1e-15));
+	EXPECT_TRUE(pt::prepareOne(no_att, *ned, tc.ctx()).R.isApprox(C, 1e-15));
 	// The same motion reported as ENU [0, 2, 0]: cross-track is ENU x (east).
 	auto enu = dvlObs(Eigen::Vector3d(0, 2, 0), C);
 	enu->frame = DvlFrame::EarthEnu;
-	m = prepareOne(model, *enu, tc.ctx());
+	m = pt::prepareOne(model, *enu, tc.ctx());
 	Eigen::Matrix3d extra_enu = Eigen::Matrix3d::Zero();
 	extra_enu(0, 0) = 4 * sh * sh;
 	extra_enu(2, 2) = 4 * st * st;
@@ -730,12 +681,12 @@ TEST(DvlEarth, CompassAndTiltErrorsEnterTheNoise)
 	diag->frame = DvlFrame::EarthNed;
 	DvlModel heading_only(pt::configText("extra_sigma_mps: 0\nearth_tilt_sigma_deg: 0"),
 	                      "DVL");  // default 2°
-	m = prepareOne(heading_only, *diag, tc.ctx());
+	m = pt::prepareOne(heading_only, *diag, tc.ctx());
 	const Eigen::Vector3d w(-1, 1, 0);
 	EXPECT_TRUE((m.R - C).isApprox(std::pow(2 * kDeg, 2) * w * w.transpose(), 1e-12)) << m.R - C;
 	// Other frames get no attitude term.
 	auto inst = dvlObs(Eigen::Vector3d(2, 0, 0), C);
-	EXPECT_TRUE(prepareOne(model, *inst, tc.ctx()).R.isApprox(C, 1e-15));
+	EXPECT_TRUE(pt::prepareOne(model, *inst, tc.ctx()).R.isApprox(C, 1e-15));
 }
 
 TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
@@ -743,9 +694,8 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 	// An Earth-frame velocity is v_n plus the rotated lever-arm velocity: at
 	// the same v_n a different heading changes h only by R_nb (ω × l), while
 	// an instrument-frame h turns with the heading.
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ie_n.setZero();  // keep ω itself independent of R_nb
-	tc.ctx().imu_position_b = kImuPos;
 	DvlModel model(pt::defaultConfig(), "DVL");
 	const Eigen::Vector3d l = kDvlPos - kImuPos;
 	for (uint32_t seed = 1; seed <= 10; ++seed)
@@ -760,13 +710,14 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 			const Eigen::Vector3d lever_change = (b.R_nb - a.R_nb) * w.cross(l);
 			for (DvlFrame f : {DvlFrame::EarthNed, DvlFrame::EarthEnu})
 			{
-				const Measurement m = prepareOne(model, *modeObs(f, a, tc.ctx()), tc.ctx());
+				const Measurement m = pt::prepareOne(model, *modeObs(f, a, tc.ctx()), tc.ctx());
 				const Eigen::VectorXd dh =
 				    at::Predict(model, m, tc.ctx(), b) - at::Predict(model, m, tc.ctx(), a);
 				EXPECT_NEAR(dh.norm(), lever_change.norm(), 1e-12)
 				    << obs::dvlFrameName(f) << " seed " << seed;
 			}
-			const Measurement mi = prepareOne(model, *modeObs(DvlFrame::Instrument, a, tc.ctx()), tc.ctx());
+			const Measurement mi =
+			    pt::prepareOne(model, *modeObs(DvlFrame::Instrument, a, tc.ctx()), tc.ctx());
 			const Eigen::VectorXd dhi =
 			    at::Predict(model, mi, tc.ctx(), b) - at::Predict(model, mi, tc.ctx(), a);
 			// |Δh| = |Δ(R_nbᵀ v_n)| = 2 sin 15° |v_n| horizontally, give or take the lever arm.
@@ -777,10 +728,9 @@ TEST(DvlEarth, AttitudeEntersOnlyThroughTheLeverArm)
 
 TEST(DvlEarth, RejectsBadAttitudeSigmas)
 {
-	EXPECT_THROW(DvlModel(pt::configText("earth_heading_sigma_deg: -1"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("earth_heading_sigma_deg: 91"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("earth_tilt_sigma_deg: x"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("beam_sigma_mps: 0"), "DVL"), config::ConfigError);
+	for (const char* yaml : {"earth_heading_sigma_deg: -1", "earth_heading_sigma_deg: 91",
+	                         "earth_tilt_sigma_deg: x", "beam_sigma_mps: 0"})
+		EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("earth_heading_sigma_deg: -5", "earth_heading_sigma_deg"));
 }
 
@@ -810,21 +760,18 @@ TEST(DvlStates, DeclaresScaleAndMisalignmentBlocksFromTheConfig)
 	EXPECT_NEAR(misalignment.process_sigma, 0.001 * kDeg, 1e-18);
 	EXPECT_NE(m.uses() & kPluginStates, 0u);
 	// Bad blocks name the key.
-	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0}}"), "DVL"), config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("states: {scale: {sigma: 0.01}}"), "DVL"), config::ConfigError);
-	EXPECT_THROW(
-	    DvlModel(pt::configText("states: {misalignment: {sigma_deg: 1, process: gauss_markov}}"), "DVL"),
-	    config::ConfigError);
-	EXPECT_THROW(DvlModel(pt::configText("states: {scale_factor: {sigma: 0.01, tau_s: 5}}"), "DVL"),
-	             config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>("states: {scale_factor: {sigma: 0}}"));
+	EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>("states: {scale: {sigma: 0.01}}"));
+	EXPECT_TRUE(
+	    pt::ConstructorRefuses<DvlModel>("states: {misalignment: {sigma_deg: 1, process: gauss_markov}}"));
+	EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>("states: {scale_factor: {sigma: 0.01, tau_s: 5}}"));
 }
 
 TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
 {
 	// Instrument frame, states bound after two other coordinates: h = (1 + s) R_bsᵀ Exp(δ)ᵀ v_s_b,
 	// i.e. the velocity seen through the true mounting Exp(δ) R_bs, scaled.
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}"), "DVL");
 	const at::PluginStateBench bench(m, 2);
@@ -835,7 +782,7 @@ TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
 	bench["misalignment"].segment(x) = delta;
 	const Eigen::Matrix3d R_bs_true = so3::Exp(delta) * nominalRbs();
 	const Eigen::Vector3d expected = (1 + s) * trueSensorVelocity(x, tc.ctx(), R_bs_true, kDvlPos);
-	const Measurement meas = prepareOne(m, *dvlObs(expected), tc.ctx());
+	const Measurement meas = pt::prepareOne(m, *dvlObs(expected), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(m, meas, tc.ctx(), x);
 	EXPECT_LT((h - expected).cwiseAbs().maxCoeff(), 1e-12) << h.transpose() << " vs " << expected.transpose();
 	// Without the states the same reading is off by about s·|v| and δ·|v|.
@@ -845,9 +792,7 @@ TEST(DvlStates, ScaleAndMisalignmentEnterHAsTheSimulatorAppliesThem)
 	// A state without the plugin's coordinates: h cannot be evaluated (not a silent read).
 	const NavState short_state = at::RandomNavState(7, 3);
 	EXPECT_TRUE(at::Predict(m, meas, tc.ctx(), short_state).array().isNaN().all());
-	at::WellFormedOptions opt;
-	opt.accept_skip = false;
-	EXPECT_TRUE(at::IsWellFormed(m, *dvlObs(expected), tc.ctx(), x, opt));
+	EXPECT_TRUE(pt::IsWellFormedAndUsed(m, *dvlObs(expected), tc.ctx(), x));
 }
 
 TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
@@ -856,9 +801,8 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	// scale_reference_lag_s old (dvl.h). Formed with the state's own velocity, (1 + s) v_s_b, the
 	// scale's gain carried the prior velocity error that the innovation carries with the opposite
 	// sign, and every ping pulled s low (−0.3 % on the square mission, test_plugin_states.cpp).
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	FilterContext& ctx = tc.ctx();
-	ctx.imu_position_b = kImuPos;
 	ctx.omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.15);
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
 	                          "scale_reference_lag_s: 10"),
@@ -885,7 +829,7 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 		ctx.t_s = t;
 		ctx.t_measurement_s = t;
 		ctx.mean = &mean;
-		return prepareOne(m, *dvlObs(v_x), ctx);
+		return pt::prepareOne(m, *dvlObs(v_x), ctx);
 	};
 	// No ping 10 s old yet: (1 + s) times the state's own sensor velocity.
 	const Measurement first = pingAt(1000.0, old_mean);
@@ -911,9 +855,7 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	// After a gap in bottom lock of more than twice the lag, no reference until the history refills.
 	const Measurement after_gap = pingAt(1100.0, now_mean);
 	EXPECT_LT((at::Predict(m, after_gap, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
-	at::WellFormedOptions opt;
-	opt.accept_skip = false;
-	EXPECT_TRUE(at::IsWellFormed(m, *dvlObs(v_x), ctx, x, opt));
+	EXPECT_TRUE(pt::IsWellFormedAndUsed(m, *dvlObs(v_x), ctx, x));
 
 	// scale_reference_lag_s 0: always (1 + s) v_s_b, as before.
 	DvlModel plain(pt::configText("states: {scale_factor: {sigma: 0.01}, misalignment: {sigma_deg: 2}}\n"
@@ -924,18 +866,17 @@ TEST(DvlStates, TheScaleTermIsEvaluatedAtTheVelocityEstimateLagSecondsBefore)
 	{
 		ctx.t_s = t;
 		ctx.mean = &old_mean;
-		const Measurement mm = prepareOne(plain, *dvlObs(v_x), ctx);
+		const Measurement mm = pt::prepareOne(plain, *dvlObs(v_x), ctx);
 		EXPECT_LT((at::Predict(plain, mm, ctx, x) - (1 + s) * v_x).norm(), 1e-12);
 	}
-	EXPECT_THROW(DvlModel(pt::configText("scale_reference_lag_s: -1"), "DVL"), config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<DvlModel>("scale_reference_lag_s: -1"));
 }
 
 TEST(DvlStates, AFilterLearnsTheScaleFactorFromVelocityKnownOtherwise)
 {
 	// The velocity is known to 1 mm/s (as from a GPS track): DVL readings 0.5 % high are explained
 	// by the scale factor, which the filter then knows to a fraction of its prior σ.
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	DvlModel m(pt::configText("states: {scale_factor: {sigma: 0.02}}"), "DVL");
 	const at::PluginStateBench bench(m);
 	const PluginState& scale = bench["scale_factor"];

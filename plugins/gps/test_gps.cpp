@@ -12,17 +12,12 @@
 #include "gps.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using auvnav::plugins::GpsModel;
 using mrpt::obs::CObservationGPS;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
-const Eigen::Vector3d kAntennaPos(-0.3, 0, -0.6);     // gps.position_m
+const Eigen::Vector3d kAntennaPos(-0.3, 0, -0.6);  // gps.position_m
 
 /** A GGA fix at navigation-frame position `p_n`, as the simulator writes it. */
 CObservationGPS::Ptr ggaObs(const earth::TangentFrame& frame, const Eigen::Vector3d& p_n, int fix_quality = 1,
@@ -43,17 +38,17 @@ CObservationGPS::Ptr ggaObs(const earth::TangentFrame& frame, const Eigen::Vecto
 	return o;
 }
 
-Eigen::Vector3d antennaPosition(const NavState& x, const Eigen::Vector3d& imu_pos)
+Eigen::Vector3d antennaPosition(const NavState& x)
 {
-	return x.p_n + x.R_nb * (kAntennaPos - imu_pos);
+	return pt::pointOnVehicle_n(x, kAntennaPos);
 }
 
-Measurement prepareOne(GpsModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
+/** A GGA fix of the antenna at `p_n` stamped `t_s` [s]. */
+CObservationGPS::Ptr ggaObsAt(double t_s, const earth::TangentFrame& frame, const Eigen::Vector3d& p_n)
 {
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
-	return out.empty() ? Measurement{} : out[0];
+	auto o = ggaObs(frame, p_n);
+	o->timestamp = mrpt::Clock::fromDouble(t_s);
+	return o;
 }
 }  // namespace
 
@@ -68,18 +63,16 @@ TEST(Gps, DefaultConfig)
 
 TEST(Gps, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(GpsModel(pt::configText("sigma_m: 0"), "GPS"), config::ConfigError);
-	EXPECT_THROW(GpsModel(pt::configText("scale_by_hdop: 2"), "GPS"), config::ConfigError);
-	EXPECT_THROW(GpsModel(pt::configText("position_m: [0, 0, 1e6]"), "GPS"), config::ConfigError);
-	EXPECT_THROW(GpsModel(pt::configText("gate_probability: 0"), "GPS"), config::ConfigError);
+	for (const char* yaml :
+	     {"sigma_m: 0", "scale_by_hdop: 2", "position_m: [0, 0, 1e6]", "gate_probability: 0"})
+		EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("sigma_m: -3", "sigma_m"));
 	EXPECT_TRUE(pt::ModuleRefuses("sigma_m: [1", "malformed"));
 }
 
 TEST(Gps, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(
-	    pt::ModuleLoadsAndCreates("gps", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("gps", pt::defaultConfigText(), kAttitude | kPosition));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates(
 	    "gps", "states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}",
 	    kAttitude | kPosition | kPluginStates));
@@ -87,8 +80,7 @@ TEST(Gps, ModuleExportsEntryAndCreatesFromDefaultConfig)
 
 TEST(Gps, WellFormedOnRandomStates)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	for (const char* cfg : {"{}", "scale_by_hdop: true", "states: {bias: {sigma: 2}}"})
 	{
 		GpsModel model(pt::configText(cfg), "GPS");
@@ -97,11 +89,8 @@ TEST(Gps, WellFormedOnRandomStates)
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
 			const NavState x = bench.randomState(seed);
-			const Eigen::Vector3d p = antennaPosition(at::RandomNavState(seed + 3), kImuPos);
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(model, *ggaObs(tc.frame(), p, 1, 1.4f), tc.ctx(), x, opt))
+			const Eigen::Vector3d p = antennaPosition(at::RandomNavState(seed + 3));
+			EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *ggaObs(tc.frame(), p, 1, 1.4f), tc.ctx(), x, seed))
 			    << cfg << ", seed " << seed;
 		}
 	}
@@ -114,7 +103,7 @@ TEST(Gps, FixConvertsBackToTheNavigationFrame)
 	for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1234.5, -987.6, -1.0),
 	                                 Eigen::Vector3d(-20000, 15000, -0.5)})
 	{
-		const Measurement m = prepareOne(model, *ggaObs(tc.frame(), p), tc.ctx());
+		const Measurement m = pt::prepareOne(model, *ggaObs(tc.frame(), p), tc.ctx());
 		ASSERT_EQ(m.z.size(), 2);
 		EXPECT_NEAR(m.z[0], p.x(), 1e-6);
 		EXPECT_NEAR(m.z[1], p.y(), 1e-6);
@@ -124,13 +113,12 @@ TEST(Gps, FixConvertsBackToTheNavigationFrame)
 
 TEST(Gps, LeverArmAtHeading180)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	GpsModel model(pt::defaultConfig(), "GPS");
 	NavState x;
 	x.R_nb = at::rotationYpr(180 * kDeg, 0, 0);  // facing south
 	x.p_n = Eigen::Vector3d(10, 20, 0);
-	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), Eigen::Vector3d(10, 20, -0.6)), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *ggaObs(tc.frame(), Eigen::Vector3d(10, 20, -0.6)), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	// Antenna 0.59424 m behind the IMU; facing south, behind is north.
 	EXPECT_NEAR(h[0], 10.59424, 1e-12);
@@ -153,29 +141,24 @@ TEST(Gps, HdopScalingOnlyWhenConfiguredAndReported)
 	GpsModel plain(pt::defaultConfig(), "GPS");
 	GpsModel scaled(pt::configText("scale_by_hdop: true\nsigma_m: 2.0"), "GPS");
 	const Eigen::Vector3d p(5, 5, -1);
-	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 0), 9.0, 1e-12);
-	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(1, 1), 25.0, 1e-12);
-	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 0.0f), tc.ctx()).R(0, 0), 4.0,
+	EXPECT_NEAR(pt::prepareOne(plain, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 0), 9.0, 1e-12);
+	EXPECT_NEAR(pt::prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(1, 1), 25.0, 1e-12);
+	EXPECT_NEAR(pt::prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 0.0f), tc.ctx()).R(0, 0), 4.0,
 	            1e-12);  // not reported
-	EXPECT_NEAR(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, NAN), tc.ctx()).R(0, 0), 4.0, 1e-12);
-	EXPECT_EQ(prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 1), 0.0);
+	EXPECT_NEAR(pt::prepareOne(scaled, *ggaObs(tc.frame(), p, 1, NAN), tc.ctx()).R(0, 0), 4.0, 1e-12);
+	EXPECT_EQ(pt::prepareOne(scaled, *ggaObs(tc.frame(), p, 1, 2.5f), tc.ctx()).R(0, 1), 0.0);
 }
 
 TEST(Gps, UpdateReducesPositionError)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	GpsModel model(pt::defaultConfig(), "GPS");
-	NavState truth;
-	truth.R_nb = at::rotationYpr(180 * kDeg, 0, 0);
-	truth.p_n = Eigen::Vector3d(10, 20, 0);
+	const NavState truth = pt::levelState(180 * kDeg, Eigen::Vector3d(10, 20, 0));
 	NavState x0 = truth;
 	x0.p_n = Eigen::Vector3d(15, 16, 0);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, at::TypicalCovariance());  // 5 m per axis
+	ManifoldUkf ukf = pt::filterAt(x0);  // 5 m per axis
 	const double err_before = (x0.p_n - truth.p_n).head<2>().norm();
-	const auto res =
-	    at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos)), tc.ctx());
+	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), antennaPosition(truth)), tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
@@ -187,18 +170,13 @@ TEST(Gps, UpdateReducesPositionError)
 
 TEST(Gps, GrossOutlierIsRejectedAndLeavesTheStateUnchanged)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	GpsModel model(pt::defaultConfig(), "GPS");
-	NavState truth;
-	truth.R_nb = at::rotationYpr(45 * kDeg, 0, 0);
-	truth.p_n = Eigen::Vector3d(-40, 70, 0);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(truth, at::TypicalCovariance());
+	const NavState truth = pt::levelState(45 * kDeg, Eigen::Vector3d(-40, 70, 0));
+	ManifoldUkf ukf = pt::filterAt(truth);
 	const NavState before = ukf.state();
 	const Covariance P_before = ukf.covariance();
-	const Eigen::Vector3d outlier =
-	    antennaPosition(truth, kImuPos) + Eigen::Vector3d(60, -80, 0);  // 100 m off
+	const Eigen::Vector3d outlier = antennaPosition(truth) + Eigen::Vector3d(60, -80, 0);  // 100 m off
 	const auto res = at::ApplyObservation(ukf, model, *ggaObs(tc.frame(), outlier), tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
@@ -208,8 +186,7 @@ TEST(Gps, GrossOutlierIsRejectedAndLeavesTheStateUnchanged)
 	EXPECT_TRUE(ukf.covariance() == P_before);
 	// A 3 m error is accepted.
 	const auto ok = at::ApplyObservation(
-	    ukf, model, *ggaObs(tc.frame(), antennaPosition(truth, kImuPos) + Eigen::Vector3d(3, 0, 0)),
-	    tc.ctx());
+	    ukf, model, *ggaObs(tc.frame(), antennaPosition(truth) + Eigen::Vector3d(3, 0, 0)), tc.ctx());
 	ASSERT_EQ(ok.updates.size(), 1u);
 	EXPECT_EQ(ok.updates[0].status, UpdateStatus::Accepted);
 }
@@ -258,48 +235,32 @@ TEST(Gps, InvalidInputs)
 	// A missing altitude still gives the horizontal position.
 	auto no_alt = ggaObs(tc.frame(), Eigen::Vector3d(100, 50, 0));
 	no_alt->getMsgByClass<mrpt::obs::gnss::Message_NMEA_GGA>().fields.altitude_meters = NAN;
-	const Measurement m = prepareOne(model, *no_alt, tc.ctx());
+	const Measurement m = pt::prepareOne(model, *no_alt, tc.ctx());
 	EXPECT_NEAR(m.z[0], 100, 1e-3);
 	EXPECT_NEAR(m.z[1], 50, 1e-3);
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationPressure::Create(), tc.ctx(), out, why),
-	          PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationGPS"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<obs::CObservationPressure>(model, tc.ctx(), "CObservationGPS"));
 }
 
 TEST(Gps, NanMeasurementNeverChangesTheState)
 {
 	at::TestContext tc;
 	GpsModel model(pt::defaultConfig(), "GPS");
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(at::RandomNavState(5), at::TypicalCovariance());
-	const NavState before = ukf.state();
-	Measurement m = prepareOne(model, *ggaObs(tc.frame(), before.p_n), tc.ctx());
+	const NavState x0 = at::RandomNavState(5);
+	Measurement m = pt::prepareOne(model, *ggaObs(tc.frame(), x0.p_n), tc.ctx());
 	m.z[0] = std::nan("");
-	EXPECT_EQ(ukf.update(model, m, tc.ctx()).status, UpdateStatus::Invalid);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
 }
 
 TEST(Gps, MinIntervalUsesOneFixPerCorrelationTime)
 {
 	at::TestContext tc;
 	GpsModel model(pt::configText("min_interval_s: 30\n"), "GPS");
-	int used = 0, skipped = 0;
-	for (int k = 0; k < 100; ++k)  // 100 s of 1 Hz fixes
-	{
-		auto o = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
-		o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
-		std::vector<Measurement> out;
-		std::string why;
-		const auto st = model.prepare(*o, tc.ctx(), out, why);
-		(st == PrepareStatus::Ok ? used : skipped)++;
-		if (st == PrepareStatus::Skip)
-		{
-			EXPECT_NE(why.find("min_interval_s"), std::string::npos);
-		}
-	}
-	EXPECT_EQ(used, 4);  // t = 0, 30, 60, 90
-	EXPECT_EQ(skipped, 96);
-	EXPECT_THROW(GpsModel(pt::configText("min_interval_s: -1\n"), "GPS"), config::ConfigError);
+	// 100 s of 1 Hz fixes: used at t = 0, 30, 60, 90 s.
+	const auto fix = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
+	const pt::Offered n = pt::offerInTurn(model, tc.ctx(), *fix, 100, 1492693200.0, 1.0);
+	EXPECT_EQ(n.used, 4);
+	EXPECT_EQ(n.skipped, 96);
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("min_interval_s: -1\n"));
 }
 
 TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
@@ -308,9 +269,9 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 	GpsModel model(pt::configText("sigma_m: 1.0\ncorrelated_sigma_m: 1.5\ncorrelation_time_s: 60\n"), "GPS");
 	auto fixAt = [&](double t)
 	{
-		auto o = ggaObs(tc.frame(), Eigen::Vector3d(10, 20, 0));
-		o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + t);
-		return prepareOne(model, *o, tc.ctx()).R;
+		return pt::prepareOne(model, *ggaObsAt(1492693200.0 + t, tc.frame(), Eigen::Vector3d(10, 20, 0)),
+		                      tc.ctx())
+		    .R;
 	};
 	// First fix: nothing to share an error with: 1 + 1.5².
 	EXPECT_NEAR(fixAt(0)(0, 0), 1 + 2.25, 1e-9);
@@ -324,16 +285,15 @@ TEST(Gps, CorrelatedErrorIsInflatedByItsEffectiveSampleSize)
 	EXPECT_NEAR(fixAt(1230)(0, 0), 1 + 2.25, 1e-6);
 	// Off by default: sigma_m alone.
 	GpsModel plain(pt::configText("sigma_m: 2.0\n"), "GPS");
-	EXPECT_NEAR(prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0,
+	EXPECT_NEAR(pt::prepareOne(plain, *ggaObs(tc.frame(), Eigen::Vector3d(1, 2, 0)), tc.ctx()).R(0, 0), 4.0,
 	            1e-12);
-	EXPECT_THROW(GpsModel(pt::configText("correlated_sigma_m: -1\n"), "GPS"), config::ConfigError);
-	EXPECT_THROW(GpsModel(pt::configText("correlation_time_s: 0\n"), "GPS"), config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("correlated_sigma_m: -1\n"));
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("correlation_time_s: 0\n"));
 }
 
 TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	GpsModel model(
 	    pt::configText("states: {bias: {sigma: 1.5, process: gauss_markov, process_sigma: 1.5, tau_s: 60}}"),
 	    "GPS");
@@ -348,8 +308,8 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 	NavState x = bench.randomState(7);
 	bias(x, 0) = 0.8;
 	bias(x, 1) = -1.3;
-	const Eigen::Vector3d a = antennaPosition(x, kImuPos);
-	const Measurement m = prepareOne(model, *ggaObs(tc.frame(), a), tc.ctx());
+	const Eigen::Vector3d a = antennaPosition(x);
+	const Measurement m = pt::prepareOne(model, *ggaObs(tc.frame(), a), tc.ctx());
 	EXPECT_NEAR(m.R(0, 0), 9.0, 1e-12);  // sigma_m alone: no inflation for the correlated part
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	EXPECT_NEAR(h[0], a.x() + 0.8, 1e-12);
@@ -381,15 +341,14 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 		FilterContext ctx = tc.ctx();
 		ctx.mean = &mean;
 		ctx.covariance = &P;
-		const Eigen::Vector3d fix = antennaPosition(mean, kImuPos) + Eigen::Vector3d(12, 0, 0);
+		const Eigen::Vector3d fix = antennaPosition(mean) + Eigen::Vector3d(12, 0, 0);
 		int used = 0;
 		for (int k = 0; k < 2; ++k)
 		{
-			auto o = ggaObs(tc.frame(), fix);
-			o->timestamp = mrpt::Clock::fromDouble(1492693200.0 + k);
 			std::vector<Measurement> out;
 			std::string why;
-			used += limited.prepare(*o, ctx, out, why) == PrepareStatus::Ok;
+			used += limited.prepare(*ggaObsAt(1492693200.0 + k, tc.frame(), fix), ctx, out, why) ==
+			        PrepareStatus::Ok;
 		}
 		return used;
 	};
@@ -407,11 +366,10 @@ TEST(Gps, BiasStateEntersHAndTheOutlierTest)
 
 TEST(Gps, BiasStateAndCorrelatedSigmaAreExclusive)
 {
-	EXPECT_THROW(GpsModel(pt::configText("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}"), "GPS"),
-	             config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}"));
 	EXPECT_TRUE(pt::ModuleRefuses("{correlated_sigma_m: 1.5, states: {bias: {sigma: 1.5}}}", "states.bias"));
-	EXPECT_THROW(GpsModel(pt::configText("states: {bais: {sigma: 1}}"), "GPS"), config::ConfigError);
-	EXPECT_THROW(GpsModel(pt::configText("states: {bias: {sigma: 0}}"), "GPS"), config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("states: {bais: {sigma: 1}}"));
+	EXPECT_TRUE(pt::ConstructorRefuses<GpsModel>("states: {bias: {sigma: 0}}"));
 	EXPECT_NO_THROW(GpsModel(pt::configText("{correlated_sigma_m: 0, states: {bias: {sigma: 1.5}}}"), "GPS"));
 }
 

@@ -10,15 +10,10 @@
 #include "inertial.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using auvnav::plugins::InertialModel;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-
 mrpt::obs::CObservationIMU::Ptr imuObs(const Eigen::Vector3d& f,
                                        const Eigen::Vector3d& w = Eigen::Vector3d::Zero())
 {
@@ -43,10 +38,7 @@ Eigen::Vector3d specificForce(const NavState& x)
 
 Eigen::Vector3d measure(InertialModel& model, const NavState& x, const FilterContext& ctx)
 {
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(*imuObs(specificForce(x)), ctx, out, why), PrepareStatus::Ok) << why;
-	return at::Predict(model, out.at(0), ctx, x);
+	return at::Predict(model, pt::prepareAll(model, *imuObs(specificForce(x)), ctx).at(0), ctx, x);
 }
 
 NavState levelAtRest()
@@ -73,19 +65,16 @@ TEST(Inertial, DefaultConfigLoadsAndGivesDocumentedNoise)
 
 TEST(Inertial, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(InertialModel(pt::configText("rate_hz: 0"), "IMU"), config::ConfigError);
-	EXPECT_THROW(InertialModel(pt::configText("vrw_mg_per_sqrt_hz: -1"), "IMU"), config::ConfigError);
-	EXPECT_THROW(InertialModel(pt::configText("vrw_mg_per_sqrt_hz: 0\nextra_sigma_mps2: 0"), "IMU"),
-	             config::ConfigError);
-	EXPECT_THROW(InertialModel(pt::configText("gate_probability: 0"), "IMU"), config::ConfigError);
-	EXPECT_THROW(InertialModel(pt::configText("gate_probability: 1.5"), "IMU"), config::ConfigError);
-	EXPECT_THROW(InertialModel(pt::configText("coriolis: maybe"), "IMU"), config::ConfigError);
+	for (const char* yaml :
+	     {"rate_hz: 0", "vrw_mg_per_sqrt_hz: -1", "vrw_mg_per_sqrt_hz: 0\nextra_sigma_mps2: 0",
+	      "gate_probability: 0", "gate_probability: 1.5", "coriolis: maybe"})
+		EXPECT_TRUE(pt::ConstructorRefuses<InertialModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("rate_hz: -5", "rate_hz"));
 }
 
 TEST(Inertial, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("inertial", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("inertial", pt::defaultConfigText(),
 	                                      kAttitude | kAcceleration | kGravity | kAccelBias));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("inertial", "coriolis: true",
 	                                      kAttitude | kAcceleration | kGravity | kAccelBias | kVelocity));
@@ -93,9 +82,8 @@ TEST(Inertial, ModuleExportsEntryAndCreatesFromDefaultConfig)
 
 TEST(Inertial, WellFormedOnRandomStates)
 {
-	at::TestContext tc;
+	pt::FlatfishContext tc;
 	tc.ctx().omega_ib_b = Eigen::Vector3d(0.01, -0.02, 0.1);
-	tc.ctx().imu_position_b = Eigen::Vector3d(0.29424, 0, -0.02863);
 	for (const char* cfg : {"{}", "coriolis: true"})
 	{
 		InertialModel model(pt::configText(cfg), "IMU");
@@ -104,10 +92,8 @@ TEST(Inertial, WellFormedOnRandomStates)
 			const NavState x = at::RandomNavState(seed);
 			const Eigen::Vector3d f =
 			    specificForce(at::RandomNavState(seed + 100)) + Eigen::Vector3d(0.01, -0.02, 0.03);
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(model, *imuObs(f), tc.ctx(), x, opt)) << cfg << ", seed " << seed;
+			EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *imuObs(f), tc.ctx(), x, seed))
+			    << cfg << ", seed " << seed;
 		}
 	}
 }
@@ -179,8 +165,7 @@ TEST(Inertial, UpdateReducesTiltError)
 	x0.R_nb = at::rotationYpr(0, -2 * kDeg, 3 * kDeg);  // 3.6° tilt error
 	Covariance P0 = at::TypicalCovariance();
 	P0.block<3, 3>(idx::att, idx::att) = Eigen::Matrix3d::Identity() * std::pow(5 * kDeg, 2);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, P0);
+	ManifoldUkf ukf = pt::filterAt(x0, P0);
 	const double tilt_before = x0.boxminus(truth).segment<2>(idx::att).norm();
 	ASSERT_GT(tilt_before, 3 * kDeg);
 
@@ -222,30 +207,18 @@ TEST(Inertial, InvalidInputs)
 	EXPECT_EQ(model.prepare(*gyro_only, tc.ctx(), out, why), PrepareStatus::Invalid);
 	EXPECT_NE(why.find("missing"), std::string::npos) << why;
 	// Wrong observation class.
-	auto gps = mrpt::obs::CObservationGPS::Create();
-	EXPECT_EQ(model.prepare(*gps, tc.ctx(), out, why), PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationIMU"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<mrpt::obs::CObservationGPS>(model, tc.ctx(), "CObservationIMU"));
 }
 
 TEST(Inertial, NanMeasurementNeverChangesTheState)
 {
 	at::TestContext tc;
 	InertialModel model(pt::defaultConfig(), "IMU");
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(at::RandomNavState(3), at::TypicalCovariance());
-	const NavState before = ukf.state();
-	const Covariance P_before = ukf.covariance();
+	const NavState x0 = at::RandomNavState(3);
 	// Through the plugin: prepare refuses, nothing reaches the filter.
-	const auto res =
-	    at::ApplyObservation(ukf, model, *imuObs(Eigen::Vector3d(0, std::nan(""), -9.8)), tc.ctx());
-	EXPECT_EQ(res.status, PrepareStatus::Invalid);
-	EXPECT_TRUE(res.updates.empty());
+	EXPECT_TRUE(pt::PrepareRefuses(model, *imuObs(Eigen::Vector3d(0, std::nan(""), -9.8)), tc.ctx(), x0));
 	// Directly: a measurement with a NaN is refused by the filter.
-	std::vector<Measurement> out;
-	std::string why;
-	ASSERT_EQ(model.prepare(*imuObs(Eigen::Vector3d(0, 0, -9.8)), tc.ctx(), out, why), PrepareStatus::Ok);
-	out[0].z[1] = std::nan("");
-	EXPECT_EQ(ukf.update(model, out[0], tc.ctx()).status, UpdateStatus::Invalid);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
-	EXPECT_TRUE(ukf.covariance() == P_before);
+	Measurement m = pt::prepareOne(model, *imuObs(Eigen::Vector3d(0, 0, -9.8)), tc.ctx());
+	m.z[1] = std::nan("");
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
 }

@@ -11,10 +11,7 @@
 #include "model_aiding.h"
 #include "plugin_test_support.h"
 
-using namespace auvnav;
 using namespace auvnav::plugins;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
@@ -171,7 +168,7 @@ TEST(ModelAiding, UpdatePullsTheCurrentAndDampingTheRightWay)
 	// current estimate toward zero. (Symmetric thruster gains, so that the
 	// least-squares efforts reproduce the wrench exactly; horizontal DOFs only:
 	// two heave thrusters cannot set roll and pitch independently.)
-	std::string text = pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG);
+	std::string text = pt::defaultConfigText();
 	for (std::size_t pos; (pos = text.find("gain_reverse: 0.8")) != std::string::npos;)
 		text.replace(pos, 17, "gain_reverse: 1.0");
 	ASSERT_NE(text.find("\ndofs: [0, 1, 5]\n"), std::string::npos);  // the default: surge, sway, yaw

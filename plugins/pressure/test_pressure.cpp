@@ -10,17 +10,12 @@
 #include "plugin_test_support.h"
 #include "pressure.h"
 
-using namespace auvnav;
 using auvnav::obs::CObservationPressure;
 using auvnav::plugins::PressureModel;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);  // flatfish_sensors.yaml imu.position_m
-const Eigen::Vector3d kSensorPos(0, 0, 0.3);          // pressure.position_m
+const Eigen::Vector3d kSensorPos(0, 0, 0.3);  // pressure.position_m
 
 CObservationPressure::Ptr pressureObs(double pa)
 {
@@ -32,19 +27,27 @@ CObservationPressure::Ptr pressureObs(double pa)
 	return o;
 }
 
-/** The simulator's pressure (no noise, no bias) for state x. */
-double truePressure(const NavState& x, const Eigen::Vector3d& imu_pos)
+/** The simulator's pressure (no noise, no bias) for state x (FlatFish IMU lever arm). */
+double truePressure(const NavState& x)
 {
-	const double depth = x.p_n.z() + (x.R_nb * (kSensorPos - imu_pos)).z();
-	return 101325 + 1025 * x.g * depth;
+	return 101325 + 1025 * x.g * pt::pointOnVehicle_n(x, kSensorPos).z();
 }
 
 double predictOne(PressureModel& model, const NavState& x, const FilterContext& ctx)
 {
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(*pressureObs(2e5), ctx, out, why), PrepareStatus::Ok) << why;
+	const std::vector<Measurement> out = pt::prepareAll(model, *pressureObs(2e5), ctx);
 	return out.empty() ? NAN : at::Predict(model, out[0], ctx, x)[0];
+}
+
+/** A vehicle with its IMU at p_n [m] in water under gravity 9.81 m/s², facing
+ *  `yaw` (pitch, roll in radians too). */
+NavState submergedAt(const Eigen::Vector3d& p_n, double yaw = 0, double pitch = 0, double roll = 0)
+{
+	NavState x;
+	x.g = 9.81;
+	x.R_nb = at::rotationYpr(yaw, pitch, roll);
+	x.p_n = p_n;
+	return x;
 }
 }  // namespace
 
@@ -63,45 +66,35 @@ TEST(Pressure, DefaultConfig)
 
 TEST(Pressure, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(PressureModel(pt::configText("density_kg_m3: 10"), "P"), config::ConfigError);
-	EXPECT_THROW(PressureModel(pt::configText("atmospheric_pressure_pa: 0"), "P"), config::ConfigError);
-	EXPECT_THROW(PressureModel(pt::configText("sigma_pa: 0"), "P"), config::ConfigError);
-	EXPECT_THROW(PressureModel(pt::configText("position_m: 3"), "P"), config::ConfigError);
-	EXPECT_THROW(PressureModel(pt::configText("gate_probability: 2"), "P"), config::ConfigError);
+	for (const char* yaml : {"density_kg_m3: 10", "atmospheric_pressure_pa: 0", "sigma_pa: 0",
+	                         "position_m: 3", "gate_probability: 2"})
+		EXPECT_TRUE(pt::ConstructorRefuses<PressureModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("density_kg_m3: 5000", "density_kg_m3"));
 }
 
 TEST(Pressure, ModuleExportsEntryAndCreatesFromDefaultConfig)
 {
-	EXPECT_TRUE(pt::ModuleLoadsAndCreates("pressure", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG),
-	                                      kAttitude | kGravity | kPosition));
+	EXPECT_TRUE(
+	    pt::ModuleLoadsAndCreates("pressure", pt::defaultConfigText(), kAttitude | kGravity | kPosition));
 }
 
 TEST(Pressure, WellFormedOnRandomStates)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	PressureModel model(pt::defaultConfig(), "PRESSURE");
 	for (uint32_t seed = 1; seed <= 20; ++seed)
 	{
-		const NavState x = at::RandomNavState(seed);
-		at::WellFormedOptions opt;
-		opt.seed = seed;
-		opt.accept_skip = false;
-		EXPECT_TRUE(at::IsWellFormed(
-		    model, *pressureObs(truePressure(at::RandomNavState(seed + 9), kImuPos) + 30), tc.ctx(), x, opt))
+		const auto o = pressureObs(truePressure(at::RandomNavState(seed + 9)) + 30);
+		EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *o, tc.ctx(), at::RandomNavState(seed), seed))
 		    << "seed " << seed;
 	}
 }
 
 TEST(Pressure, TenMetresLevelAndPitched)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	PressureModel model(pt::defaultConfig(), "PRESSURE");
-	NavState x;
-	x.g = 9.81;
-	x.p_n = Eigen::Vector3d(5, -3, 10);  // IMU at 10 m
+	NavState x = submergedAt(Eigen::Vector3d(5, -3, 10));  // IMU at 10 m
 	// Level: the sensor is 0.3 + 0.02863 m below the IMU.
 	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 101325 + 1025 * 9.81 * 10.32863, 1e-8);
 	EXPECT_NEAR(predictOne(model, x, tc.ctx()), 205181.9568075, 1e-6);
@@ -119,18 +112,13 @@ TEST(Pressure, TenMetresLevelAndPitched)
 
 TEST(Pressure, UpdateReducesDepthError)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	PressureModel model(pt::defaultConfig(), "PRESSURE");
-	NavState truth;
-	truth.g = 9.81;
-	truth.R_nb = at::rotationYpr(10 * kDeg, 3 * kDeg, -2 * kDeg);
-	truth.p_n = Eigen::Vector3d(20, 30, 10);
+	const NavState truth = submergedAt(Eigen::Vector3d(20, 30, 10), 10 * kDeg, 3 * kDeg, -2 * kDeg);
 	NavState x0 = truth;
 	x0.p_n.z() = 12;
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, at::TypicalCovariance());
-	const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
+	ManifoldUkf ukf = pt::filterAt(x0);
+	const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth)), tc.ctx());
 	ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 	ASSERT_EQ(res.updates.size(), 1u);
 	EXPECT_EQ(res.updates[0].status, UpdateStatus::Accepted) << res.updates[0].why;
@@ -158,44 +146,33 @@ TEST(Pressure, InvalidInputs)
 	// The plausible extremes pass: a reading above water, and 9000 m deep.
 	EXPECT_EQ(model.prepare(*pressureObs(5.0e4), tc.ctx(), out, why), PrepareStatus::Ok);
 	EXPECT_EQ(model.prepare(*pressureObs(9.3e7), tc.ctx(), out, why), PrepareStatus::Ok);
-	EXPECT_EQ(model.prepare(*auvnav::obs::CObservationDVL::Create(), tc.ctx(), out, why),
-	          PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationPressure"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<obs::CObservationDVL>(model, tc.ctx(), "CObservationPressure"));
 }
 
 TEST(Pressure, NanMeasurementNeverChangesTheState)
 {
 	at::TestContext tc;
 	PressureModel model(pt::defaultConfig(), "PRESSURE");
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(at::RandomNavState(11), at::TypicalCovariance());
-	const NavState before = ukf.state();
-	const Covariance P_before = ukf.covariance();
-	EXPECT_EQ(at::ApplyObservation(ukf, model, *pressureObs(NAN), tc.ctx()).status, PrepareStatus::Invalid);
-	std::vector<Measurement> out;
-	std::string why;
-	ASSERT_EQ(model.prepare(*pressureObs(2e5), tc.ctx(), out, why), PrepareStatus::Ok);
-	out[0].z[0] = std::nan("");
-	EXPECT_EQ(ukf.update(model, out[0], tc.ctx()).status, UpdateStatus::Invalid);
-	out[0].z[0] = 2e5;
-	out[0].R(0, 0) = std::nan("");
-	EXPECT_EQ(ukf.update(model, out[0], tc.ctx()).status, UpdateStatus::Invalid);
-	EXPECT_TRUE(at::NavStateIdentical(ukf.state(), before));
-	EXPECT_TRUE(ukf.covariance() == P_before);
+	const NavState x0 = at::RandomNavState(11);
+	EXPECT_TRUE(pt::PrepareRefuses(model, *pressureObs(NAN), tc.ctx(), x0));
+	// A measurement with a NaN in z or in R is refused by the filter.
+	Measurement m = pt::prepareOne(model, *pressureObs(2e5), tc.ctx());
+	m.z[0] = std::nan("");
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
+	m.z[0] = 2e5;
+	m.R(0, 0) = std::nan("");
+	EXPECT_TRUE(pt::FilterRefuses(model, m, tc.ctx(), x0));
 }
 
 TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	const double pa_per_m = 1025 * PressureModel::kNominalGravity;
 	const double floor_m = 60 / pa_per_m;  // ~6 mm
 	auto run = [&](const char* cfg, double& sigma_d, double& first_err)
 	{
 		PressureModel model(pt::configText(cfg), "PRESSURE");
-		NavState truth;
-		truth.g = 9.81;
-		truth.p_n = Eigen::Vector3d(20, 30, 10);
+		const NavState truth = submergedAt(Eigen::Vector3d(20, 30, 10));
 		NavState x0 = truth;
 		x0.p_n.z() = 12;
 		// Gravity and tilt known well: otherwise their share of the depth
@@ -207,13 +184,11 @@ TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
 		P0.topRows<3>().setZero();
 		P0.leftCols<3>().setZero();
 		P0.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 1e-8;
-		ManifoldUkf ukf(ProcessModel{}, UtParams{});
-		ukf.initialize(x0, P0);
+		ManifoldUkf ukf = pt::filterAt(x0, P0);
 		tc.ctx().covariance = &ukf.covariance();
 		for (int k = 0; k < 200; ++k)
 		{
-			const auto res =
-			    at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth, kImuPos)), tc.ctx());
+			const auto res = at::ApplyObservation(ukf, model, *pressureObs(truePressure(truth)), tc.ctx());
 			ASSERT_EQ(res.status, PrepareStatus::Ok) << res.why;
 			ASSERT_EQ(res.updates.at(0).status, UpdateStatus::Accepted) << res.updates[0].why;
 			if (k == 0) first_err = std::abs(ukf.state().p_n.z() - truth.p_n.z());
@@ -245,5 +220,5 @@ TEST(Pressure, BiasFloorKeepsTheDepthSigmaAtTheBias)
 	tc.ctx().covariance = &P;
 	ASSERT_EQ(model.prepare(*pressureObs(2e5), tc.ctx(), out, why), PrepareStatus::Ok);
 	EXPECT_GT(out[0].R(0, 0), 1e5 * 3600 * 0.5);
-	EXPECT_THROW(PressureModel(pt::configText("bias_sigma_pa: -1"), "P"), config::ConfigError);
+	EXPECT_TRUE(pt::ConstructorRefuses<PressureModel>("bias_sigma_pa: -1"));
 }

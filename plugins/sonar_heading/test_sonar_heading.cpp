@@ -17,15 +17,11 @@
 #include "plugin_test_support.h"
 #include "sonar_heading.h"
 
-using namespace auvnav;
 using namespace auvnav::plugins;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 namespace fs = std::filesystem;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
 
 /** Writes a pole map and a sonar config into a temp folder; returns the plugin YAML. */
 std::string pluginYaml(const std::string& mode, const fs::path& dir)

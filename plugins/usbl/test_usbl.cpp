@@ -14,17 +14,12 @@
 #include "plugin_test_support.h"
 #include "usbl.h"
 
-using namespace auvnav;
 using auvnav::obs::CObservationUSBL;
 using auvnav::obs::UsblFrame;
 using auvnav::plugins::UsblModel;
-namespace at = auvnav::testing;
-namespace pt = auvnav::plugins::test;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-const Eigen::Vector3d kImuPos(0.29424, 0, -0.02863);
 const Eigen::Vector3d kTransponder(-0.5, 0.1, -0.3);
 const char* kMounted = "position_m: [-0.5, 0.1, -0.3]";
 
@@ -49,15 +44,7 @@ CObservationUSBL::Ptr fixAt(const earth::TangentFrame& frame, const Eigen::Vecto
 
 Eigen::Vector3d transponderOf(const NavState& x)
 {
-	return x.p_n + x.R_nb * (kTransponder - kImuPos);
-}
-
-Measurement prepareOne(UsblModel& model, const mrpt::obs::CObservation& o, const FilterContext& ctx)
-{
-	std::vector<Measurement> out;
-	std::string why;
-	EXPECT_EQ(model.prepare(o, ctx, out, why), PrepareStatus::Ok) << why;
-	return out.empty() ? Measurement{} : out[0];
+	return pt::pointOnVehicle_n(x, kTransponder);
 }
 }  // namespace
 
@@ -67,26 +54,22 @@ TEST(Usbl, DefaultConfigAndModule)
 	EXPECT_TRUE(m.position_b().isZero());
 	EXPECT_EQ(m.uses(), uint32_t(kAttitude | kPosition));
 	EXPECT_EQ(at::PluginStateBench(m).extraSize(), 0);
-	EXPECT_TRUE(
-	    pt::ModuleLoadsAndCreates("usbl", pt::readFile(AUVNAV_PLUGIN_DEFAULT_CONFIG), kAttitude | kPosition));
+	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", pt::defaultConfigText(), kAttitude | kPosition));
 	EXPECT_TRUE(pt::ModuleLoadsAndCreates("usbl", "states: {bias: {sigma: 1}}",
 	                                      kAttitude | kPosition | kPluginStates));
 }
 
 TEST(Usbl, RejectsBadConfigNamingTheKey)
 {
-	EXPECT_THROW(UsblModel(pt::configText("sigma_m: 0"), "USBL"), config::ConfigError);
-	EXPECT_THROW(UsblModel(pt::configText("sigma_range_fraction: 2"), "USBL"), config::ConfigError);
-	EXPECT_THROW(UsblModel(pt::configText("position_m: [0, 0, 1e6]"), "USBL"), config::ConfigError);
-	EXPECT_THROW(UsblModel(pt::configText("states: {bais: {sigma: 1}}"), "USBL"), config::ConfigError);
-	EXPECT_THROW(UsblModel(pt::configText("states: {bias: {sigma: -1}}"), "USBL"), config::ConfigError);
+	for (const char* yaml : {"sigma_m: 0", "sigma_range_fraction: 2", "position_m: [0, 0, 1e6]",
+	                         "states: {bais: {sigma: 1}}", "states: {bias: {sigma: -1}}"})
+		EXPECT_TRUE(pt::ConstructorRefuses<UsblModel>(yaml));
 	EXPECT_TRUE(pt::ModuleRefuses("sigma_cm: 3", "sigma_m"));  // unknown key, with the suggestion
 }
 
 TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	for (const char* cfg :
 	     {kMounted, "{position_m: [0, 0, 0.4], use_depth: true}", "states: {bias: {sigma: 2}}"})
 	{
@@ -94,12 +77,8 @@ TEST(Usbl, WellFormedOnRandomStatesWithAndWithoutBias)
 		const at::PluginStateBench bench(model);
 		for (uint32_t seed = 1; seed <= 20; ++seed)
 		{
-			const NavState x = bench.randomState(seed);
-			at::WellFormedOptions opt;
-			opt.seed = seed;
-			opt.accept_skip = false;
-			EXPECT_TRUE(at::IsWellFormed(
-			    model, *fixAt(tc.frame(), transponderOf(bench.randomState(seed + 3))), tc.ctx(), x, opt))
+			const auto o = fixAt(tc.frame(), transponderOf(bench.randomState(seed + 3)));
+			EXPECT_TRUE(pt::IsWellFormedAndUsed(model, *o, tc.ctx(), bench.randomState(seed), seed))
 			    << cfg << ", seed " << seed;
 		}
 	}
@@ -112,8 +91,8 @@ TEST(Usbl, GeodeticAndLocalFixesGiveTheSamePosition)
 	for (const Eigen::Vector3d& p :
 	     {Eigen::Vector3d(0, 0, 5), Eigen::Vector3d(1234.5, -987.6, 40), Eigen::Vector3d(-15000, 20000, 250)})
 	{
-		const Measurement g = prepareOne(model, *fixAt(tc.frame(), p), tc.ctx());
-		const Measurement l = prepareOne(model, *fixAt(tc.frame(), p, UsblFrame::LocalNed), tc.ctx());
+		const Measurement g = pt::prepareOne(model, *fixAt(tc.frame(), p), tc.ctx());
+		const Measurement l = pt::prepareOne(model, *fixAt(tc.frame(), p, UsblFrame::LocalNed), tc.ctx());
 		ASSERT_EQ(g.z.size(), 3);
 		// North/east round-trip exactly; the depth is the geodetic one (the
 		// tangent plane's down grows by the Earth's curvature: 49 m at 25 km).
@@ -129,16 +108,16 @@ TEST(Usbl, NoiseFromTheFixOrGrowingWithSlantRange)
 	UsblModel model(pt::configText("{sigma_m: 0.3, sigma_range_fraction: 0.01}"), "USBL");
 	auto o = fixAt(tc.frame(), Eigen::Vector3d(10, 20, 30));
 	o->slant_range_m = 400;  // 1 % of 400 m = 4 m, with 0.3 m: 4.011 m
-	EXPECT_NEAR(prepareOne(model, *o, tc.ctx()).R(0, 0), 0.09 + 16.0, 1e-9);
+	EXPECT_NEAR(pt::prepareOne(model, *o, tc.ctx()).R(0, 0), 0.09 + 16.0, 1e-9);
 	o->slant_range_m = std::nan("");  // unknown range: the constant part only
-	EXPECT_NEAR(prepareOne(model, *o, tc.ctx()).R(1, 1), 0.09, 1e-12);
+	EXPECT_NEAR(pt::prepareOne(model, *o, tc.ctx()).R(1, 1), 0.09, 1e-12);
 	o->covariance_ned_m2 = {4, 1, 0, 1, 9, 0, 0, 0, 25};
-	const Measurement m = prepareOne(model, *o, tc.ctx());
+	const Measurement m = pt::prepareOne(model, *o, tc.ctx());
 	EXPECT_EQ(m.R(0, 0), 4);
 	EXPECT_EQ(m.R(0, 1), 1);
 	EXPECT_EQ(m.R(1, 1), 9);
 	UsblModel own(pt::configText("{sigma_m: 0.3, use_reported_covariance: false}"), "USBL");
-	EXPECT_NEAR(prepareOne(own, *o, tc.ctx()).R(0, 0), 0.09, 1e-12);
+	EXPECT_NEAR(pt::prepareOne(own, *o, tc.ctx()).R(0, 0), 0.09, 1e-12);
 }
 
 TEST(Usbl, MeasurementTimeFromTheFixElseTheNavigatorsEstimate)
@@ -153,14 +132,13 @@ TEST(Usbl, MeasurementTimeFromTheFixElseTheNavigatorsEstimate)
 
 TEST(Usbl, LeverArmAndBiasEnterH)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	UsblModel model(pt::configText(std::string(kMounted) + "\nstates: {bias: {sigma: 1}}"), "USBL");
 	const at::PluginStateBench bench(model, 1);
 	NavState x = bench.randomState(5);
 	bench["bias"](x, 0) = 0.7;
 	bench["bias"](x, 1) = -1.2;
-	const Measurement m = prepareOne(model, *fixAt(tc.frame(), Eigen::Vector3d(0, 0, 0)), tc.ctx());
+	const Measurement m = pt::prepareOne(model, *fixAt(tc.frame(), Eigen::Vector3d(0, 0, 0)), tc.ctx());
 	const Eigen::VectorXd h = at::Predict(model, m, tc.ctx(), x);
 	const Eigen::Vector3d t = transponderOf(x);
 	EXPECT_NEAR(h[0], t.x() + 0.7, 1e-12);
@@ -194,23 +172,17 @@ TEST(Usbl, BadFixesAreInvalidAndNeverReachTheState)
 	EXPECT_NE(why.find("non-finite"), std::string::npos) << why;
 	o->position = {95, 0, 0};  // latitude beyond the pole
 	EXPECT_EQ(model.prepare(*o, tc.ctx(), out, why), PrepareStatus::Invalid);
-	mrpt::obs::CObservationIMU not_usbl;
-	EXPECT_EQ(model.prepare(not_usbl, tc.ctx(), out, why), PrepareStatus::Invalid);
-	EXPECT_NE(why.find("CObservationUSBL"), std::string::npos) << why;
+	EXPECT_TRUE(pt::RefusesOtherClass<mrpt::obs::CObservationIMU>(model, tc.ctx(), "CObservationUSBL"));
 }
 
 TEST(Usbl, UpdateReducesErrorAndAGrossOutlierIsRejected)
 {
-	at::TestContext tc;
-	tc.ctx().imu_position_b = kImuPos;
+	pt::FlatfishContext tc;
 	UsblModel model(pt::configText(std::string(kMounted) + "\nsigma_m: 3\nsigma_range_fraction: 0"), "USBL");
-	NavState truth;
-	truth.R_nb = at::rotationYpr(30 * kDeg, 0, 0);
-	truth.p_n = Eigen::Vector3d(10, 20, 30);
+	const NavState truth = pt::levelState(30 * kDeg, Eigen::Vector3d(10, 20, 30));
 	NavState x0 = truth;
 	x0.p_n = Eigen::Vector3d(15, 16, 30);
-	ManifoldUkf ukf(ProcessModel{}, UtParams{});
-	ukf.initialize(x0, at::TypicalCovariance());  // 5 m per axis
+	ManifoldUkf ukf = pt::filterAt(x0);  // 5 m per axis
 	const double before = (x0.p_n - truth.p_n).head<2>().norm();
 	auto r = at::ApplyObservation(ukf, model, *fixAt(tc.frame(), transponderOf(truth)), tc.ctx());
 	ASSERT_EQ(r.status, PrepareStatus::Ok) << r.why;
