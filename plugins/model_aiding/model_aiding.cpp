@@ -166,6 +166,7 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /
 	else if (unit != "force")
 		cfg.fail("effort_unit", "expected 'force' or 'rpm', got '" + unit + "'");
 	const auto thrusters = cfg.sequence("thrusters");
+	std::vector<double> time_constants_s;
 	T_.resize(6, static_cast<Eigen::Index>(thrusters.size()));
 	for (std::size_t i = 0; i < thrusters.size(); ++i)
 	{
@@ -176,7 +177,12 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /
 		T_.col(static_cast<Eigen::Index>(i)) << d.normalized(), r.cross(d.normalized());
 		gain_forward_.push_back(t.positive("gain_forward", 1.0));
 		gain_reverse_.push_back(t.positive("gain_reverse", 1.0));
+		thrust_lag_ = thrust_lag_ || t.has("time_constant_s");
+		time_constants_s.push_back(t.inRange("time_constant_s", 0.0, 10.0, 0.0));
 	}
+	response_ = ThrustResponse(time_constants_s);
+	alpha_delay_s_ = cfg.inRange("alpha_delay_s", 0.0, 10.0, 0.0);
+	time_constant_sigma_s_ = cfg.inRange("time_constant_sigma_s", 0.0, 10.0, 0.0);
 	if (thrusters.empty()) cfg.fail("thrusters", "at least one thruster");
 	const auto s = cfg.numbers("sigma");
 	if (s.size() != 6) cfg.fail("sigma", "expected 6 values: forces [N] x, y, z and torques [N m] x, y, z");
@@ -202,7 +208,7 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /
 	diagonal_base_ = diagonal(vm_.M) && diagonal(vm_.D_l) && diagonal(vm_.D_q);
 }
 
-Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
+Eigen::VectorXd ModelAidingModel::thrusterForces(const std::vector<double>& effort) const
 {
 	Eigen::VectorXd f(static_cast<Eigen::Index>(effort.size()));
 	for (std::size_t i = 0; i < effort.size(); ++i)
@@ -211,7 +217,33 @@ Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
 		const double force = rpm_ ? rpm_coefficient_ * u * std::abs(u) : u;
 		f[static_cast<Eigen::Index>(i)] = force * (force >= 0 ? gain_forward_[i] : gain_reverse_[i]);
 	}
-	return T_ * f;
+	return f;
+}
+
+Vector6d ModelAidingModel::thrustWrench(const std::vector<double>& effort) const
+{
+	return T_ * thrusterForces(effort);
+}
+
+bool ModelAidingModel::laggedWrench(const std::vector<double>& effort, const FilterContext& ctx,
+                                    Vector6d& wrench, Vector6d& rate, std::string& why)
+{
+	const Eigen::VectorXd command = thrusterForces(effort);
+	const double t_obs = ctx.t_measurement_s;
+	if (!response_.started() || t_obs < response_.time_s() || t_obs - response_.time_s() > kMaxCommandGap_s)
+	{
+		response_.restart(t_obs, command);
+		why = "thrust response (re)started: no earlier command within " + std::to_string(kMaxCommandGap_s) +
+		      " s";
+		return false;
+	}
+	// The filter's angular acceleration lags the motion by about
+	// alpha_delay_s: the thrust it is compared with is taken as much earlier.
+	const double t_eval = std::min(ctx.t_s, t_obs) - alpha_delay_s_;
+	wrench = T_ * response_.forceAt(t_eval);
+	rate = T_ * response_.rateAt(t_eval);
+	response_.hold(t_obs, command);
+	return true;
 }
 
 PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -238,7 +270,11 @@ PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, co
 			why = "non-finite thruster effort";
 			return PrepareStatus::Invalid;
 		}
-	const Vector6d tau = thrustWrench(thr->effort);
+	Vector6d tau, tau_rate = Vector6d::Zero();
+	if (!thrust_lag_)
+		tau = thrustWrench(thr->effort);
+	else if (!laggedWrench(thr->effort, ctx, tau, tau_rate, why))
+		return PrepareStatus::Skip;
 	// Near the surface waves and the breaching hull make the model poor.
 	const bool shallow = ctx.mean && ctx.mean->p_n.z() < surface_depth_m_;
 	const double factor = shallow ? surface_factor_ : 1.0;
@@ -251,6 +287,11 @@ PrepareStatus ModelAidingModel::doPrepare(const mrpt::obs::CObservation& obs, co
 		m.z[i] = tau[dofs_[i]];
 		m.R(i, i) = std::pow(factor * sigma_[dofs_[i]], 2);
 	}
+	// A time constant off by δτ shifts the response by about δτ: the wrench
+	// is then off by its rate times δτ, in every row together.
+	for (int i = 0; i < k; ++i)
+		for (int j = 0; j < k; ++j)
+			m.R(i, j) += std::pow(time_constant_sigma_s_, 2) * tau_rate[dofs_[i]] * tau_rate[dofs_[j]];
 	m.label = "wrench";
 	out.push_back(std::move(m));
 	return PrepareStatus::Ok;

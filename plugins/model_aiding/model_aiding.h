@@ -35,6 +35,8 @@
 #include <string>
 #include <vector>
 
+#include "thrust_response.h"
+
 namespace auvnav::plugins
 {
 using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -74,6 +76,8 @@ class ModelAidingModel final : public SafeMeasurementModel
 
 	/** Wrench of thruster efforts u (in the configured unit). */
 	Vector6d thrustWrench(const std::vector<double>& effort) const;
+	/** Each thruster's force for efforts u: the force model and its gain. */
+	Eigen::VectorXd thrusterForces(const std::vector<double>& effort) const;
 	const VehicleModel& vehicle() const { return vm_; }
 	const Eigen::Matrix<double, 6, Eigen::Dynamic>& configurationMatrix() const { return T_; }
 
@@ -99,5 +103,17 @@ class ModelAidingModel final : public SafeMeasurementModel
 	double surface_depth_m_ = 1.0, surface_factor_ = 10.0, gate_probability_ = 0.999;
 	std::vector<int> dofs_;       // rows of the wrench used (default all six)
 	bool diagonal_base_ = false;  // vm_'s matrices diagonal: predictedWrenchDiagonal
+	// Thrust dynamics (`time_constant_s` of the thrusters): the wrench is the
+	// response to the commands so far, at the filter time less alpha_delay_s_.
+	bool thrust_lag_ = false;
+	ThrustResponse response_;
+	double alpha_delay_s_ = 0, time_constant_sigma_s_ = 0;
+	static constexpr double kMaxCommandGap_s = 1.0;  // longer: the response starts over
+
+	/** The wrench the thrusters give at the filter's time from the commands
+	 *  so far, then holds this observation's; false (and `why`) when the
+	 *  response starts over. `rate` is its time derivative. */
+	bool laggedWrench(const std::vector<double>& effort, const FilterContext& ctx, Vector6d& wrench,
+	                  Vector6d& rate, std::string& why);
 };
 }  // namespace auvnav::plugins

@@ -320,3 +320,95 @@ TEST(ModelAiding, DiagonalWrenchEqualsTheGeneralOne)
 		}
 	EXPECT_EQ(compared, 40);
 }
+
+TEST(ThrustResponse, FollowsAHeldCommandWithItsTimeConstant)
+{
+	ThrustResponse r({0.2, 0.0});
+	r.restart(10.0, Eigen::Vector2d(0, 0));
+	r.hold(10.0, Eigen::Vector2d(10, -4));
+	// Lagged thruster: 10 (1 − e^{−t/τ}); the one without a lag at once.
+	EXPECT_NEAR(r.forceAt(10.2)[0], 10 * (1 - std::exp(-1.0)), 1e-12);
+	EXPECT_NEAR(r.forceAt(10.2)[1], -4.0, 1e-12);
+	EXPECT_NEAR(r.rateAt(10.2)[0], 10 * std::exp(-1.0) / 0.2, 1e-9);
+	EXPECT_EQ(r.rateAt(10.2)[1], 0.0);
+	// Before the command's time the force is the one it started from.
+	EXPECT_EQ(r.forceAt(9.0)[0], 0.0);
+	// A new command continues from where the response is.
+	r.hold(10.1, Eigen::Vector2d(0, 0));
+	const double f_at_switch = 10 * (1 - std::exp(-0.5));
+	EXPECT_NEAR(r.forceAt(10.3)[0], f_at_switch * std::exp(-1.0), 1e-12);
+}
+
+namespace
+{
+/** The plugin's default configuration with every thruster lagged by
+ *  `tau_s`, alpha_delay_s and time_constant_sigma_s set. */
+ModelAidingModel laggedModel(double tau_s, double alpha_delay_s, double tau_sigma_s)
+{
+	std::string yaml = pt::defaultConfigText();
+	const auto set = [&](const std::string& from, const std::string& to)
+	{
+		for (std::size_t at = yaml.find(from); at != std::string::npos; at = yaml.find(from, at + to.size()))
+			yaml.replace(at, from.size(), to);
+	};
+	set("gain_reverse: 0.8}", "gain_reverse: 0.8, time_constant_s: " + std::to_string(tau_s) + "}");
+	set("\nalpha_delay_s: 0\n", "\nalpha_delay_s: " + std::to_string(alpha_delay_s) + "\n");
+	set("\ntime_constant_sigma_s: 0\n", "\ntime_constant_sigma_s: " + std::to_string(tau_sigma_s) + "\n");
+	return ModelAidingModel(pt::configText(yaml), "THRUSTERS");
+}
+
+/** Prepares thruster efforts logged at t_s with the filter at t_s − 0.01. */
+PrepareStatus prepareAt(ModelAidingModel& m, const std::vector<double>& effort, double t_s,
+                        std::vector<Measurement>& out)
+{
+	at::TestContext tc;
+	FilterContext c = tc.ctx();
+	c.t_measurement_s = t_s;
+	c.t_s = t_s - 0.01;
+	std::string why;
+	return m.prepare(*thrusters(effort), c, out, why);
+}
+}  // namespace
+
+TEST(ModelAiding, LaggedThrustIsTheResponseToEarlierCommands)
+{
+	ModelAidingModel m = laggedModel(0.15, 0.05, 0);
+	std::vector<Measurement> out;
+	const std::vector<double> idle(6, 0.0), surge{10, 10, 0, 0, 0, 0};
+	// The first command only starts the response.
+	EXPECT_EQ(prepareAt(m, idle, 100.0, out), PrepareStatus::Skip);
+	// The step logged at 100.08 has not acted yet: the wrench is still idle.
+	ASSERT_EQ(prepareAt(m, surge, 100.08, out), PrepareStatus::Ok);
+	EXPECT_NEAR(out[0].z[0], 0.0, 1e-12);
+	// At 100.16 the step has acted for 0.16 − 0.01 − 0.05 − 0.08 = 0.02 s.
+	ASSERT_EQ(prepareAt(m, surge, 100.16, out), PrepareStatus::Ok);
+	EXPECT_NEAR(out[0].z[0], 20 * (1 - std::exp(-0.02 / 0.15)), 1e-9);
+	// Commands too far apart (> 1 s) start the response over.
+	EXPECT_EQ(prepareAt(m, surge, 102.0, out), PrepareStatus::Skip);
+	EXPECT_EQ(prepareAt(m, surge, 101.5, out), PrepareStatus::Skip);  // time went back
+}
+
+TEST(ModelAiding, TimeConstantUncertaintyWidensTheNoiseWhileThrustChanges)
+{
+	ModelAidingModel sure = laggedModel(0.15, 0, 0), unsure = laggedModel(0.15, 0, 0.05);
+	std::vector<Measurement> a, b;
+	const std::vector<double> idle(6, 0.0), surge{10, 10, 0, 0, 0, 0};
+	for (ModelAidingModel* m : {&sure, &unsure})
+	{
+		std::vector<Measurement>& out = m == &sure ? a : b;
+		prepareAt(*m, idle, 100.0, out);
+		prepareAt(*m, surge, 100.08, out);
+		ASSERT_EQ(prepareAt(*m, surge, 100.16, out), PrepareStatus::Ok);
+	}
+	// At 100.15 the step of 100.08 has acted 0.07 s: surge force rate
+	// 20 e^{−0.07/0.15}/0.15 N/s (dofs x, y, ψ: row 0).
+	const double rate = 20 * std::exp(-0.07 / 0.15) / 0.15;
+	EXPECT_NEAR(b[0].R(0, 0) - a[0].R(0, 0), std::pow(0.05 * rate, 2), 1e-9);
+	// Once settled the two agree.
+	for (double t = 100.24; t < 102; t += 0.08)
+	{
+		prepareAt(sure, surge, t, a);
+		prepareAt(unsure, surge, t, b);
+	}
+	EXPECT_NEAR(b[0].R(0, 0), a[0].R(0, 0), 1e-9);
+}
