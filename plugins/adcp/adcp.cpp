@@ -39,15 +39,15 @@ Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne,
 }
 
 AdcpModel::AdcpModel(const config::Node& cfg, const std::string& /*label*/)
-    : position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
+    : GatedModel(cfg),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
       R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
       use_observation_pose_(cfg.boolean("use_observation_pose", false)),
       sigma_mps_(cfg.has("sigma_mps") ? cfg.positive("sigma_mps") : 0.0),
       extra_sigma_mps_(cfg.nonNegative("extra_sigma_mps", 0.02)),
       min_correlation_(cfg.inRange("min_correlation", 0.0, 1.0, 0.5)),
       max_distance_m_(cfg.has("max_distance_m") ? cfg.positive("max_distance_m")
-                                                : std::numeric_limits<double>::infinity()),
-      gate_probability_(gateProbabilityFrom(cfg))
+                                                : std::numeric_limits<double>::infinity())
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }

@@ -41,6 +41,8 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
 /** Per-cell data from prepare to h (Measurement::payload<AdcpCell>()). R_bs
@@ -64,7 +66,7 @@ double adcpFarWeight(double d_m, double d_max_m);
 Eigen::Vector3d adcpCellCurrent(const Eigen::Vector2d& current_vehicle_ne,
                                 const Eigen::Vector2d& current_far_ne, double w);
 
-class AdcpModel final : public SafeMeasurementModel
+class AdcpModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -94,14 +96,14 @@ class AdcpModel final : public SafeMeasurementModel
 	{
 		return {kGyroBias | kVelocity | kCurrentVehicle | kCurrentFar | kAdcpBias};
 	}
-	double doGateProbability() const override { return gate_probability_; }
+	/** The slopes of h in the gyro bias (lever arm), velocity, currents and
+	 *  bias, in closed form for the held attitude (MeasurementModel::affineSlopes). */
+	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
+	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
-	/** h's slopes in closed form (MeasurementModel::affineSlopes). */
-	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
-	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
  private:
 	Eigen::Vector3d position_b_;
@@ -111,6 +113,5 @@ class AdcpModel final : public SafeMeasurementModel
 	double extra_sigma_mps_ = 0.02;
 	double min_correlation_ = 0.5;
 	double max_distance_m_;
-	double gate_probability_ = 0.999;
 };
 }  // namespace auvnav::plugins

@@ -21,7 +21,7 @@ struct AhrsReference
 };
 }  // namespace
 
-AhrsModel::AhrsModel(const config::Node& cfg, const std::string& /*label*/)
+AhrsModel::AhrsModel(const config::Node& cfg, const std::string& /*label*/) : GatedModel(cfg)
 {
 	// A misspelled key must not fall back to its default silently.
 	cfg.allowOnly({"reference_frame", "heading_reference", "declination_deg", "orientation_ypr_deg",
@@ -58,7 +58,6 @@ AhrsModel::AhrsModel(const config::Node& cfg, const std::string& /*label*/)
 	sigma_pitch_rad_ = cfg.inRange("sigma_pitch_deg", 1e-3, 90.0, 0.5) * kDeg;
 	sigma_heading_rad_ = cfg.inRange("sigma_heading_deg", 1e-3, 180.0, 2.0) * kDeg;
 	heading_only_ = cfg.boolean("heading_only", false);
-	gate_probability_ = gateProbabilityFrom(cfg);
 	min_interval_ = MinInterval(cfg);
 }
 

@@ -47,7 +47,7 @@
 
 namespace auvnav::plugins
 {
-class AhrsModel final : public SafeMeasurementModel
+class AhrsModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -65,7 +65,6 @@ class AhrsModel final : public SafeMeasurementModel
 
  protected:
 	uint32_t doUses() const override { return kAttitude; }
-	double doGateProbability() const override { return gate_probability_; }
 	//! heading_only: a heading [rad], the residual wraps; else z = 0 and h = −r
 	//! are already a rotation vector in one chart: a plain difference.
 	MeasurementStructure doStructure() const override { return {0, heading_only_ ? ~0u : 0u}; }
@@ -79,7 +78,6 @@ class AhrsModel final : public SafeMeasurementModel
 	std::optional<Eigen::Matrix3d> R_bs_config_;  // orientation_ypr_deg, else the observation's sensorPose
 	double sigma_roll_rad_ = 0, sigma_pitch_rad_ = 0, sigma_heading_rad_ = 0;
 	bool heading_only_ = false;
-	double gate_probability_ = 0.999;
 	MinInterval min_interval_;
 };
 }  // namespace auvnav::plugins

@@ -21,14 +21,22 @@ namespace auvnav::plugins
 {
 constexpr double kDeg = M_PI / 180;
 
-/** The `gate_probability` key every plugin has: in (0, 1], 1 disables the
- *  χ² gate. */
-inline double gateProbabilityFrom(const config::Node& cfg, double default_value = 0.999)
+/** A core plugin's model: SafeMeasurementModel with the `gate_probability`
+ *  key every core plugin has, read and checked here once. The key is a
+ *  probability in (0, 1] (default 0.999); 1 disables the χ² gate. */
+class GatedModel : public SafeMeasurementModel
 {
-	const double p = cfg.inRange("gate_probability", 0.0, 1.0, default_value);
-	if (!(p > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
-	return p;
-}
+ protected:
+	explicit GatedModel(const config::Node& cfg)
+	    : gate_probability_(cfg.inRange("gate_probability", 0.0, 1.0, 0.999))
+	{
+		if (!(gate_probability_ > 0)) cfg.fail("gate_probability", "expected a probability in (0, 1], got 0");
+	}
+	double doGateProbability() const final { return gate_probability_; }
+
+ private:
+	double gate_probability_;
+};
 
 /** `obs` as the observation class T, or null with `why` naming the class
  *  expected and the one given: every plugin's first check in prepare. */

@@ -30,7 +30,7 @@ namespace auvnav::plugins
 /** `Fix`: what the plugin decodes from one observation; its member
  *  `Eigen::Vector3d p_n` is the point's position [m, navigation frame]. */
 template <class Fix>
-class PositionFixModel : public SafeMeasurementModel
+class PositionFixModel : public GatedModel
 {
  public:
 	/** The point's lever arm r_f [m, body FRD]. */
@@ -42,9 +42,9 @@ class PositionFixModel : public SafeMeasurementModel
 	 *  (any other state is refused). `measured_axes`: how many of north,
 	 *  east, down a measurement holds, 2 or 3. */
 	PositionFixModel(const config::Node& cfg, const Eigen::Vector3d& default_position_b, int measured_axes)
-	    : position_b_(cfg.vector3("position_m", default_position_b)),
-	      measured_axes_(measured_axes),
-	      gate_probability_(gateProbabilityFrom(cfg))
+	    : GatedModel(cfg),
+	      position_b_(cfg.vector3("position_m", default_position_b)),
+	      measured_axes_(measured_axes)
 	{
 		if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 		if (!cfg.has("states")) return;
@@ -76,7 +76,6 @@ class PositionFixModel : public SafeMeasurementModel
 
 	uint32_t doUses() const override { return kAttitude | kPosition | bias_.uses(); }
 	std::vector<PluginState*> doStates() override { return {&bias_}; }
-	double doGateProbability() const override { return gate_probability_; }
 	bool doReportsPositionFix() const override { return true; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override
@@ -110,7 +109,6 @@ class PositionFixModel : public SafeMeasurementModel
  private:
 	Eigen::Vector3d position_b_;
 	int measured_axes_;
-	double gate_probability_;
 	PluginState bias_;
 };
 }  // namespace auvnav::plugins

@@ -69,7 +69,8 @@ Eigen::Vector3d sensorVelocity_b(const NavState& x, const Eigen::Vector3d& r_s, 
 }  // namespace
 
 DvlModel::DvlModel(const config::Node& cfg, const std::string& /*label*/)
-    : position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
+    : GatedModel(cfg),
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0.659, -0.141, 0.206))),
       R_bs_(rotationFromYprDeg(cfg.vector3("orientation_ypr_deg", Eigen::Vector3d(-22.5, 0, 0)))),
       use_observation_pose_(cfg.boolean("use_observation_pose", false)),
       sigma_mps_(cfg.positive("sigma_mps", 0.02)),
@@ -77,7 +78,6 @@ DvlModel::DvlModel(const config::Node& cfg, const std::string& /*label*/)
       beam_sigma_mps_(cfg.positive("beam_sigma_mps", 0.01)),
       earth_heading_sigma_rad_(cfg.inRange("earth_heading_sigma_deg", 0, 90, 2.0) * kDeg),
       earth_tilt_sigma_rad_(cfg.inRange("earth_tilt_sigma_deg", 0, 90, 0.5) * kDeg),
-      gate_probability_(gateProbabilityFrom(cfg)),
       scale_reference_lag_s_(cfg.inRange("scale_reference_lag_s", 0, 600, 10.0))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");

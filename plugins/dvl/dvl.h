@@ -80,6 +80,8 @@
 #include <deque>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::obs
 {
 class CObservationDVL;
@@ -103,7 +105,7 @@ struct DvlPing
 	double scale_reference_valid;
 };
 
-class DvlModel final : public SafeMeasurementModel
+class DvlModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -120,7 +122,6 @@ class DvlModel final : public SafeMeasurementModel
 	/** The sensor's velocity is R_nbᵀ v_n + (ω − b_w) × r: affine in the gyro
 	 *  bias and velocity with the attitude (and any scale or misalignment state) held. */
 	MeasurementStructure doStructure() const override { return {kGyroBias | kVelocity}; }
-	double doGateProbability() const override { return gate_probability_; }
 	std::vector<PluginState*> doStates() override { return {&scale_, &misalignment_}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
@@ -154,7 +155,6 @@ class DvlModel final : public SafeMeasurementModel
 	double beam_sigma_mps_ = 0.01;
 	double earth_heading_sigma_rad_ = 0;
 	double earth_tilt_sigma_rad_ = 0;
-	double gate_probability_ = 0.999;
 	PluginState scale_;         // s (1), if configured
 	PluginState misalignment_;  // δ (3) [rad, body axes], if configured
 	double scale_reference_lag_s_ = 10;

@@ -14,7 +14,7 @@ namespace
 constexpr double kMg = 1e-3 * 9.80665;  // 1 mg in m/s² (standard gravity, as datasheets)
 }
 
-InertialModel::InertialModel(const config::Node& cfg, const std::string& /*label*/)
+InertialModel::InertialModel(const config::Node& cfg, const std::string& /*label*/) : GatedModel(cfg)
 {
 	const double rate_hz = cfg.inRange("rate_hz", 1.0, 10000.0, 100.0);
 	const double vrw = cfg.nonNegative("vrw_mg_per_sqrt_hz", 0.12) * kMg;  // m/s²/√Hz
@@ -24,7 +24,6 @@ InertialModel::InertialModel(const config::Node& cfg, const std::string& /*label
 	if (!(sigma_mps2_ > 0))
 		cfg.fail("extra_sigma_mps2",
 		         "vrw_mg_per_sqrt_hz and extra_sigma_mps2 are both 0: noise must be positive");
-	gate_probability_ = gateProbabilityFrom(cfg);
 	coriolis_ = cfg.boolean("coriolis", false);
 }
 

@@ -22,9 +22,11 @@
 
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
-class InertialModel final : public SafeMeasurementModel
+class InertialModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -40,18 +42,17 @@ class InertialModel final : public SafeMeasurementModel
 	{
 		return {kAcceleration | kGravity | kAccelBias | kVelocity};
 	}
-	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
 	               Eigen::Ref<Eigen::VectorXd> z_pred) const override;
-	/** h's slopes in closed form (MeasurementModel::affineSlopes). */
+	/** The slopes of h in the acceleration, gravity, bias and velocity (the
+	 *  Coriolis term), in closed form for the held attitude. */
 	bool doAffineSlopes(const NavState& x, const Measurement& m, const FilterContext& ctx, int from, int to,
 	                    Eigen::Ref<Eigen::MatrixXd> At) const override;
 
  private:
 	double sigma_mps2_ = 0;
-	double gate_probability_ = 0.999;
 	bool coriolis_ = false;
 };
 }  // namespace auvnav::plugins

@@ -45,7 +45,7 @@ Eigen::Vector3d predictedReading_s(const Eigen::Matrix3d& R_nb, const Eigen::Mat
 	return b_hard_ut + S_soft * (R_bs.transpose() * (R_nb.transpose() * m_n_ut));
 }
 
-MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string& /*label*/)
+MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string& /*label*/) : GatedModel(cfg)
 {
 	// A misspelled key must not fall back to its default silently.
 	cfg.allowOnly({"mode", "field_ut", "declination_deg", "inclination_deg", "hard_iron_ut", "soft_iron",
@@ -90,7 +90,6 @@ MagnetometerModel::MagnetometerModel(const config::Node& cfg, const std::string&
 	dip_tolerance_rad_ = cfg.inRange("dip_tolerance_deg", 0.0, 180.0, 10.0) * kDeg;
 	if (!(dip_tolerance_rad_ > 0))
 		cfg.fail("dip_tolerance_deg", "must be > 0 (use 180 to disable the check)");
-	gate_probability_ = gateProbabilityFrom(cfg);
 	if (cfg.has("states"))
 	{
 		const auto st = cfg.child("states");

@@ -79,7 +79,7 @@ struct ReferenceDirection
 	double x = 0, y = 0, z = 0;
 };
 
-class MagnetometerModel final : public SafeMeasurementModel
+class MagnetometerModel final : public GatedModel
 {
  public:
 	enum class Mode
@@ -104,7 +104,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 
  protected:
 	uint32_t doUses() const override { return kAttitude | heading_bias_.uses(); }
-	double doGateProbability() const override { return gate_probability_; }
 	std::vector<PluginState*> doStates() override { return {&heading_bias_}; }
 	//! Heading mode: z and h are headings [rad], the residual wraps.
 	MeasurementStructure doStructure() const override { return {0, mode_ == Mode::Heading ? ~0u : 0u}; }
@@ -126,7 +125,6 @@ class MagnetometerModel final : public SafeMeasurementModel
 	double heading_sigma_rad_ = 0;
 	double norm_tolerance_ = 0.1;
 	double dip_tolerance_rad_ = 0;
-	double gate_probability_ = 0.999;
 	MinInterval min_interval_;
 	std::size_t disturbed_ = 0;
 	PluginState heading_bias_;  // [rad], heading mode, if configured

@@ -147,7 +147,7 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 	       applyPlaced(vm.D_q, subs.D_q, nu.cwiseAbs().cwiseProduct(nu)) + restoringWrench(vm, x.R_nb);
 }
 
-ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /*label*/)
+ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /*label*/) : GatedModel(cfg)
 {
 	vm_.M = diagonal6(cfg, "inertia_diag");
 	vm_.D_l = diagonal6(cfg, "linear_damping_diag");
@@ -193,7 +193,6 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /
 	}
 	surface_depth_m_ = cfg.nonNegative("surface_depth_m", surface_depth_m_);
 	surface_factor_ = cfg.inRange("surface_noise_factor", 1.0, 1e6, surface_factor_);
-	gate_probability_ = cfg.inRange("gate_probability", 1e-6, 1.0, gate_probability_);
 	if (cfg.has("dofs"))
 	{
 		for (double d : cfg.numbers("dofs"))

@@ -37,6 +37,8 @@
 
 #include "thrust_response.h"
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
 using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -68,7 +70,7 @@ Vector6d predictedWrenchDiagonal(const VehicleModel& vm, const NavState& x, cons
 /** Restoring forces and moments g(R) (subtracted from thrust in the equation). */
 Vector6d restoringWrench(const VehicleModel& vm, const Eigen::Matrix3d& R_nb);
 
-class ModelAidingModel final : public SafeMeasurementModel
+class ModelAidingModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -87,7 +89,6 @@ class ModelAidingModel final : public SafeMeasurementModel
 		return kAttitude | kGyroBias | kAcceleration | kVelocity | kCurrentVehicle | kInertia |
 		       kDampingLinear | kDampingQuadratic;
 	}
-	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -100,7 +101,7 @@ class ModelAidingModel final : public SafeMeasurementModel
 	bool rpm_ = false;
 	double rpm_coefficient_ = 0;
 	Vector6d sigma_ = Vector6d::Ones();
-	double surface_depth_m_ = 1.0, surface_factor_ = 10.0, gate_probability_ = 0.999;
+	double surface_depth_m_ = 1.0, surface_factor_ = 10.0;
 	std::vector<int> dofs_;       // rows of the wrench used (default all six)
 	bool diagonal_base_ = false;  // vm_'s matrices diagonal: predictedWrenchDiagonal
 	// Thrust dynamics (`time_constant_s` of the thrusters): the wrench is the

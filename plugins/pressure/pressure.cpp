@@ -10,12 +10,12 @@
 namespace auvnav::plugins
 {
 PressureModel::PressureModel(const config::Node& cfg, const std::string& /*label*/)
-    : density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
+    : GatedModel(cfg),
+      density_kg_m3_(cfg.inRange("density_kg_m3", 900.0, 1100.0, 1025.0)),
       atmospheric_pa_(cfg.inRange("atmospheric_pressure_pa", 50e3, 120e3, 101325.0)),
       sigma_pa_(cfg.positive("sigma_pa", 100.0)),
       bias_sigma_pa_(cfg.inRange("bias_sigma_pa", 0.0, 1e5, 0.0)),
-      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0, 0, 0.3))),
-      gate_probability_(gateProbabilityFrom(cfg))
+      position_b_(cfg.vector3("position_m", Eigen::Vector3d(0, 0, 0.3)))
 {
 	if (position_b_.cwiseAbs().maxCoeff() > 100) cfg.fail("position_m", "lever arm longer than 100 m");
 }

@@ -25,9 +25,11 @@
 #include <Eigen/Core>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
-class PressureModel final : public SafeMeasurementModel
+class PressureModel final : public GatedModel
 {
  public:
 	/** Pressures outside this range are rejected as absurd [Pa]. */
@@ -49,7 +51,6 @@ class PressureModel final : public SafeMeasurementModel
 
  protected:
 	uint32_t doUses() const override { return kAttitude | kGravity | kPosition; }
-	double doGateProbability() const override { return gate_probability_; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
 	                        std::vector<Measurement>& out, std::string& why) override;
 	bool doPredict(const NavState& x, const Measurement& m, const FilterContext& ctx,
@@ -61,6 +62,5 @@ class PressureModel final : public SafeMeasurementModel
 	double sigma_pa_ = 100;
 	double bias_sigma_pa_ = 0;  //!< 0: no floor
 	Eigen::Vector3d position_b_;
-	double gate_probability_ = 0.999;
 };
 }  // namespace auvnav::plugins

@@ -10,8 +10,6 @@ namespace auvnav::plugins
 {
 namespace
 {
-constexpr double kDeg = M_PI / 180;
-
 std::string resolve(const config::Node& cfg, const std::string& key)
 {
 	const std::filesystem::path p = cfg.string(key);
@@ -29,7 +27,7 @@ double predictedBearing(const NavState& x, const Eigen::Vector3d& r_s_b, double 
 	return auvnav::wrapAngle(std::atan2(pole_ne.y() - p_s.y(), pole_ne.x() - p_s.x()) - psi_s);
 }
 
-SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& /*label*/)
+SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string& /*label*/) : GatedModel(cfg)
 {
 	const auto sonar_file = config::Node::load(resolve(cfg, "sonar_config"));
 	sonar_ = sonar::SonarConfig::fromConfig(sonar_file);
@@ -39,7 +37,6 @@ SonarHeadingModel::SonarHeadingModel(const config::Node& cfg, const std::string&
 		cfg.fail("mode", "expected 'validate' or 'update', got '" + mode + "'");
 	validate_only_ = mode == "validate";
 	sigma_floor_rad_ = cfg.inRange("bearing_sigma_floor_deg", 0, 10, 0.5) * kDeg;
-	gate_probability_ = cfg.inRange("gate_probability", 1e-6, 1.0, gate_probability_);
 	if (cfg.has("validation_csv"))
 	{
 		const std::string path = resolve(cfg, "validation_csv");

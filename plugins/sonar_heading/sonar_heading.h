@@ -24,6 +24,8 @@
 #include <memory>
 #include <string>
 
+#include "plugin_common.h"
+
 namespace auvnav::plugins
 {
 /** Bearing [rad] of the pole at `pole_ne` seen from state x by a sonar at
@@ -38,7 +40,7 @@ struct PolePosition
 	double north_m = 0, east_m = 0;
 };
 
-class SonarHeadingModel final : public SafeMeasurementModel
+class SonarHeadingModel final : public GatedModel
 {
  public:
 	/** `label`, the sensor's name (the plugin factory's argument), is not used. */
@@ -49,7 +51,6 @@ class SonarHeadingModel final : public SafeMeasurementModel
 
  protected:
 	uint32_t doUses() const override { return kAttitude | kPosition; }
-	double doGateProbability() const override { return gate_probability_; }
 	//! Bearings [rad]: every residual component wraps.
 	MeasurementStructure doStructure() const override { return {0, ~0u}; }
 	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
@@ -61,7 +62,6 @@ class SonarHeadingModel final : public SafeMeasurementModel
 	sonar::SonarConfig sonar_;
 	bool validate_only_ = true;
 	double sigma_floor_rad_ = 0;
-	double gate_probability_ = 0.999;
 	std::unique_ptr<std::ofstream> validation_;
 };
 }  // namespace auvnav::plugins
