@@ -181,7 +181,6 @@ ModelAidingModel::ModelAidingModel(const config::Node& cfg, const std::string& /
 		time_constants_s.push_back(t.inRange("time_constant_s", 0.0, 10.0, 0.0));
 	}
 	response_ = ThrustResponse(time_constants_s);
-	alpha_delay_s_ = cfg.inRange("alpha_delay_s", 0.0, 10.0, 0.0);
 	time_constant_sigma_s_ = cfg.inRange("time_constant_sigma_s", 0.0, 10.0, 0.0);
 	if (thrusters.empty()) cfg.fail("thrusters", "at least one thruster");
 	const auto s = cfg.numbers("sigma");
@@ -236,9 +235,9 @@ bool ModelAidingModel::laggedWrench(const std::vector<double>& effort, const Fil
 		      " s";
 		return false;
 	}
-	// The filter's angular acceleration lags the motion by about
-	// alpha_delay_s: the thrust it is compared with is taken as much earlier.
-	const double t_eval = std::min(ctx.t_s, t_obs) - alpha_delay_s_;
+	// The filter's angular acceleration lags the motion: the thrust it is
+	// compared with is taken as much earlier.
+	const double t_eval = std::min(ctx.t_s, t_obs) - ctx.alpha_delay_s;
 	wrench = T_ * response_.forceAt(t_eval);
 	rate = T_ * response_.rateAt(t_eval);
 	response_.hold(t_obs, command);

@@ -105,10 +105,10 @@ class ModelAidingModel final : public GatedModel
 	std::vector<int> dofs_;       // rows of the wrench used (default all six)
 	bool diagonal_base_ = false;  // vm_'s matrices diagonal: predictedWrenchDiagonal
 	// Thrust dynamics (`time_constant_s` of the thrusters): the wrench is the
-	// response to the commands so far, at the filter time less alpha_delay_s_.
+	// response to the commands so far, at the filter time less FilterContext::alpha_delay_s.
 	bool thrust_lag_ = false;
 	ThrustResponse response_;
-	double alpha_delay_s_ = 0, time_constant_sigma_s_ = 0;
+	double time_constant_sigma_s_ = 0;
 	static constexpr double kMaxCommandGap_s = 1.0;  // longer: the response starts over
 
 	/** The wrench the thrusters give at the filter's time from the commands

@@ -342,8 +342,8 @@ TEST(ThrustResponse, FollowsAHeldCommandWithItsTimeConstant)
 namespace
 {
 /** The plugin's default configuration with every thruster lagged by
- *  `tau_s`, alpha_delay_s and time_constant_sigma_s set. */
-ModelAidingModel laggedModel(double tau_s, double alpha_delay_s, double tau_sigma_s)
+ *  `tau_s` and time_constant_sigma_s set. */
+ModelAidingModel laggedModel(double tau_s, double tau_sigma_s)
 {
 	std::string yaml = pt::defaultConfigText();
 	const auto set = [&](const std::string& from, const std::string& to)
@@ -352,19 +352,20 @@ ModelAidingModel laggedModel(double tau_s, double alpha_delay_s, double tau_sigm
 			yaml.replace(at, from.size(), to);
 	};
 	set("gain_reverse: 0.8}", "gain_reverse: 0.8, time_constant_s: " + std::to_string(tau_s) + "}");
-	set("\nalpha_delay_s: 0\n", "\nalpha_delay_s: " + std::to_string(alpha_delay_s) + "\n");
 	set("\ntime_constant_sigma_s: 0\n", "\ntime_constant_sigma_s: " + std::to_string(tau_sigma_s) + "\n");
 	return ModelAidingModel(pt::configText(yaml), "THRUSTERS");
 }
 
-/** Prepares thruster efforts logged at t_s with the filter at t_s − 0.01. */
+/** Prepares thruster efforts logged at t_s with the filter at t_s − 0.01
+ *  and its angular acceleration `alpha_delay_s` late. */
 PrepareStatus prepareAt(ModelAidingModel& m, const std::vector<double>& effort, double t_s,
-                        std::vector<Measurement>& out)
+                        std::vector<Measurement>& out, double alpha_delay_s = 0)
 {
 	at::TestContext tc;
 	FilterContext c = tc.ctx();
 	c.t_measurement_s = t_s;
 	c.t_s = t_s - 0.01;
+	c.alpha_delay_s = alpha_delay_s;
 	std::string why;
 	return m.prepare(*thrusters(effort), c, out, why);
 }
@@ -372,16 +373,17 @@ PrepareStatus prepareAt(ModelAidingModel& m, const std::vector<double>& effort, 
 
 TEST(ModelAiding, LaggedThrustIsTheResponseToEarlierCommands)
 {
-	ModelAidingModel m = laggedModel(0.15, 0.05, 0);
+	ModelAidingModel m = laggedModel(0.15, 0);
+	const double alpha_delay_s = 0.05;
 	std::vector<Measurement> out;
 	const std::vector<double> idle(6, 0.0), surge{10, 10, 0, 0, 0, 0};
 	// The first command only starts the response.
-	EXPECT_EQ(prepareAt(m, idle, 100.0, out), PrepareStatus::Skip);
+	EXPECT_EQ(prepareAt(m, idle, 100.0, out, alpha_delay_s), PrepareStatus::Skip);
 	// The step logged at 100.08 has not acted yet: the wrench is still idle.
-	ASSERT_EQ(prepareAt(m, surge, 100.08, out), PrepareStatus::Ok);
+	ASSERT_EQ(prepareAt(m, surge, 100.08, out, alpha_delay_s), PrepareStatus::Ok);
 	EXPECT_NEAR(out[0].z[0], 0.0, 1e-12);
 	// At 100.16 the step has acted for 0.16 − 0.01 − 0.05 − 0.08 = 0.02 s.
-	ASSERT_EQ(prepareAt(m, surge, 100.16, out), PrepareStatus::Ok);
+	ASSERT_EQ(prepareAt(m, surge, 100.16, out, alpha_delay_s), PrepareStatus::Ok);
 	EXPECT_NEAR(out[0].z[0], 20 * (1 - std::exp(-0.02 / 0.15)), 1e-9);
 	// Commands too far apart (> 1 s) start the response over.
 	EXPECT_EQ(prepareAt(m, surge, 102.0, out), PrepareStatus::Skip);
@@ -390,7 +392,7 @@ TEST(ModelAiding, LaggedThrustIsTheResponseToEarlierCommands)
 
 TEST(ModelAiding, TimeConstantUncertaintyWidensTheNoiseWhileThrustChanges)
 {
-	ModelAidingModel sure = laggedModel(0.15, 0, 0), unsure = laggedModel(0.15, 0, 0.05);
+	ModelAidingModel sure = laggedModel(0.15, 0), unsure = laggedModel(0.15, 0.05);
 	std::vector<Measurement> a, b;
 	const std::vector<double> idle(6, 0.0), surge{10, 10, 0, 0, 0, 0};
 	for (ModelAidingModel* m : {&sure, &unsure})

@@ -269,6 +269,53 @@ TEST(Navigator, RunsAnInProcessModelWithoutAPluginHost)
 	EXPECT_LT(std::sqrt(nav.filter().covariance()(idx::pos + 2, idx::pos + 2)), 0.05);
 }
 
+/** The toy depth model, keeping the context of its last prepare. */
+class ContextRecordingDepthModel final : public ToyDepthModel
+{
+ public:
+	FilterContext last;
+
+ protected:
+	PrepareStatus doPrepare(const mrpt::obs::CObservation& obs, const FilterContext& ctx,
+	                        std::vector<Measurement>& out, std::string& why) override
+	{
+		last = ctx;
+		return ToyDepthModel::doPrepare(obs, ctx, out, why);
+	}
+};
+
+TEST(Navigator, AngularAccelerationLagsByTheDelayItStates)
+{
+	auto* model = new ContextRecordingDepthModel;
+	std::vector<SensorSource> sensors;
+	sensors.push_back({"DEPTH", "in-process", ModelPtr(model, [](MeasurementModel* m) { delete m; }), 0.0});
+	const NavigatorConfig cfg = toyConfig();
+	Navigator nav(cfg, std::move(sensors));
+	// At rest for 2 s, then a yaw rate growing as j t²/2: the angular
+	// acceleration is the ramp j t, which a lag of d turns into j (t − d).
+	const double t0 = 1.7e9, t_turn = t0 + 2.0, jerk = 0.05;
+	for (int k = 0; k <= 500; ++k)
+	{
+		const double t = t0 + 0.01 * k;
+		const double since_s = std::max(0.0, t - t_turn);
+		auto imu = imuAt(t);
+		imu->set(mrpt::obs::IMU_WZ, jerk * since_s * since_s / 2);
+		nav.process(*imu);
+		if (k % 10 == 5)
+		{
+			auto p = obs::CObservationPressure::Create();
+			p->sensorLabel = "DEPTH";
+			p->timestamp = mrpt::Clock::fromDouble(t);
+			p->pressure_pa = 5e4;
+			nav.process(*p);
+		}
+	}
+	const FilterContext& c = model->last;
+	EXPECT_NEAR(c.alpha_delay_s, cfg.imu.angular_acceleration_tau_s + 0.005, 1e-6);  // stamps: ~0.2 µs
+	ASSERT_GT(c.t_s - t_turn, 2.5);  // the low-pass has settled on the ramp
+	EXPECT_NEAR(c.alpha_b.z(), jerk * (c.t_s - t_turn - c.alpha_delay_s), 1e-6);
+}
+
 TEST(Navigator, RefusesAStartFixSensorItWasNotGiven)
 {
 	NavigatorConfig c = toyConfig();

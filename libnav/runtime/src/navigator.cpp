@@ -297,6 +297,7 @@ FilterContext Navigator::context(double t_obs) const
 	ctx.imu_position_b = cfg_.imu.position_b;
 	ctx.frame = frame_.get();
 	ctx.alpha_b = alpha_b_;
+	ctx.alpha_delay_s = alpha_delay_s_;
 	ctx.mean = initialized_ ? &ukf_->state() : nullptr;
 	ctx.current_far_distance_m = ukf_ ? ukf_->processModel().current_far_distance_m : 0.0;
 	ctx.covariance = initialized_ ? &ukf_->covariance() : nullptr;

@@ -16,6 +16,7 @@ void Navigator::checkpointIfDue(std::size_t event)
 	c.P = ukf_->covariance();
 	c.omega_ib_b = omega_ib_b_;
 	c.alpha_b = alpha_b_;
+	c.alpha_delay_s = alpha_delay_s_;
 	c.gates.reserve(slots_.size());
 	for (const auto& slot : slots_) c.gates.push_back(slot->aiding.gate);
 	if (smoother_) c.smoother = smoother_->snapshot(*ukf_);
@@ -29,6 +30,7 @@ void Navigator::restoreLastCheckpoint()
 	t_s_ = c.t_s;
 	omega_ib_b_ = c.omega_ib_b;
 	alpha_b_ = c.alpha_b;
+	alpha_delay_s_ = c.alpha_delay_s;
 	if (smoother_ && c.smoother) smoother_->restore(*c.smoother, *ukf_);
 	for (std::size_t i = 0; i < slots_.size(); ++i) slots_[i]->aiding.gate = c.gates[i];
 }

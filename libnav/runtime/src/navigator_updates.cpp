@@ -22,6 +22,7 @@ void Navigator::propagate(const Eigen::Vector3d& w, double t)
 	}
 	// Angular acceleration: first-order low-pass of the gyro's derivative.
 	alpha_b_ += ((w - omega_ib_b_) / dt - alpha_b_) * (dt / (cfg_.imu.angular_acceleration_tau_s + dt));
+	alpha_delay_s_ = cfg_.imu.angular_acceleration_tau_s + 0.5 * dt;
 	t_s_ = t;
 	omega_ib_b_ = w;
 }

@@ -44,6 +44,11 @@ struct FilterContext
 	//! Body angular acceleration [rad/s²] from the low-pass filtered derivative
 	//! of the gyro (the state has no angular acceleration).
 	Eigen::Vector3d alpha_b = Eigen::Vector3d::Zero();
+	//! How long alpha_b lags the body's angular acceleration [s]: the
+	//! low-pass's time constant plus half the IMU period of the derivative.
+	//! A model that sets alpha_b against a history of its own inputs (a
+	//! thrust response) compares it with those inputs this much earlier.
+	double alpha_delay_s = 0;
 	//! The filter's current mean (for decisions in `prepare`, e.g. near the
 	//! surface); never use it inside h, which must depend on its argument only.
 	const NavState* mean = nullptr;

@@ -42,6 +42,7 @@ struct FilterCheckpoint
 	NavState x;
 	Covariance P;
 	Eigen::Vector3d omega_ib_b, alpha_b;
+	double alpha_delay_s = 0;
 	std::vector<GateState> gates;  //!< per sensor
 	std::optional<SmoothingRecorder::Snapshot> smoother;
 };

@@ -217,6 +217,7 @@ class Navigator
 	double t_s_ = 0, t0_s_ = -1, t_latest_s_ = 0;
 	Eigen::Vector3d omega_ib_b_ = Eigen::Vector3d::Zero();
 	Eigen::Vector3d alpha_b_ = Eigen::Vector3d::Zero();  // low-pass filtered gyro derivative
+	double alpha_delay_s_ = 0;                           // FilterContext::alpha_delay_s
 	SensorStats imu_stats_;
 	std::size_t predictions_ = 0, imu_gaps_ = 0, clock_jumps_ = 0, replayed_predictions_ = 0;
 	double next_health_check_s_ = 0;

@@ -33,9 +33,9 @@
 // API 2: MeasurementFunction::structure() replaces affineIn() and
 // residualIsDifference() (ABI 9); plugin-owned states are PluginState
 // handles returned by states(), every virtual is guarded by
-// SafeMeasurementModel's do* methods (ABI 10; API 2 is not released yet,
-// so both changes are one API version).
-#define AUVNAV_PLUGIN_ABI_VERSION 10u
+// SafeMeasurementModel's do* methods (ABI 10); FilterContext::alpha_delay_s
+// (ABI 11). API 2 is not released yet, so these are one API version.
+#define AUVNAV_PLUGIN_ABI_VERSION 11u
 #define AUVNAV_PLUGIN_API_VERSION 2u
 #define AUVNAV_PLUGIN_ENTRY_SYMBOL "auvnav_plugin_entry_v1"
 
