@@ -52,14 +52,17 @@ int main(int argc, char** argv)
 	    "span, rate, gaps and clock jumps. Exit code: 0 ok, 1 usage error, 2 bad spec or input.",
 	    ' ', AUVNAV_VERSION);
 	TCLAP::ValueArg<std::string> spec("", "spec", "Import spec (YAML).", true, "", "SPEC.yaml", cmd);
-	TCLAP::ValueArg<std::string> out("", "out", "Rawlog to write.", true, "", "OUT.rawlog", cmd);
+	TCLAP::ValueArg<std::string> out("", "out", "Rawlog to write (required unless --check).", false, "",
+	                                 "OUT.rawlog", cmd);
 	TCLAP::SwitchArg lenient(
 	    "", "lenient",
 	    "Count unusable rows/messages (malformed, non-numeric, non-finite) by reason and go on, "
 	    "instead of stopping at the first with an error.",
 	    cmd);
 	TCLAP::SwitchArg check("", "check",
-	                       "Only validate the spec (keys, classes, units, formats); read no input.", cmd);
+	                       "Only validate the spec (keys, classes, units, formats); read no input, write "
+	                       "nothing (--out is not needed).",
+	                       cmd);
 	TCLAP::UnlabeledMultiArg<std::string> inputs("INPUT", "Files or folders holding the spec's sources.",
 	                                             false, "INPUT", cmd);
 	if (const auto code = auvnav::cli::parse(cmd, argc, argv, "auvnav-import")) return *code;
@@ -77,6 +80,11 @@ int main(int argc, char** argv)
 			return auvnav::cli::fail("auvnav-import", e.what());
 		}
 	}
+
+	if (!out.isSet())
+		return auvnav::cli::fail("auvnav-import",
+		                         "--out OUT.rawlog is required (only --check runs without it)",
+		                         auvnav::cli::kExitUsage);
 
 	auvnav::import::ImportOptions opt;
 	opt.spec_path = spec.getValue();
