@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <unistd.h>
@@ -543,6 +544,50 @@ TEST(ImportBagBadInput, TopicNotInTheBagNamesTheTopicsItHas)
 		          "")
 		    << kind;
 	}
+}
+
+TEST(ImportBag, OptionalSensorWithoutItsTopicIsAbsent)
+{
+	// A vehicle without GPS or magnetometer: the shipped ROS spec imports
+	// its bag and says which optional topics were not there.
+	auvnav::testing::ScratchDir d("bag_no_gps");
+	{
+		Ros1BagWriter bag((d / "vehicle.bag").string());
+		for (int i = 0; i < 500; ++i)
+		{
+			const auvnav::import::TimeNs t = 1000000000000LL + i * 10000000LL;
+			sensor_msgs::Imu imu;
+			imu.header.stamp = auvnav::import::testing::toRosTime(t);
+			imu.linear_acceleration.z = -9.8;
+			bag.write("/imu/data", t, imu);
+			if (i % 10 != 0) continue;
+			sensor_msgs::FluidPressure p;
+			p.header.stamp = imu.header.stamp;
+			p.fluid_pressure = 150000;
+			bag.write("/pressure", t, p);
+			geometry_msgs::TwistWithCovarianceStamped v;
+			v.header.stamp = imu.header.stamp;
+			bag.write("/dvl/twist", t, v);
+		}
+	}
+	auvnav::import::ImportOptions opt;
+	opt.spec_path = kSource + "/config/import/ros_standard.yaml";
+	opt.inputs = {d.path().string()};
+	opt.out_rawlog = (d / "out.rawlog").string();
+	auvnav::import::ImportReport rep;
+	ASSERT_NO_THROW(auvnav::import::runImport(opt, rep));
+	EXPECT_EQ(rep.written, 500u + 50u + 50u);
+	std::map<std::string, std::string> source;
+	for (const auto& s : rep.sensors) source[s.label] = s.source;
+	EXPECT_THAT(source["GPS"], ::testing::HasSubstr("optional, topic /gps/fix not in"));
+	EXPECT_THAT(source["MAG"], ::testing::HasSubstr("optional, topic /imu/mag not in"));
+	EXPECT_THAT(rep.toMarkdown(), ::testing::HasSubstr("topic /gps/fix not in"));
+	// A required sensor's missing topic still stops the import.
+	std::ofstream(d / "no_dvl_optional.yaml")
+	    << "sensors:\n  - {label: DVL, class: dvl, source: {ros1: '*.bag', "
+	       "topic: /dvl/data}, time: {field: header.stamp}}\n";
+	opt.spec_path = (d / "no_dvl_optional.yaml").string();
+	EXPECT_THROW(auvnav::import::runImport(opt, rep), auvnav::import::ImportError);
 }
 
 TEST(ImportBagBadInput, TruncatedBagIsAClearError)

@@ -27,4 +27,12 @@ inline std::string describeTopics(const TopicList& topics)
 	return s;
 }
 
+/** Throws MissingTopicError naming the bag's topics unless `topic` is one. */
+inline void requireTopic(const std::string& path, const std::string& topic, const TopicList& topics)
+{
+	for (const auto& t : topics)
+		if (t.first == topic) return;
+	throw MissingTopicError(path + ": no topic '" + topic + "' in the bag; " + describeTopics(topics));
+}
+
 }  // namespace auvnav::import::detail

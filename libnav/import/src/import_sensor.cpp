@@ -106,16 +106,28 @@ bool openSensor(SensorRun& run, const std::vector<std::string>& inputs)
 		if (run.optional)
 		{
 			checkConverter(run);
+			run.absent_why = "no input";
 			return false;
 		}
 		throw;
 	}
-	if (run.source_kind == "csv")
-		run.source = std::make_unique<CsvSource>(run.path, run.delimiter);
-	else if (run.source_kind == "ros1")
-		run.source = openRos1Bag(run.path, run.topic);
-	else
-		run.source = openRos2Bag(run.path, run.topic);
+	try
+	{
+		if (run.source_kind == "csv")
+			run.source = std::make_unique<CsvSource>(run.path, run.delimiter);
+		else if (run.source_kind == "ros1")
+			run.source = openRos1Bag(run.path, run.topic);
+		else
+			run.source = openRos2Bag(run.path, run.topic);
+	}
+	catch (const MissingTopicError&)
+	{
+		// A vehicle without that sensor: its bag lacks the topic.
+		if (!run.optional) throw;
+		checkConverter(run);
+		run.absent_why = "topic " + run.topic + " not in " + run.path;
+		return false;
+	}
 
 	config::Node quantities = run.node;
 	if (run.source_kind != "csv" && !hasQuantityKeys(run.node))

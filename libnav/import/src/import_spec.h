@@ -38,6 +38,7 @@ struct SensorRun
 	std::string source_pattern, topic;
 	char delimiter = ',';
 	bool optional = false;
+	std::string absent_why;  // an optional sensor's reason for having no source
 	TimeSpec time;
 
 	std::string path;  // resolved
@@ -84,7 +85,8 @@ Spec parseSpec(const config::Node& root);
  *  needs the topic's message type, so it is checked only once opened. */
 void checkConverter(const SensorRun& run);
 
-/** Opens the source and builds the converter; false if an optional sensor has no input. */
+/** Opens the source and builds the converter; false (and run.absent_why) if
+ *  an optional sensor has no input or its bag lacks the topic. */
 bool openSensor(SensorRun& run, const std::vector<std::string>& inputs);
 
 /** The stamp of `r` per the time spec, or false and `why`. */

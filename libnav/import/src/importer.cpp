@@ -111,7 +111,7 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			rep.observation_class = detail::mrptClassOf(run.cls);
 			if (!openSensor(run, opt.inputs))
 			{
-				rep.source = run.source_pattern + " (optional, no input)";
+				rep.source = run.source_pattern + " (optional, " + run.absent_why + ")";
 				run.done = true;
 			}
 			else

@@ -21,6 +21,7 @@ namespace
 {
 using detail::describeTopics;
 using detail::fail;
+using detail::requireTopic;
 using detail::TopicList;
 
 std::unique_ptr<rosbag::Bag> openBag(const std::string& path, const std::string& topic)
@@ -182,9 +183,7 @@ std::unique_ptr<RecordSource> openRos1Bag(const std::string& path, const std::st
 {
 	auto bag = openBag(path, topic);
 	const TopicList topics = topicsOf(path, *bag);
-	bool found = false;
-	for (const auto& t : topics) found = found || t.first == topic;
-	if (!found) fail(path, "no topic '" + topic + "' in the bag; " + describeTopics(topics));
+	requireTopic(path, topic, topics);
 	try
 	{
 		return std::make_unique<Ros1Source>(path, topic, std::move(bag));

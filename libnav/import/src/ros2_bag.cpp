@@ -20,6 +20,7 @@ namespace
 using detail::BagPart;
 using detail::describeTopics;
 using detail::fail;
+using detail::requireTopic;
 using detail::openParts;
 using detail::Statement;
 using detail::TopicList;
@@ -281,9 +282,7 @@ std::unique_ptr<RecordSource> openRos2Bag(const std::string& path, const std::st
 {
 	std::vector<BagPart> parts = openParts(path);
 	const TopicList topics = topicsOf(parts);
-	bool found = false;
-	for (const auto& t : topics) found = found || t.first == topic;
-	if (!found) fail(path, "no topic '" + topic + "' in the bag; " + describeTopics(topics));
+	requireTopic(path, topic, topics);
 	return std::make_unique<Ros2Source>(path, topic, std::move(parts));
 }
 

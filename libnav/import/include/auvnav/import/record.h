@@ -44,6 +44,13 @@ class ImportError : public std::runtime_error
 	using std::runtime_error::runtime_error;
 };
 
+/** A bag without the topic a sensor reads: an optional sensor is then absent. */
+class MissingTopicError : public ImportError
+{
+ public:
+	using ImportError::ImportError;
+};
+
 struct Value
 {
 	enum class Kind : uint8_t
