@@ -80,7 +80,7 @@ Experiment loadExperiment(const std::string& file, int max_seeds)
 		throw std::runtime_error(file + ": kind '" + e.kind +
 		                         "' is neither 'denial_table' nor 'dvl_dropout'");
 	e.spec = sim::MissionSpec::load(ex.filePath("mission"));
-	e.nav_cfg = config::Node::load(ex.filePath("navigator"));
+	e.nav_cfg = ex.loadFile("navigator");
 	if (e.kind == "denial_table")
 	{
 		e.init_s = ex.positive("initialization_s");

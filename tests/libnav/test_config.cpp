@@ -62,6 +62,21 @@ TEST(Config, MissingOrMalformedFilesAreRefused)
 	          std::string::npos);
 }
 
+TEST(Config, AFileItCannotOpenIsNamedWithItsKeyAndFolder)
+{
+	// A profile copied to another folder without the files it names.
+	const Node n = Node::fromText("model: {vehicle_model_file: vehicles/v.yaml}\n", "/tmp/copy/nav.yaml");
+	const std::string e = errorOf([&] { n.child("model").loadFile("vehicle_model_file"); });
+	EXPECT_EQ(e,
+	          "/tmp/copy/nav.yaml: model.vehicle_model_file: cannot open 'vehicles/v.yaml' (looked for "
+	          "/tmp/copy/vehicles/v.yaml: a relative path is taken from the folder of /tmp/copy/nav.yaml)");
+	const Node absolute = Node::fromText("f: /nonexistent/v.yaml\n", "nav.yaml");
+	EXPECT_EQ(errorOf([&] { absolute.loadFile("f"); }), "nav.yaml: f: cannot open '/nonexistent/v.yaml'");
+	const Node found =
+	    Node::fromText("f: flatfish.yaml\n", std::string(AUVNAV_SOURCE_DIR) + "/config/x.yaml");
+	EXPECT_TRUE(found.loadFile("f").has("imu"));
+}
+
 // What MRPT's YAML reader takes silently (the last duplicate wins, a second
 // document is dropped) or fails on with a multi-line assertion report (an
 // alias, a list as a key): refused in one line with file:line:column and key.

@@ -4,8 +4,10 @@
 // config_values.cpp.
 #include <auvnav/config.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 #include "config_yaml.h"
 
@@ -44,6 +46,23 @@ std::string Node::filePath(const std::string& key) const
 	if (p[0] == '/') return p;
 	const auto slash = file_.find_last_of('/');
 	return slash == std::string::npos ? p : file_.substr(0, slash + 1) + p;
+}
+
+Node Node::loadFile(const std::string& key) const
+{
+	const std::string path = filePath(key);
+	if (!std::ifstream(path))
+	{
+		const std::string given = string(key);
+		std::error_code ec;
+		const auto absolute = std::filesystem::absolute(path, ec);
+		fail(key,
+		     "cannot open '" + given + "'" +
+		         (given[0] == '/' ? std::string()
+		                          : " (looked for " + (ec ? path : absolute.lexically_normal().string()) +
+		                                ": a relative path is taken from the folder of " + file_ + ")"));
+	}
+	return load(path);
 }
 
 std::string Node::toYaml() const

@@ -186,7 +186,7 @@ std::string pluginConfigText(const config::Node& s)
 	// Inline `config`, or `config_file` relative to the navigator's file.
 	if (s.has("config") && s.has("config_file")) s.fail("config_file", "give either config or config_file");
 	config::Node plugin_cfg = s.has("config")        ? s.child("config")
-	                          : s.has("config_file") ? config::Node::load(s.filePath("config_file"))
+	                          : s.has("config_file") ? s.loadFile("config_file")
 	                                                 : config::Node::fromText("{}", s.file());
 	// Plugins receive YAML text: tell them where relative paths in it start.
 	const std::string origin = s.has("config_file") ? s.filePath("config_file") : s.file();
@@ -207,8 +207,7 @@ NavigatorConfig NavigatorConfig::fromNode(const config::Node& cfg)
 	const auto f = cfg.child("filter");
 	// The parameter prior: inline `vehicle_model`, or `vehicle_model_file`
 	// (relative to this config file) shared with the model-aiding plugin.
-	const auto vm = f.has("vehicle_model_file") ? config::Node::load(f.filePath("vehicle_model_file"))
-	                                            : f.child("vehicle_model");
+	const auto vm = f.has("vehicle_model_file") ? f.loadFile("vehicle_model_file") : f.child("vehicle_model");
 	put23(c.prior_mean, idx::inertia, subMatrix(vm, "inertia_diag"));
 	put23(c.prior_mean, idx::damping_lin, subMatrix(vm, "linear_damping_diag"));
 	put23(c.prior_mean, idx::damping_quad, subMatrix(vm, "quadratic_damping_diag"));

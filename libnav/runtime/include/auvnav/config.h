@@ -104,6 +104,10 @@ class Node
 	/** The path given under `key`, resolved relative to the folder of this
 	 *  node's file unless it is absolute (file references inside configs). */
 	std::string filePath(const std::string& key) const;
+	/** The configuration file given under `key` (filePath), loaded; one it
+	 *  cannot open fails naming the key, the path and the folder it is
+	 *  relative to. */
+	Node loadFile(const std::string& key) const;
 	/** This subtree as YAML text (to hand a plugin its configuration),
 	 *  written by libyaml's emitter: strings are quoted where needed, comments
 	 *  are gone, and fromText() of it gives the same tree. */
