@@ -121,17 +121,14 @@ int main(int argc, char** argv)
 		nav = std::make_unique<auvnav::Navigator>(cfg, *host);
 		for (const auto& d : deny.getValue())
 		{
-			auvnav::DenialWindow w;
-			const auto a = d.find(':'), b = d.rfind(':');
-			char* end = nullptr;
-			if (a == std::string::npos || a == b || a == 0)
-				throw auvnav::config::ConfigError("--deny '" + d + "': expected LABEL:FROM:TO");
-			w.labels = {d.substr(0, a)};
-			w.from_s = std::strtod(d.c_str() + a + 1, &end);
-			w.to_s = std::strtod(d.c_str() + b + 1, nullptr);
-			if (!(w.to_s > w.from_s) || w.from_s < 0)
-				throw auvnav::config::ConfigError("--deny '" + d + "': need 0 <= FROM < TO");
-			nav->addDenial(w);
+			try
+			{
+				nav->addDenial(auvnav::parseDenial(d));
+			}
+			catch (const std::exception& e)
+			{
+				throw auvnav::config::ConfigError("--deny '" + d + "': " + e.what());
+			}
 		}
 		const double rate = cfg.has("outputs") ? cfg.child("outputs").positive("rate_hz", 10.0) : 10.0;
 		write_updates = cfg.has("outputs") ? cfg.child("outputs").boolean("updates_csv", true) : true;

@@ -324,5 +324,50 @@ TEST(Navigator, RefusesAStartFixSensorItWasNotGiven)
 	EXPECT_THROW(Navigator(c, toySensors()), std::invalid_argument);
 }
 
+TEST(Navigator, DenialOfAnUnknownSensorIsRefused)
+{
+	Navigator nav(toyConfig(), toySensors());
+	EXPECT_NO_THROW(nav.addDenial(parseDenial("DEPTH:10:20")));
+	try
+	{
+		nav.addDenial(parseDenial("depth:10:20"));  // labels are case-sensitive
+		ADD_FAILURE() << "no error";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_STREQ(e.what(), "denial of an unknown sensor 'depth' (the sensors: DEPTH)");
+	}
+}
+
+TEST(DenialWindow, ParsesLabelAndSecondsStrictly)
+{
+	const DenialWindow w = parseDenial("GPS:1200:1e9");
+	ASSERT_EQ(w.labels.size(), 1u);
+	EXPECT_EQ(w.labels[0], "GPS");
+	EXPECT_EQ(w.from_s, 1200);
+	EXPECT_EQ(w.to_s, 1e9);
+	const std::pair<const char*, const char*> bad[] = {{"GPS:abc:100", "FROM 'abc' is not a number"},
+	                                                   {"GPS::100", "FROM '' is not a number"},
+	                                                   {"GPS:0:100s", "TO '100s' is not a number"},
+	                                                   {"GPS:0:inf", "TO 'inf' is not a number"},
+	                                                   {":0:100", "no sensor label"},
+	                                                   {"GPS:100", "not three fields"},
+	                                                   {"GPS:0:1:2", "not three fields"},
+	                                                   {"GPS:100:50", "need 0 <= FROM < TO"},
+	                                                   {"GPS:-5:50", "need 0 <= FROM < TO"}};
+	for (const auto& [text, why] : bad)
+	{
+		try
+		{
+			parseDenial(text);
+			ADD_FAILURE() << text << ": no error";
+		}
+		catch (const config::ConfigError& e)
+		{
+			EXPECT_EQ(std::string(e.what()), std::string(why) + " (expected LABEL:FROM:TO, seconds)") << text;
+		}
+	}
+}
+
 }  // namespace
 }  // namespace auvnav

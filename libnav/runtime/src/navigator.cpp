@@ -60,6 +60,7 @@ Navigator::Navigator(const NavigatorConfig& cfg, std::vector<SensorSource> senso
 	                 [&](const auto& s) { return s->stats.label == cfg_.initial.fix_label; }))
 		throw std::invalid_argument("filter.initial.gps_label: no sensor '" + cfg_.initial.fix_label +
 		                            "' gives the first fix");
+	for (const auto& w : cfg_.denial) checkDenialLabels(w);
 	ProcessModel pm = cfg_.process;
 	layout_ = appendPluginStates(models, pm, P0_);
 	ukf_ = std::make_unique<ManifoldUkf>(pm, cfg_.unscented);
@@ -69,6 +70,25 @@ Navigator::Navigator(const NavigatorConfig& cfg, std::vector<SensorSource> senso
 		ukf_->setSigmaLimits(lo, hi);
 	}
 	if (cfg_.delayed.max_delay_s > 0) history_ = std::make_unique<FilterHistory>(cfg_.delayed);
+}
+
+void Navigator::addDenial(const DenialWindow& w)
+{
+	checkDenialLabels(w);
+	cfg_.denial.push_back(w);
+}
+
+void Navigator::checkDenialLabels(const DenialWindow& w) const
+{
+	for (const auto& label : w.labels)
+	{
+		if (std::any_of(slots_.begin(), slots_.end(), [&](const auto& s) { return s->stats.label == label; }))
+			continue;
+		std::string known;
+		for (const auto& s : slots_) known += (known.empty() ? "" : ", ") + s->stats.label;
+		throw std::invalid_argument("denial of an unknown sensor '" + label + "' (the sensors: " + known +
+		                            ")");
+	}
 }
 
 bool Navigator::denied(const std::string& label, double t_obs) const

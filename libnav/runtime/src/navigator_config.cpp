@@ -2,7 +2,9 @@
 #include <auvnav/process_model_config.h>
 #include <auvnav/state.h>
 
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 namespace fs = std::filesystem;
@@ -164,6 +166,14 @@ DenialWindow readDenial(const config::Node& d)
 	return w;
 }
 
+/** `text` as a finite number of seconds, the whole of it. */
+bool parseSeconds(const std::string& text, double& out)
+{
+	if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
+	char* end = nullptr;
+	out = std::strtod(text.c_str(), &end);
+	return end == text.c_str() + text.size() && std::isfinite(out);
+}
 SensorEntry readSensor(const config::Node& s)
 {
 	SensorEntry e;
@@ -193,6 +203,23 @@ std::string pluginConfigText(const config::Node& s)
 	if (!plugin_cfg.has("config_dir"))
 		plugin_cfg.set("config_dir", fs::absolute(fs::path(origin)).parent_path().string());
 	return plugin_cfg.toYaml();
+}
+
+DenialWindow parseDenial(const std::string& text)
+{
+	const auto fail = [&](const std::string& why)
+	{ throw config::ConfigError(why + " (expected LABEL:FROM:TO, seconds)"); };
+	const auto a = text.find(':');
+	const auto b = a == std::string::npos ? a : text.find(':', a + 1);
+	if (b == std::string::npos || text.find(':', b + 1) != std::string::npos) fail("not three fields");
+	DenialWindow w;
+	w.labels = {text.substr(0, a)};
+	if (w.labels[0].empty()) fail("no sensor label");
+	const std::string from = text.substr(a + 1, b - a - 1), to = text.substr(b + 1);
+	if (!parseSeconds(from, w.from_s)) fail("FROM '" + from + "' is not a number");
+	if (!parseSeconds(to, w.to_s)) fail("TO '" + to + "' is not a number");
+	if (!(w.from_s >= 0 && w.to_s > w.from_s)) fail("need 0 <= FROM < TO");
+	return w;
 }
 
 NavigatorConfig NavigatorConfig::fromNode(const config::Node& cfg)

@@ -134,8 +134,10 @@ class Navigator
 	//! Why the smoother's file could not be finished in finish() (empty: it was).
 	const std::string& smootherError() const { return smoother_error_; }
 
-	/** Adds a data-denial window (as the config's `denial` list does). */
-	void addDenial(const DenialWindow& w) { cfg_.denial.push_back(w); }
+	/** Adds a data-denial window (as the config's `denial` list does).
+	 *  Throws std::invalid_argument for a label that is none of the sensors'
+	 *  (labels are case-sensitive), naming the sensors. */
+	void addDenial(const DenialWindow& w);
 
 	/** Called after every prediction (i.e. at IMU rate) once initialised. */
 	std::function<void(const Navigator&)> on_predict;
@@ -160,6 +162,7 @@ class Navigator
 	bool handleImu(const mrpt::obs::CObservation& obs);  // false: sample dropped
 	void dispatch(const mrpt::obs::CObservation& obs, double stamp_s);
 	bool denied(const std::string& label, double t_obs) const;
+	void checkDenialLabels(const DenialWindow& w) const;
 	/** The measurement time of `obs` for a slot (NaN: the plugin says invalid). */
 	double measurementTime(const Slot& slot, const mrpt::obs::CObservation& obs, double stamp_s) const;
 	/** What a plugin sees besides the state, for an observation at t_obs. */

@@ -76,6 +76,12 @@ struct DenialWindow
 	double from_s = 0, to_s = 0;  //!< seconds from the first observation
 };
 
+/** A denial window written "LABEL:FROM:TO" (auvnav-run --deny): FROM and TO
+ *  numbers of seconds, 0 <= FROM < TO. Throws config::ConfigError saying
+ *  what is wrong with it; whether LABEL is a sensor is for the
+ *  navigator to say (Navigator::addDenial). */
+DenialWindow parseDenial(const std::string& text);
+
 /** One `sensors:` entry: the plugin to load for observations with `label`. */
 struct SensorEntry
 {
