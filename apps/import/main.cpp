@@ -10,6 +10,7 @@
 #include <auvnav/import/importer.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -81,10 +82,18 @@ int main(int argc, char** argv)
 		}
 	}
 
+	// TCLAP takes a misspelled option (--lenent) for an input path.
+	for (const auto& in : inputs.getValue())
+		if (in.size() > 1 && in[0] == '-')
+			return auvnav::cli::fail("auvnav-import", "unknown option '" + in + "' (see --help)",
+			                         auvnav::cli::kExitUsage);
 	if (!out.isSet())
 		return auvnav::cli::fail("auvnav-import",
 		                         "--out OUT.rawlog is required (only --check runs without it)",
 		                         auvnav::cli::kExitUsage);
+
+	for (const auto& in : inputs.getValue())
+		if (!std::filesystem::exists(in)) return auvnav::cli::fail("auvnav-import", "no input '" + in + "'");
 
 	auvnav::import::ImportOptions opt;
 	opt.spec_path = spec.getValue();
