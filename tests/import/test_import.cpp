@@ -488,6 +488,27 @@ TEST(ImportBadInput, MalformedRowNamesFileAndLine)
 	          (dir / "imu.csv").string() + ":3");
 }
 
+TEST(ImportBadInput, AFailedImportLeavesNoRawlog)
+{
+	// The rawlog is written as OUT.partial and renamed only when complete: an
+	// import that stops half-way leaves neither, and an earlier OUT is kept.
+	const auto dir = scratch("no_partial");
+	std::string rows = "t,gx,gy,gz,ax,ay,az\n";
+	for (int i = 0; i < 5000; ++i) rows += std::to_string(1 + 0.01 * i) + ",0,0,0,0,0,1\n";
+	write(dir / "imu.csv", rows + "99,0,0,0\n");
+	write(dir / "out.rawlog", "an earlier import");
+	ImportReport rep;
+	EXPECT_THAT(importError(dir, kImuSpec, rep), HasSubstr("4 cells, the header has 7"));
+	EXPECT_FALSE(rep.output_created);
+	EXPECT_FALSE(fs::exists(dir / "out.rawlog.partial"));
+	EXPECT_EQ(fs::file_size(dir / "out.rawlog"), 17u);
+	write(dir / "imu.csv", rows);
+	ASSERT_EQ(importError(dir, kImuSpec, rep), "");
+	EXPECT_TRUE(rep.output_created);
+	EXPECT_FALSE(fs::exists(dir / "out.rawlog.partial"));
+	EXPECT_EQ(readAll((dir / "out.rawlog").string()).size(), 5000u);
+}
+
 TEST(ImportBadInput, NonNumericAndNonFiniteFields)
 {
 	const auto dir = scratch("bad_number");

@@ -140,8 +140,10 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 	const TimeNs window_ns = static_cast<TimeNs>(spec.reorder_window_s * 1e9);
 	const TimeNs jump_ns = static_cast<TimeNs>(spec.clock_jump_s * 1e9);
 
-	io::RawlogWriter writer(opt.out_rawlog);
-	report.output_created = true;
+	// Written under a temporary name and renamed once complete: a killed or
+	// failed import never leaves a partial rawlog that passes for the log.
+	const std::string partial = opt.out_rawlog + ".partial";
+	io::RawlogWriter writer(partial);
 	std::priority_queue<Pending, std::vector<Pending>, std::greater<Pending>> heap;
 	TimeNs written_upto = kNoTime;
 	uint64_t seq = 0;
@@ -351,15 +353,22 @@ void runImport(const ImportOptions& opt, ImportReport& report)
 			}
 		}
 		writeUpTo(std::numeric_limits<TimeNs>::max());
+		writer.close();
+		std::error_code ec;
+		std::filesystem::rename(partial, opt.out_rawlog, ec);
+		if (ec) throw ImportError(opt.out_rawlog + ": cannot rename " + partial + " to it: " + ec.message());
+		report.output_created = true;
 	}
 	catch (const ImportError& e)
 	{
 		report.error = e.what();
+		std::remove(partial.c_str());
 		throw;
 	}
 	catch (const std::exception& e)
 	{
 		report.error = e.what();
+		std::remove(partial.c_str());
 		throw ImportError(e.what());
 	}
 	for (auto& run : spec.sensors) finishSteps(run, report.sensors[run.report_index], spec.gap_factor);

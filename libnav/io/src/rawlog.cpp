@@ -390,7 +390,16 @@ void RawlogWriter::write(const mrpt::obs::CObservation& obs)
 		    << " is older than the previous one; rawlogs are written in time order";
 		throw std::invalid_argument(msg.str());
 	}
-	mrpt::serialization::archiveFrom(file_) << obs;
+	try
+	{
+		mrpt::serialization::archiveFrom(file_) << obs;
+	}
+	catch (const std::exception& e)
+	{
+		// MRPT says only "Cannot write bytes to stream!" (e.g. a full disk).
+		throw RawlogError(path_ + ": cannot write observation #" + std::to_string(count_ + 1) + " ('" +
+		                  obs.sensorLabel + "'): " + auvnav::oneLineReason(e.what()));
+	}
 	last_ = obs.timestamp;
 	++count_;
 }

@@ -75,7 +75,7 @@ struct ImportReport
 	std::size_t buffer_overflows = 0;  //!< records written early because the reorder buffer was full
 	double reorder_window_s = 0;
 	bool completed = false;
-	bool output_created = false;  //!< runImport created (truncated) out_rawlog
+	bool output_created = false;  //!< runImport wrote out_rawlog (OUT.partial until complete)
 	std::string error;            //!< why the import stopped, if it did
 
 	std::string toJson() const;

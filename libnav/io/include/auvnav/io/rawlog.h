@@ -124,6 +124,8 @@ class RawlogWriter
 	/** Appends one observation; throws std::invalid_argument if its timestamp
 	 *  is earlier than the previous one. */
 	void write(const mrpt::obs::CObservation& obs);
+	/** Flushes and closes the file (also done by the destructor). */
+	void close() { file_.close(); }
 
 	std::size_t count() const { return count_; }
 
