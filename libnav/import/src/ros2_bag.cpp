@@ -20,8 +20,8 @@ namespace
 using detail::BagPart;
 using detail::describeTopics;
 using detail::fail;
-using detail::requireTopic;
 using detail::openParts;
+using detail::requireTopic;
 using detail::Statement;
 using detail::TopicList;
 using detail::TopicRow;
